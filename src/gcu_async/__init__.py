@@ -1,0 +1,23 @@
+"""gcu_async — asyncio driver, simulator and sans-I/O codec for XF Robot gimbal GCUs
+(GCU private protocol V2.0.6)."""
+
+from gcu_async.errors import (
+    CommandFailed,
+    CommandTimeout,
+    FieldRangeError,
+    GcuError,
+    LinkLost,
+    LocalProtocolError,
+    RemoteProtocolError,
+    UnsupportedCommandError,
+)
+from gcu_async.protocol import *  # noqa: F403
+from gcu_async.protocol import __all__ as _protocol_all
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "CommandFailed", "CommandTimeout", "FieldRangeError", "GcuError", "LinkLost",
+    "LocalProtocolError", "RemoteProtocolError", "UnsupportedCommandError", "__version__",
+    *_protocol_all,
+]  # fmt: skip

@@ -1,0 +1,95 @@
+"""The one exception tree of gcu_async.
+
+``GcuError`` is the root. Errors split into *local* ones (the caller passed something the
+protocol cannot carry: raised before anything is sent) and *remote* ones (the peer sent
+something malformed). Errors that mean "too late" or "link gone" also derive from the
+builtin ``TimeoutError`` / ``ConnectionError`` so generic handlers keep working.
+"""
+
+from __future__ import annotations
+
+
+class GcuError(Exception):
+    """Root of every error raised by gcu_async."""
+
+
+class LocalProtocolError(GcuError):
+    """The caller asked for something the protocol cannot express (nothing was sent)."""
+
+
+class FieldRangeError(LocalProtocolError, ValueError):
+    """A value lies outside the range its wire field can carry.
+
+    Attributes name the field, the allowed range (inclusive unless ``high_open``), the value
+    as given, and its unit, so callers can report it without parsing the message.
+    """
+
+    def __init__(
+        self,
+        field: str,
+        value: object,
+        low: float,
+        high: float,
+        unit: str = "",
+        *,
+        high_open: bool = False,
+        detail: str = "",
+    ) -> None:
+        self.field = field
+        self.value = value
+        self.low = low
+        self.high = high
+        self.unit = unit
+        self.high_open = high_open
+        closing = ")" if high_open else "]"
+        unit_txt = f" {unit}" if unit else ""
+        extra = f" ({detail})" if detail else ""
+        super().__init__(
+            f"{field}: {value!r} is outside the allowed range "
+            f"[{_fmt(low)}, {_fmt(high)}{closing}{unit_txt}{extra}"
+        )
+
+
+def _fmt(x: float) -> str:
+    return f"{x:g}" if isinstance(x, float) else str(x)
+
+
+class UnsupportedCommandError(LocalProtocolError):
+    """The connected pod model does not support this command (Appendix 8); nothing was sent."""
+
+    def __init__(self, command: str, pod_model: str) -> None:
+        self.command = command
+        self.pod_model = pod_model
+        super().__init__(f"{pod_model} does not support {command} (protocol Appendix 8)")
+
+
+class RemoteProtocolError(GcuError, ValueError):
+    """The peer sent bytes that are not a valid packet of this protocol."""
+
+
+class CommandFailed(GcuError):
+    """The GCU answered a command with a failure execution status.
+
+    ``opcode`` is the command's opcode, ``status`` the raw execution-status byte and
+    ``failed_cameras`` the camera mask of the cameras that failed (zoom commands only;
+    an empty mask otherwise).
+    """
+
+    def __init__(self, opcode: int, status: int | None, failed_cameras: int = 0) -> None:
+        from gcu_async.protocol.enums import CameraMask, opcode_name
+
+        self.opcode = opcode
+        self.status = status
+        self.failed_cameras = CameraMask(failed_cameras)
+        cams = f", failed cameras {self.failed_cameras!r}" if failed_cameras else ""
+        status_txt = "none" if status is None else f"0x{status:02X}"
+        name = opcode_name(opcode)
+        super().__init__(f"{name} (0x{opcode:02X}) failed: status {status_txt}{cams}")
+
+
+class CommandTimeout(GcuError, TimeoutError):
+    """No feedback for a command arrived before its timeout."""
+
+
+class LinkLost(GcuError, ConnectionError):
+    """The link to the GCU is down (closed, silent too long, or never came up)."""

@@ -1,0 +1,119 @@
+"""The sans-I/O protocol core of gcu_async: GCU private protocol V2.0.6.
+
+No asyncio, sockets or serial here — bytes in, typed values out, and back. The simulator,
+the client, the CLI and the tests all share this package.
+"""
+
+from gcu_async.protocol.camera_axes import axes_to_euler, euler_to_axes
+from gcu_async.protocol.commands import (
+    COMMAND_TYPES,
+    MODE_COMMANDS,
+    AngleControl,
+    AreaTemperature,
+    Calibration,
+    Centre,
+    ClickToPan,
+    Command,
+    DigitalZoom,
+    EulerControl,
+    FillLight,
+    Focus,
+    Fpv,
+    GazeAtCoordinates,
+    GazeLock,
+    ImageAutoFlip,
+    ImageBox,
+    ImagePoint,
+    Isotherm,
+    NightVision,
+    NullCommand,
+    Osd,
+    OsdCoordinatesCommand,
+    Palette,
+    PictureInPicture,
+    PointingFollow,
+    PointingLock,
+    Ranging,
+    Record,
+    SpotTemperature,
+    TakePhoto,
+    TargetDetection,
+    TemperatureAlarm,
+    TimeZone,
+    TopDown,
+    Track,
+    UnknownCommand,
+    ZoomIn,
+    ZoomOut,
+    ZoomStop,
+    ZoomTo,
+    command_code,
+    decode_command,
+)
+from gcu_async.protocol.crc import crc16_xmodem
+from gcu_async.protocol.deframer import Deframer, DeframerStats
+from gcu_async.protocol.enums import (
+    CameraFlags,
+    CameraMask,
+    ExecutionStatus,
+    FaultFlags,
+    HostFlags,
+    Mode,
+    NightVisionMode,
+    Opcode,
+    OsdCoordinates,
+    PodModel,
+    PodStatus,
+    SubFrameRequest,
+    ThermalFlags,
+    opcode_name,
+)
+from gcu_async.protocol.feedback import Feedback, failure_status, read_status
+from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame, UnknownSubFrame
+from gcu_async.protocol.gpstime import gps_to_utc, utc_to_gps
+from gcu_async.protocol.host_frames import ControlValues, HostMainFrame, HostSubFrame
+from gcu_async.protocol.packets import (
+    GCU_HEADER,
+    HOST_HEADER,
+    GcuPacket,
+    HostPacket,
+    decode_gcu_packet,
+    decode_host_packet,
+    decode_packet,
+)
+from gcu_async.protocol.pods import (
+    POD_NAMES,
+    is_radiometric,
+    is_thermal,
+    pod_name,
+    resolve_pod_model,
+    supports,
+)
+from gcu_async.protocol.units import (
+    Attitude,
+    AxisAngles,
+    GeoPosition,
+    NorthEastUp,
+    wrap_degrees_180,
+    wrap_degrees_360,
+)
+
+__all__ = [
+    "COMMAND_TYPES", "GCU_HEADER", "HOST_HEADER", "MODE_COMMANDS", "POD_NAMES",
+    "AngleControl", "AreaTemperature", "Attitude", "AxisAngles", "Calibration", "CameraFlags",
+    "CameraMask", "Centre", "ClickToPan", "Command", "ControlValues", "Deframer",
+    "DeframerStats", "DigitalZoom", "EulerControl", "ExecutionStatus", "FaultFlags",
+    "Feedback", "FillLight", "Focus", "Fpv", "GazeAtCoordinates", "GazeLock", "GcuMainFrame",
+    "GcuPacket", "GcuSubFrame", "GeoPosition", "HostFlags", "HostMainFrame", "HostPacket",
+    "HostSubFrame", "ImageAutoFlip", "ImageBox", "ImagePoint", "Isotherm", "Mode",
+    "NightVision", "NightVisionMode", "NorthEastUp", "NullCommand", "Opcode", "Osd",
+    "OsdCoordinates", "OsdCoordinatesCommand", "Palette", "PictureInPicture", "PodModel",
+    "PodStatus", "PointingFollow", "PointingLock", "Ranging", "Record", "SpotTemperature",
+    "SubFrameRequest", "TakePhoto", "TargetDetection", "TemperatureAlarm", "ThermalFlags",
+    "TimeZone", "TopDown", "Track", "UnknownCommand", "UnknownSubFrame", "ZoomIn", "ZoomOut",
+    "ZoomStop", "ZoomTo", "axes_to_euler", "command_code", "crc16_xmodem", "decode_command",
+    "decode_gcu_packet", "decode_host_packet", "decode_packet", "euler_to_axes",
+    "failure_status", "gps_to_utc", "is_radiometric", "is_thermal", "opcode_name", "pod_name",
+    "read_status", "resolve_pod_model", "supports", "utc_to_gps", "wrap_degrees_180",
+    "wrap_degrees_360",
+]  # fmt: skip

@@ -1,0 +1,68 @@
+"""GNSS week + milliseconds ↔ UTC (Appendix 6).
+
+The document's functions count from the GPS epoch 1980-01-06 00:00:00 and ignore leap
+seconds (GPS time runs 18 s ahead of UTC since 2017-01-01). ``apply_leap_seconds=True``
+applies the published table below, which is complete up to the time of writing
+(no leap second has been inserted since 2017-01-01).
+"""
+
+from __future__ import annotations
+
+from datetime import datetime, timedelta, timezone
+
+GPS_EPOCH = datetime(1980, 1, 6, tzinfo=timezone.utc)
+SECONDS_PER_WEEK = 604_800
+MS_PER_WEEK = SECONDS_PER_WEEK * 1000
+
+# UTC date from which GPS − UTC equals the count (IERS Bulletin C).
+LEAP_SECONDS: tuple[tuple[datetime, int], ...] = tuple(
+    (datetime(y, m, 1, tzinfo=timezone.utc), n)
+    for n, (y, m) in enumerate(
+        [
+            (1981, 7), (1982, 7), (1983, 7), (1985, 7), (1988, 1), (1990, 1), (1991, 1),
+            (1992, 7), (1993, 7), (1994, 7), (1996, 1), (1997, 7), (1999, 1), (2006, 1),
+            (2009, 1), (2012, 7), (2015, 7), (2017, 1),
+        ],
+        start=1,
+    )
+)  # fmt: skip
+
+
+def gps_minus_utc(utc: datetime) -> int:
+    """Leap-second offset GPS − UTC (seconds) in force at ``utc``."""
+    offset = 0
+    for start, n in LEAP_SECONDS:
+        if utc >= start:
+            offset = n
+    return offset
+
+
+def gps_to_utc(week: int, ms: int, *, apply_leap_seconds: bool = False) -> datetime:
+    """UTC datetime for GNSS ``week`` and milliseconds of week ``ms``.
+
+    With ``apply_leap_seconds=False`` this is the document's rule (GPS time taken as UTC).
+    """
+    seconds, millis = divmod(ms, 1000)
+    gps = GPS_EPOCH + timedelta(days=7 * week, seconds=seconds, microseconds=1000 * millis)
+    if not apply_leap_seconds:
+        return gps
+    utc = gps - timedelta(seconds=gps_minus_utc(gps))
+    # near a leap-second boundary the offset of the UTC instant is the right one
+    return gps - timedelta(seconds=gps_minus_utc(utc))
+
+
+def utc_to_gps(utc: datetime, *, apply_leap_seconds: bool = False) -> tuple[int, int]:
+    """(week, milliseconds of week) for an aware ``utc`` datetime.
+
+    Raises ``ValueError`` for a naive datetime (its time zone would be a guess) or a time
+    before the GPS epoch.
+    """
+    if utc.tzinfo is None or utc.utcoffset() is None:
+        raise ValueError(f"gnss_time: {utc!r} is naive; pass an aware datetime (tz=timezone.utc)")
+    utc = utc.astimezone(timezone.utc)
+    if utc < GPS_EPOCH:
+        raise ValueError(f"gnss_time: {utc.isoformat()} is before the GPS epoch 1980-01-06")
+    gps = utc + timedelta(seconds=gps_minus_utc(utc)) if apply_leap_seconds else utc
+    total_ms = (gps - GPS_EPOCH) // timedelta(milliseconds=1)
+    week, ms = divmod(total_ms, MS_PER_WEEK)
+    return int(week), int(ms)

@@ -1,0 +1,327 @@
+"""Host → GCU frames: main frame (bytes 5–36) and sub frame (bytes 37–68).
+
+Frames are immutable ``NamedTuple``s of the raw wire integers (cheap to build from
+``struct.unpack``) with engineering-unit properties; ``build()`` constructs one from units.
+"""
+
+from __future__ import annotations
+
+import struct
+from datetime import datetime
+from typing import Any, NamedTuple
+
+from gcu_async.protocol.enums import HostFlags, SubFrameRequest
+from gcu_async.protocol.units import (
+    Attitude,
+    GeoPosition,
+    NorthEastUp,
+    check_flags,
+    check_int,
+    quantize,
+)
+
+HOST_MAIN = struct.Struct("<hhhBhhHhhhhhhB6x")
+"""Bytes 5–36 of a host packet."""
+HOST_SUB = struct.Struct("<iiiBIhi8x")
+"""Bytes 38–68 of a host packet when the sub frame header (byte 37) is 0x01."""
+
+S16 = (-32768, 32767)
+SUB_FRAME_HEADER = 0x01
+"""Byte 37 of a standard sub frame (the only one V2.0.6 defines)."""
+CONTROL_ANGLE_RAW = 18000  # 0.01°
+CONTROL_RATE_RAW = 1500  # 0.1 °/s ÷ zoom
+MS_PER_WEEK = 604_800_000
+
+
+class ControlValues(NamedTuple):
+    """Host main frame bytes 5–10 as raw S16 values; their meaning depends on the mode
+    (NOTES §5). Build them with :meth:`angles` or :meth:`rates`."""
+
+    roll_raw: int = 0
+    pitch_raw: int = 0
+    yaw_raw: int = 0
+
+    @classmethod
+    def angles(cls, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0) -> ControlValues:
+        """Desired angles in degrees (Euler or relative, per mode), 0.01° resolution, ±180°."""
+        r = CONTROL_ANGLE_RAW
+        return cls(
+            quantize("control roll angle", roll, 100, -r, r, "deg"),
+            quantize("control pitch angle", pitch, 100, -r, r, "deg"),
+            quantize("control yaw angle", yaw, 100, -r, r, "deg"),
+        )
+
+    @classmethod
+    def rates(
+        cls, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0, *, zoom: float = 1.0
+    ) -> ControlValues:
+        """Desired angular rates in °/s. The wire value is in units of 0.1/zoom °/s (the
+        current main-view zoom ratio), range ±1500, so the reachable rate shrinks with zoom."""
+        if not zoom >= 1.0:
+            raise ValueError(f"zoom: {zoom!r} is outside the allowed range [1, inf) ratio")
+        scale = 10.0 * zoom
+        r = CONTROL_RATE_RAW
+        return cls(
+            quantize("control roll rate", roll, scale, -r, r, f"deg/s at zoom {zoom:g}x"),
+            quantize("control pitch rate", pitch, scale, -r, r, f"deg/s at zoom {zoom:g}x"),
+            quantize("control yaw rate", yaw, scale, -r, r, f"deg/s at zoom {zoom:g}x"),
+        )
+
+    def as_angles(self) -> Attitude:
+        """Read the raw values as angles (degrees)."""
+        return Attitude(self.roll_raw / 100, self.pitch_raw / 100, self.yaw_raw / 100)
+
+    def as_rates(self, zoom: float = 1.0) -> Attitude:
+        """Read the raw values as angular rates (°/s) at the given zoom ratio."""
+        s = 10.0 * zoom
+        return Attitude(self.roll_raw / s, self.pitch_raw / s, self.yaw_raw / s)
+
+
+class HostMainFrame(NamedTuple):
+    """Host main frame, bytes 5–36 (raw integers)."""
+
+    control_roll_raw: int = 0
+    """Bytes 5–6, S16: control value (rate or angle, per mode)."""
+    control_pitch_raw: int = 0
+    """Bytes 7–8, S16."""
+    control_yaw_raw: int = 0
+    """Bytes 9–10, S16."""
+    flags_raw: int = 0
+    """Byte 11: B2 control values valid, B0 aircraft INS valid."""
+    aircraft_roll_raw: int = 0
+    """Bytes 12–13, S16, 0.01°, [-18000, 18000)."""
+    aircraft_pitch_raw: int = 0
+    """Bytes 14–15, S16, 0.01°, [-9000, 9000]."""
+    aircraft_yaw_raw: int = 0
+    """Bytes 16–17, U16, 0.01°, [0, 36000)."""
+    accel_north_raw: int = 0
+    """Bytes 18–19, S16, 0.01 m/s², gravity excluded."""
+    accel_east_raw: int = 0
+    """Bytes 20–21."""
+    accel_up_raw: int = 0
+    """Bytes 22–23, up positive."""
+    vel_north_raw: int = 0
+    """Bytes 24–25, S16, 0.01 m/s."""
+    vel_east_raw: int = 0
+    """Bytes 26–27."""
+    vel_up_raw: int = 0
+    """Bytes 28–29, up positive."""
+    subframe_request: int = 0
+    """Byte 30: GCU sub-frame request code (0x01 standard, 0x00 none)."""
+
+    @classmethod
+    def build(
+        cls,
+        *,
+        control: ControlValues | None = None,
+        attitude: Attitude | tuple[float, float, float] | None = None,
+        acceleration: NorthEastUp | tuple[float, float, float] | None = None,
+        velocity: NorthEastUp | tuple[float, float, float] | None = None,
+        subframe_request: int = SubFrameRequest.STANDARD,
+    ) -> HostMainFrame:
+        """Build from engineering units. ``control=None`` sends the control values invalid
+        (B2 = 0); ``attitude=None`` marks the INS data invalid (B0 = 0) and sends zeros."""
+        flags = 0
+        c = control if control is not None else ControlValues()
+        if control is not None:
+            flags |= HostFlags.CONTROL_VALID
+        roll = pitch = yaw = 0
+        if attitude is not None:
+            flags |= HostFlags.INS_VALID
+            a_roll, a_pitch, a_yaw = attitude
+            roll = quantize("aircraft roll", a_roll, 100, -18000, 18000, "deg", high_open=True)
+            pitch = quantize("aircraft pitch", a_pitch, 100, -9000, 9000, "deg")
+            yaw = quantize("aircraft yaw", a_yaw, 100, 0, 36000, "deg", high_open=True)
+        an, ae, au = _neu("aircraft acceleration", acceleration, "m/s^2")
+        vn, ve, vu = _neu("aircraft velocity", velocity, "m/s")
+        check_int("subframe_request", subframe_request, 0, 255)
+        return cls(*c, flags, roll, pitch, yaw, an, ae, au, vn, ve, vu, int(subframe_request))
+
+    # -- unit views --------------------------------------------------------------------
+    @property
+    def flags(self) -> HostFlags:
+        return HostFlags(self.flags_raw)
+
+    @property
+    def control_valid(self) -> bool:
+        return bool(self.flags_raw & HostFlags.CONTROL_VALID)
+
+    @property
+    def ins_valid(self) -> bool:
+        return bool(self.flags_raw & HostFlags.INS_VALID)
+
+    @property
+    def control(self) -> ControlValues:
+        return ControlValues(self.control_roll_raw, self.control_pitch_raw, self.control_yaw_raw)
+
+    @property
+    def aircraft_attitude(self) -> Attitude:
+        """Aircraft absolute roll, pitch, yaw in degrees."""
+        return Attitude(
+            self.aircraft_roll_raw / 100, self.aircraft_pitch_raw / 100, self.aircraft_yaw_raw / 100
+        )
+
+    @property
+    def acceleration(self) -> NorthEastUp:
+        """Aircraft acceleration north/east/up in m/s², gravity excluded."""
+        return NorthEastUp(
+            self.accel_north_raw / 100, self.accel_east_raw / 100, self.accel_up_raw / 100
+        )
+
+    @property
+    def velocity(self) -> NorthEastUp:
+        """Aircraft velocity north/east/up in m/s."""
+        return NorthEastUp(self.vel_north_raw / 100, self.vel_east_raw / 100, self.vel_up_raw / 100)
+
+    def validate(self) -> None:
+        """Raise :class:`FieldRangeError` for any raw field outside its wire range."""
+        lo, hi = S16
+        for name in ("control_roll_raw", "control_pitch_raw", "control_yaw_raw"):
+            check_int(name, getattr(self, name), -CONTROL_ANGLE_RAW, CONTROL_ANGLE_RAW)
+        check_flags("flags_raw", self.flags_raw, HostFlags)
+        check_int("aircraft_roll_raw", self.aircraft_roll_raw, -18000, 17999, "0.01 deg")
+        check_int("aircraft_pitch_raw", self.aircraft_pitch_raw, -9000, 9000, "0.01 deg")
+        check_int("aircraft_yaw_raw", self.aircraft_yaw_raw, 0, 35999, "0.01 deg")
+        for name in (
+            "accel_north_raw", "accel_east_raw", "accel_up_raw",
+            "vel_north_raw", "vel_east_raw", "vel_up_raw",
+        ):  # fmt: skip
+            check_int(name, getattr(self, name), lo, hi)
+        check_int("subframe_request", self.subframe_request, 0, 255)
+
+    def as_dict(self) -> dict[str, Any]:
+        """Every field, in units and raw, for JSON output."""
+        return {
+            "control_raw": list(self.control),
+            "control_as_angles_deg": list(self.control.as_angles()),
+            "control_valid": self.control_valid,
+            "ins_valid": self.ins_valid,
+            "flags_raw": self.flags_raw,
+            "aircraft_attitude_deg": self.aircraft_attitude._asdict(),
+            "aircraft_attitude_raw": [
+                self.aircraft_roll_raw, self.aircraft_pitch_raw, self.aircraft_yaw_raw
+            ],
+            "acceleration_m_s2": self.acceleration._asdict(),
+            "acceleration_raw": [self.accel_north_raw, self.accel_east_raw, self.accel_up_raw],
+            "velocity_m_s": self.velocity._asdict(),
+            "velocity_raw": [self.vel_north_raw, self.vel_east_raw, self.vel_up_raw],
+            "subframe_request": self.subframe_request,
+        }  # fmt: skip
+
+
+def _neu(
+    field: str, value: NorthEastUp | tuple[float, float, float] | None, unit: str
+) -> tuple[int, int, int]:
+    if value is None:
+        return (0, 0, 0)
+    n, e, u = value
+    lo, hi = S16
+    return (
+        quantize(f"{field} north", n, 100, lo, hi, unit),
+        quantize(f"{field} east", e, 100, lo, hi, unit),
+        quantize(f"{field} up", u, 100, lo, hi, unit),
+    )
+
+
+class HostSubFrame(NamedTuple):
+    """Host sub frame 0x01, bytes 38–68 (raw integers): the aircraft's GNSS data."""
+
+    longitude_raw: int = 0
+    """Bytes 38–41, S32, 1e-7°."""
+    latitude_raw: int = 0
+    """Bytes 42–45, S32, 1e-7°."""
+    altitude_raw: int = 0
+    """Bytes 46–49, S32, mm above mean sea level."""
+    satellites: int = 0
+    """Byte 50, U8."""
+    gnss_ms: int = 0
+    """Bytes 51–54, U32: milliseconds of the GNSS week."""
+    gnss_week: int = 0
+    """Bytes 55–56, S16: GNSS week number."""
+    relative_altitude_raw: int = 0
+    """Bytes 57–60, S32, mm (0 if not needed)."""
+
+
+    @classmethod
+    def build(
+        cls,
+        *,
+        latitude: float,
+        longitude: float,
+        altitude: float,
+        satellites: int = 0,
+        gnss_week: int = 0,
+        gnss_ms: int = 0,
+        gnss_time: datetime | None = None,
+        relative_altitude: float = 0.0,
+        apply_leap_seconds: bool = False,
+    ) -> HostSubFrame:
+        """Build from degrees and metres. ``gnss_time`` (an aware UTC datetime) replaces
+        ``gnss_week``/``gnss_ms``; see :mod:`gcu_async.protocol.gpstime` for leap seconds."""
+        if gnss_time is not None:
+            from gcu_async.protocol.gpstime import utc_to_gps
+
+            gnss_week, gnss_ms = utc_to_gps(gnss_time, apply_leap_seconds=apply_leap_seconds)
+        frame = cls(
+            quantize("longitude", longitude, 1e7, -1_800_000_000, 1_800_000_000, "deg"),
+            quantize("latitude", latitude, 1e7, -900_000_000, 900_000_000, "deg"),
+            quantize("altitude", altitude, 1000, -(2**31), 2**31 - 1, "m"),
+            check_int("satellites", satellites, 0, 255),
+            check_int("gnss_ms", gnss_ms, 0, MS_PER_WEEK - 1, "ms"),
+            check_int("gnss_week", gnss_week, 0, 32767),
+            quantize("relative altitude", relative_altitude, 1000, -(2**31), 2**31 - 1, "m"),
+        )
+        return frame
+
+    @property
+    def latitude(self) -> float:
+        return self.latitude_raw / 1e7
+
+    @property
+    def longitude(self) -> float:
+        return self.longitude_raw / 1e7
+
+    @property
+    def altitude(self) -> float:
+        """Metres above mean sea level."""
+        return self.altitude_raw / 1000
+
+    @property
+    def relative_altitude(self) -> float:
+        return self.relative_altitude_raw / 1000
+
+    @property
+    def position(self) -> GeoPosition:
+        return GeoPosition(self.latitude, self.longitude, self.altitude)
+
+    def gnss_time(self, *, apply_leap_seconds: bool = False) -> datetime:
+        """GNSS week + ms as a UTC datetime (the document's rule ignores leap seconds)."""
+        from gcu_async.protocol.gpstime import gps_to_utc
+
+        return gps_to_utc(self.gnss_week, self.gnss_ms, apply_leap_seconds=apply_leap_seconds)
+
+    def validate(self) -> None:
+        check_int("longitude_raw", self.longitude_raw, -1_800_000_000, 1_800_000_000, "1e-7 deg")
+        check_int("latitude_raw", self.latitude_raw, -900_000_000, 900_000_000, "1e-7 deg")
+        check_int("altitude_raw", self.altitude_raw, -(2**31), 2**31 - 1, "mm")
+        check_int("satellites", self.satellites, 0, 255)
+        check_int("gnss_ms", self.gnss_ms, 0, MS_PER_WEEK - 1, "ms")
+        check_int("gnss_week", self.gnss_week, 0, 32767)
+        check_int("relative_altitude_raw", self.relative_altitude_raw, -(2**31), 2**31 - 1, "mm")
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "header": SUB_FRAME_HEADER,
+            "latitude_deg": self.latitude,
+            "longitude_deg": self.longitude,
+            "altitude_m": self.altitude,
+            "latitude_raw": self.latitude_raw,
+            "longitude_raw": self.longitude_raw,
+            "altitude_raw": self.altitude_raw,
+            "satellites": self.satellites,
+            "gnss_week": self.gnss_week,
+            "gnss_ms": self.gnss_ms,
+            "gnss_time_utc": self.gnss_time().isoformat(),
+            "relative_altitude_m": self.relative_altitude,
+            "relative_altitude_raw": self.relative_altitude_raw,
+        }

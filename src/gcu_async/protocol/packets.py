@@ -1,0 +1,211 @@
+"""Whole packets in both directions: encode and decode.
+
+Layout (both directions): 0–1 header, 2–3 total length S (LE), 4 version, 5–36 main frame,
+37–68 sub frame, 69 opcode, 70..S-3 parameters (host) or execution status (GCU),
+S-2..S-1 CRC-16/XMODEM of bytes 0..S-3, **high byte first**.
+"""
+
+from __future__ import annotations
+
+import struct
+from typing import Any, NamedTuple
+
+from gcu_async.errors import FieldRangeError, RemoteProtocolError
+from gcu_async.protocol.commands import Command, NullCommand, command_code, decode_command
+from gcu_async.protocol.crc import crc16_xmodem
+from gcu_async.protocol.feedback import Feedback
+from gcu_async.protocol.gcu_frames import (
+    GCU_MAIN,
+    GCU_SUB,
+    GcuMainFrame,
+    GcuSubFrame,
+    UnknownSubFrame,
+)
+from gcu_async.protocol.host_frames import (
+    HOST_MAIN,
+    HOST_SUB,
+    SUB_FRAME_HEADER,
+    HostMainFrame,
+    HostSubFrame,
+)
+from gcu_async.protocol.units import check_int
+
+HOST_HEADER = b"\xa8\xe5"
+GCU_HEADER = b"\x8a\x5e"
+PREFIX = struct.Struct("<2sHB")
+"""Bytes 0–4: header, length S, version."""
+CRC_STRUCT = struct.Struct(">H")
+BASE_LENGTH = 72
+"""S of a packet with no parameters / no execution status."""
+MAX_LENGTH = 256
+"""Longest packet the deframers accept by default (V2.0.6's longest is 84 bytes)."""
+SUPPORTED_VERSIONS = frozenset({1, 2})
+DEFAULT_VERSION = 2
+_ZERO_SUB = bytes(32)
+_OFFSET_SUB = 37
+_OFFSET_OPCODE = 69
+
+HostSub = HostSubFrame | UnknownSubFrame | None
+GcuSub = GcuSubFrame | UnknownSubFrame | None
+
+
+class HostPacket(NamedTuple):
+    """A host → GCU packet."""
+
+    main: HostMainFrame
+    sub: HostSub = None
+    """``None`` when bytes 37–68 are all zero (no sub frame)."""
+    command: Command = NullCommand()
+    version: int = DEFAULT_VERSION
+
+    def encode(self) -> bytes:
+        """Validate every field and return the wire bytes."""
+        self.main.validate()
+        if self.sub is not None:
+            self.sub.validate()
+        check_int("version", self.version, 0, 255)
+        params = self.command.encode_params()
+        buf = bytearray(BASE_LENGTH + len(params))
+        PREFIX.pack_into(buf, 0, HOST_HEADER, len(buf), self.version)
+        HOST_MAIN.pack_into(buf, 5, *self.main)
+        _pack_sub(buf, self.sub, HOST_SUB)
+        buf[_OFFSET_OPCODE] = command_code(self.command)
+        buf[70 : 70 + len(params)] = params
+        return _seal(buf)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "direction": "host_to_gcu",
+            "version": self.version,
+            "main": self.main.as_dict(),
+            "sub": None if self.sub is None else self.sub.as_dict(),
+            "command": self.command.as_dict(),
+        }
+
+
+class GcuPacket(NamedTuple):
+    """A GCU → host packet."""
+
+    main: GcuMainFrame
+    sub: GcuSub = None
+    """``None`` when bytes 37–68 are all zero (no sub frame requested, or an unknown one)."""
+    feedback: Feedback = Feedback(0)
+    version: int = DEFAULT_VERSION
+
+    def encode(self) -> bytes:
+        """Validate every field and return the wire bytes."""
+        self.main.validate()
+        if self.sub is not None:
+            self.sub.validate()
+        check_int("version", self.version, 0, 255)
+        check_int("feedback opcode", self.feedback.opcode, 0, 255)
+        status = self.feedback.status
+        n = BASE_LENGTH if status is None else BASE_LENGTH + 1
+        buf = bytearray(n)
+        PREFIX.pack_into(buf, 0, GCU_HEADER, n, self.version)
+        GCU_MAIN.pack_into(buf, 5, *self.main)
+        _pack_sub(buf, self.sub, GCU_SUB)
+        buf[_OFFSET_OPCODE] = self.feedback.opcode
+        if status is not None:
+            buf[70] = check_int("feedback status", status, 0, 255)
+        return _seal(buf)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "direction": "gcu_to_host",
+            "version": self.version,
+            "main": self.main.as_dict(),
+            "sub": None if self.sub is None else self.sub.as_dict(),
+            "feedback": self.feedback.as_dict(),
+        }
+
+
+def _pack_sub(buf: bytearray, sub: Any, layout: struct.Struct) -> None:
+    if sub is None:
+        return
+    if isinstance(sub, UnknownSubFrame):
+        buf[_OFFSET_SUB] = sub.header
+        buf[38:69] = sub.data
+    else:
+        buf[_OFFSET_SUB] = SUB_FRAME_HEADER
+        layout.pack_into(buf, 38, *sub)
+
+
+def _seal(buf: bytearray) -> bytes:
+    CRC_STRUCT.pack_into(buf, len(buf) - 2, crc16_xmodem(memoryview(buf)[:-2]))
+    return bytes(buf)
+
+
+def _check_envelope(data: bytes, header: bytes) -> int:
+    """Check header, length, version and CRC; return the version."""
+    n = len(data)
+    if n < BASE_LENGTH:
+        raise RemoteProtocolError(f"packet of {n} bytes is shorter than the minimum {BASE_LENGTH}")
+    hdr, length, version = PREFIX.unpack_from(data)
+    if hdr != header:
+        raise RemoteProtocolError(f"header {hdr.hex(' ')} is not {header.hex(' ')}")
+    if length != n:
+        raise RemoteProtocolError(f"length field says {length} bytes, packet has {n}")
+    crc = crc16_xmodem(memoryview(data)[:-2])
+    sent = CRC_STRUCT.unpack_from(data, n - 2)[0]
+    if crc != sent:
+        raise RemoteProtocolError(f"CRC mismatch: computed 0x{crc:04X}, packet has 0x{sent:04X}")
+    if version not in SUPPORTED_VERSIONS:
+        raise RemoteProtocolError(f"protocol version {version} is not supported (1 or 2)")
+    return int(version)
+
+
+_new = tuple.__new__
+
+
+def decode_gcu_packet(data: bytes) -> GcuPacket:
+    """Decode one complete GCU → host packet (as produced by a :class:`Deframer`).
+
+    Raises :class:`RemoteProtocolError` for a bad header, length, CRC, version or a
+    feedback longer than one status byte.
+    """
+    version = _check_envelope(data, GCU_HEADER)
+    main = _new(GcuMainFrame, GCU_MAIN.unpack_from(data, 5))
+    sub_header = data[_OFFSET_SUB]
+    sub: GcuSub
+    if sub_header == SUB_FRAME_HEADER:
+        sub = _new(GcuSubFrame, GCU_SUB.unpack_from(data, 38))
+    elif data[37:69] == _ZERO_SUB:
+        sub = None
+    else:
+        sub = UnknownSubFrame(sub_header, bytes(data[38:69]))
+    n = len(data)
+    if n == BASE_LENGTH:
+        feedback = Feedback(data[_OFFSET_OPCODE])
+    elif n == BASE_LENGTH + 1:
+        feedback = Feedback(data[_OFFSET_OPCODE], data[70])
+    else:
+        extra = n - BASE_LENGTH
+        raise RemoteProtocolError(f"execution status of {extra} bytes; V2.0.6 defines one")
+    return _new(GcuPacket, (main, sub, feedback, version))
+
+
+def decode_host_packet(data: bytes) -> HostPacket:
+    """Decode one complete host → GCU packet, including the typed command."""
+    version = _check_envelope(data, HOST_HEADER)
+    main = _new(HostMainFrame, HOST_MAIN.unpack_from(data, 5))
+    sub_header = data[_OFFSET_SUB]
+    sub: HostSub
+    if sub_header == SUB_FRAME_HEADER:
+        sub = _new(HostSubFrame, HOST_SUB.unpack_from(data, 38))
+    elif data[37:69] == _ZERO_SUB:
+        sub = None
+    else:
+        sub = UnknownSubFrame(sub_header, bytes(data[38:69]))
+    try:
+        command = decode_command(data[_OFFSET_OPCODE], bytes(data[70:-2]))
+    except FieldRangeError as exc:
+        raise RemoteProtocolError(str(exc)) from exc
+    return _new(HostPacket, (main, sub, command, version))
+
+
+def decode_packet(data: bytes) -> HostPacket | GcuPacket:
+    """Decode a packet of either direction, chosen by its header."""
+    if data[:2] == GCU_HEADER:
+        return decode_gcu_packet(data)
+    return decode_host_packet(data)
