@@ -1,0 +1,72 @@
+"""The aircraft state a host sends in every packet (host main frame bytes 11–29, sub frame).
+
+NOTES §11: acceleration is north/east/up **without gravity** (zero at rest or in straight,
+constant-speed flight) and velocity north/east/up; wrong values corrupt the gimbal's
+attitude solution. Fields left ``None`` are never invented: no attitude → INS-valid bit
+clear; no position → no sub frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from datetime import datetime
+
+from gcu_async.protocol.enums import SubFrameRequest
+from gcu_async.protocol.gpstime import utc_to_gps
+from gcu_async.protocol.host_frames import ControlValues, HostMainFrame, HostSubFrame
+from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp
+
+
+@dataclass(frozen=True, slots=True)
+class AircraftState:
+    """Aircraft attitude (°; yaw in [0, 360)), acceleration (m/s², N/E/U, gravity excluded),
+    velocity (m/s, N/E/U), position (°, ° , m MSL), relative altitude (m), satellites and
+    GNSS week + milliseconds of week. Validated on construction."""
+
+    attitude: Attitude | None = None
+    acceleration: NorthEastUp | None = None
+    velocity: NorthEastUp | None = None
+    position: GeoPosition | None = None
+    relative_altitude: float = 0.0
+    satellites: int = 0
+    gnss_week: int = 0
+    gnss_ms: int = 0
+
+    def __post_init__(self) -> None:
+        self.main_frame()
+        self.sub_frame()
+
+    @staticmethod
+    def gnss_from_utc(utc: datetime, *, apply_leap_seconds: bool = True) -> tuple[int, int]:
+        """(week, ms) for a UTC time; GNSS receivers count GPS time, so leap seconds are
+        applied by default (the document's Appendix 6 functions do not)."""
+        return utc_to_gps(utc, apply_leap_seconds=apply_leap_seconds)
+
+    def main_frame(
+        self,
+        control: ControlValues | None = None,
+        subframe_request: int = SubFrameRequest.STANDARD,
+    ) -> HostMainFrame:
+        """Host main frame with this state and the given control values (None = invalid)."""
+        return HostMainFrame.build(
+            control=control,
+            attitude=self.attitude,
+            acceleration=self.acceleration,
+            velocity=self.velocity,
+            subframe_request=subframe_request,
+        )
+
+    def sub_frame(self) -> HostSubFrame | None:
+        """Host sub frame 0x01, or ``None`` when no position is known."""
+        if self.position is None:
+            return None
+        lat, lon, alt = self.position
+        return HostSubFrame.build(
+            latitude=lat,
+            longitude=lon,
+            altitude=alt,
+            satellites=self.satellites,
+            gnss_week=self.gnss_week,
+            gnss_ms=self.gnss_ms,
+            relative_altitude=self.relative_altitude,
+        )

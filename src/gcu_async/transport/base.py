@@ -1,0 +1,102 @@
+"""The one small interface every transport implements: bytes in, bytes out.
+
+Transports know nothing of the protocol. Received bytes go to the ``on_data`` handler in
+arrival order (stream transports may split or merge packets; the session's deframer copes);
+link changes go to ``on_event``. ``send`` never blocks: it hands bytes to the OS (or the
+peer) and raises :class:`~gcu_async.errors.LinkLost` when the link is down.
+"""
+
+from __future__ import annotations
+
+import abc
+import enum
+from collections.abc import Callable
+from dataclasses import dataclass
+from types import TracebackType
+
+DataHandler = Callable[[bytes], None]
+
+
+class LinkEventKind(enum.Enum):
+    """What happened to the link."""
+
+    LOST = "lost"
+    """The link went down (peer closed, I/O error). Stream transports may try to restore it."""
+    RESTORED = "restored"
+    """A lost link is back (e.g. TCP reconnected)."""
+    PEER = "peer"
+    """Bytes came from a new peer address (UDP any-source discovery)."""
+
+
+@dataclass(frozen=True)
+class LinkEvent:
+    kind: LinkEventKind
+    detail: str = ""
+    peer: tuple[str, int] | None = None
+
+
+EventHandler = Callable[[LinkEvent], None]
+
+
+def _drop(data: bytes) -> None:
+    return None
+
+
+def _ignore(event: LinkEvent) -> None:
+    return None
+
+
+class Transport(abc.ABC):
+    """Base of serial, UDP, TCP and in-memory transports.
+
+    Use as ``async with transport:`` or call :meth:`open` / :meth:`close`. Handlers are set
+    with :meth:`set_handlers` before opening and are called from the event loop.
+    """
+
+    def __init__(self) -> None:
+        self._on_data: DataHandler = _drop
+        self._on_event: EventHandler = _ignore
+
+    def set_handlers(self, on_data: DataHandler, on_event: EventHandler | None = None) -> None:
+        """Route received bytes to ``on_data`` and link events to ``on_event``."""
+        self._on_data = on_data
+        self._on_event = on_event if on_event is not None else _ignore
+
+    @property
+    @abc.abstractmethod
+    def url(self) -> str:
+        """Where this transport goes, as a URL (``udp://127.0.0.1:2337``)."""
+
+    @property
+    @abc.abstractmethod
+    def connected(self) -> bool:
+        """True while :meth:`send` can deliver bytes."""
+
+    @abc.abstractmethod
+    async def open(self) -> None:
+        """Open the link. Raises :class:`~gcu_async.errors.LinkLost` if it cannot."""
+
+    @abc.abstractmethod
+    def send(self, data: bytes) -> None:
+        """Send ``data`` without blocking. Raises :class:`~gcu_async.errors.LinkLost` if
+        the link is down."""
+
+    @abc.abstractmethod
+    async def close(self) -> None:
+        """Close the link and release every socket / fd. Idempotent."""
+
+    async def __aenter__(self) -> Transport:
+        await self.open()
+        return self
+
+    async def __aexit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        await self.close()
+
+    def __repr__(self) -> str:
+        state = "connected" if self.connected else "closed"
+        return f"<{type(self).__name__} {self.url} {state}>"
