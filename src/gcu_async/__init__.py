@@ -1,6 +1,8 @@
 """gcu_async — asyncio driver, simulator and sans-I/O codec for XF Robot gimbal GCUs
 (GCU private protocol V2.0.6)."""
 
+from gcu_async.client import GcuClient, LinkHealth, TelemetrySample
+from gcu_async.client.connect import connect
 from gcu_async.errors import (
     CommandFailed,
     CommandTimeout,
@@ -17,7 +19,8 @@ from gcu_async.protocol import __all__ as _protocol_all
 __version__ = "0.1.0"
 
 __all__ = [
-    "CommandFailed", "CommandTimeout", "FieldRangeError", "GcuError", "LinkLost",
-    "LocalProtocolError", "RemoteProtocolError", "UnsupportedCommandError", "__version__",
+    "CommandFailed", "CommandTimeout", "FieldRangeError", "GcuClient", "GcuError", "LinkHealth",
+    "LinkLost", "LocalProtocolError", "RemoteProtocolError", "TelemetrySample",
+    "UnsupportedCommandError", "__version__", "connect",
     *_protocol_all,
 ]  # fmt: skip

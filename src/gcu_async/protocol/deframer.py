@@ -9,6 +9,7 @@ Every byte fed ends up in exactly one of: a returned packet, ``bytes_discarded``
 
 from __future__ import annotations
 
+from binascii import crc_hqx
 from dataclasses import dataclass
 
 from gcu_async.protocol.crc import crc16_xmodem
@@ -28,7 +29,7 @@ class DeframerStats:
 class Deframer:
     """Sync on ``header``, check length and CRC, return whole packets as ``bytes``."""
 
-    __slots__ = ("_buf", "_header", "_max", "stats")
+    __slots__ = ("_buf", "_header", "_max", "_synced", "stats")
 
     def __init__(self, header: bytes, *, max_length: int = MAX_LENGTH) -> None:
         if len(header) != 2:
@@ -38,6 +39,7 @@ class Deframer:
         self._header = bytes(header)
         self._max = max_length
         self._buf = bytearray()
+        self._synced = True
         self.stats = DeframerStats()
 
     @classmethod
@@ -59,6 +61,7 @@ class Deframer:
         """Drop buffered bytes (counted as discarded), e.g. after a reconnect."""
         self.stats.bytes_discarded += len(self._buf)
         self._buf.clear()
+        self._synced = True
 
     def feed(self, data: bytes | bytearray | memoryview) -> list[bytes]:
         """Add ``data``; return every packet completed by it, in order. Never raises on
@@ -72,15 +75,22 @@ class Deframer:
         stats = self.stats
         pos = 0
         n = len(buf)
+        # synced: nothing discarded since the last packet (or the start), so a header here
+        # is where the next packet must begin; it is waited for even when a complete packet
+        # starts inside its span (that one may be its own payload, not a packet)
+        synced = self._synced
         while True:
             i = buf.find(header, pos)
             if i < 0:
                 # keep a trailing first header byte: the second may arrive next
                 keep = n - 1 if n > pos and buf[n - 1] == first else n
                 stats.bytes_discarded += keep - pos
+                synced = synced and keep == pos
                 pos = keep
                 break
-            stats.bytes_discarded += i - pos
+            if i != pos:
+                stats.bytes_discarded += i - pos
+                synced = False
             pos = i
             if n - i < 4:
                 break
@@ -88,10 +98,11 @@ class Deframer:
             if not BASE_LENGTH <= length <= max_len:
                 stats.length_errors += 1
                 stats.bytes_discarded += 1
+                synced = False
                 pos = i + 1
                 continue
             if n - i < length:
-                if self._later_packet(i):
+                if not synced and self._later_packet(i):
                     # a complete valid packet starts inside this candidate's span: the
                     # candidate is a false header and must not hold the valid one back
                     stats.length_errors += 1
@@ -100,15 +111,18 @@ class Deframer:
                     continue
                 break
             end = i + length
-            crc = crc16_xmodem(memoryview(buf)[i : end - 2])
-            if crc != (buf[end - 2] << 8 | buf[end - 1]):
+            packet = buf[i:end]
+            if crc_hqx(packet, 0):  # CRC-16/XMODEM (crc.py) over data + CRC is 0 iff it matches
                 stats.crc_errors += 1
                 stats.bytes_discarded += 1
+                synced = False
                 pos = i + 1
                 continue
-            out.append(bytes(buf[i:end]))
-            stats.packets += 1
+            out.append(bytes(packet))
+            synced = True
             pos = end
+        self._synced = synced
+        stats.packets += len(out)
         if pos:
             del buf[:pos]
         return out

@@ -31,6 +31,11 @@ SUB_FRAME_HEADER = 0x01
 CONTROL_ANGLE_RAW = 18000  # 0.01°
 CONTROL_RATE_RAW = 1500  # 0.1 °/s ÷ zoom
 MS_PER_WEEK = 604_800_000
+_FLAG_BITS = 0
+for _flag in HostFlags:
+    _FLAG_BITS |= int(_flag)
+_NOT_FLAG_BITS = ~_FLAG_BITS
+"""Reserved bits of byte 11 (what ``check_flags(..., HostFlags)`` rejects)."""
 
 
 class ControlValues(NamedTuple):
@@ -57,7 +62,7 @@ class ControlValues(NamedTuple):
     ) -> ControlValues:
         """Desired angular rates in °/s. The wire value is in units of 0.1/zoom °/s (the
         current main-view zoom ratio), range ±1500, so the reachable rate shrinks with zoom."""
-        if not zoom >= 1.0:
+        if not 1.0 <= zoom < float("inf"):
             raise ValueError(f"zoom: {zoom!r} is outside the allowed range [1, inf) ratio")
         scale = 10.0 * zoom
         r = CONTROL_RATE_RAW
@@ -175,6 +180,25 @@ class HostMainFrame(NamedTuple):
 
     def validate(self) -> None:
         """Raise :class:`FieldRangeError` for any raw field outside its wire range."""
+        # Fast path (encode is hot): plain ints inside the very ranges checked below.
+        # Anything else (bools, other int subclasses, wrong types, out of range) takes
+        # the field-by-field checks, which raise the error naming the field.
+        c1, c2, c3, fl, ar, ap, ay, a1, a2, a3, v1, v2, v3, req = self
+        if type(fl) is HostFlags:  # what build() stores
+            fl = int(fl)
+        c = CONTROL_ANGLE_RAW
+        if (
+            int is type(c1) is type(c2) is type(c3) is type(fl) is type(ar) is type(ap)
+            is type(ay) is type(a1) is type(a2) is type(a3) is type(v1) is type(v2)
+            is type(v3) is type(req)
+            and -c <= c1 <= c and -c <= c2 <= c and -c <= c3 <= c
+            and fl >= 0 and not fl & _NOT_FLAG_BITS
+            and -18000 <= ar <= 17999 and -9000 <= ap <= 9000 and 0 <= ay <= 35999
+            and -32768 <= a1 <= 32767 and -32768 <= a2 <= 32767 and -32768 <= a3 <= 32767
+            and -32768 <= v1 <= 32767 and -32768 <= v2 <= 32767 and -32768 <= v3 <= 32767
+            and 0 <= req <= 255
+        ):  # fmt: skip
+            return
         lo, hi = S16
         for name in ("control_roll_raw", "control_pitch_raw", "control_yaw_raw"):
             check_int(name, getattr(self, name), -CONTROL_ANGLE_RAW, CONTROL_ANGLE_RAW)
@@ -301,6 +325,18 @@ class HostSubFrame(NamedTuple):
         return gps_to_utc(self.gnss_week, self.gnss_ms, apply_leap_seconds=apply_leap_seconds)
 
     def validate(self) -> None:
+        """Raise :class:`FieldRangeError` for any raw field outside its wire range."""
+        # Fast path: plain ints inside the very ranges checked below (see HostMainFrame).
+        lon, lat, alt, sats, ms, week, rel = self
+        if (
+            int is type(lon) is type(lat) is type(alt) is type(sats) is type(ms)
+            is type(week) is type(rel)
+            and -1_800_000_000 <= lon <= 1_800_000_000 and -900_000_000 <= lat <= 900_000_000
+            and -(2**31) <= alt <= 2**31 - 1 and 0 <= sats <= 255
+            and 0 <= ms <= MS_PER_WEEK - 1 and 0 <= week <= 32767
+            and -(2**31) <= rel <= 2**31 - 1
+        ):  # fmt: skip
+            return
         check_int("longitude_raw", self.longitude_raw, -1_800_000_000, 1_800_000_000, "1e-7 deg")
         check_int("latitude_raw", self.latitude_raw, -900_000_000, 900_000_000, "1e-7 deg")
         check_int("altitude_raw", self.altitude_raw, -(2**31), 2**31 - 1, "mm")

@@ -8,10 +8,17 @@ S-2..S-1 CRC-16/XMODEM of bytes 0..S-3, **high byte first**.
 from __future__ import annotations
 
 import struct
-from typing import Any, NamedTuple
+from binascii import crc_hqx
+from typing import Any, NamedTuple, NoReturn
 
 from gcu_async.errors import FieldRangeError, RemoteProtocolError
-from gcu_async.protocol.commands import Command, NullCommand, command_code, decode_command
+from gcu_async.protocol.commands import (
+    Command,
+    NullCommand,
+    UnknownCommand,
+    command_code,
+    decode_command,
+)
 from gcu_async.protocol.crc import crc16_xmodem
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import (
@@ -44,6 +51,10 @@ DEFAULT_VERSION = 2
 _ZERO_SUB = bytes(32)
 _OFFSET_SUB = 37
 _OFFSET_OPCODE = 69
+# Bytes 0–69 in one struct (prefix, main frame, sub frame header + standard sub frame,
+# opcode): the hot paths pack / unpack a packet with one call.
+_GCU_BODY = struct.Struct("<2sHB" + GCU_MAIN.format[1:] + "B" + GCU_SUB.format[1:] + "B")
+_HOST_BODY = struct.Struct("<2sHB" + HOST_MAIN.format[1:] + "B" + HOST_SUB.format[1:] + "B")
 
 HostSub = HostSubFrame | UnknownSubFrame | None
 GcuSub = GcuSubFrame | UnknownSubFrame | None
@@ -60,11 +71,21 @@ class HostPacket(NamedTuple):
 
     def encode(self) -> bytes:
         """Validate every field and return the wire bytes."""
-        self.main.validate()
-        if self.sub is not None:
-            self.sub.validate()
-        check_int("version", self.version, 0, 255)
-        params = self.command.encode_params()
+        main, sub, command, version = self
+        main.validate()
+        if sub is not None:
+            sub.validate()
+        if type(version) is not int or not 0 <= version <= 255:
+            check_int("version", version, 0, 255)
+        params = command.encode_params()
+        if type(sub) is HostSubFrame and type(main) is HostMainFrame:  # bytes 0–69 at once
+            body = _HOST_BODY.pack(
+                HOST_HEADER, BASE_LENGTH + len(params), version,
+                *main, SUB_FRAME_HEADER, *sub,
+                command.code if isinstance(command, UnknownCommand) else command.OPCODE,
+            ) + params  # fmt: skip
+            # CRC-16/XMODEM (crc.py), high byte first
+            return body + CRC_STRUCT.pack(crc_hqx(body, 0))
         buf = bytearray(BASE_LENGTH + len(params))
         PREFIX.pack_into(buf, 0, HOST_HEADER, len(buf), self.version)
         HOST_MAIN.pack_into(buf, 5, *self.main)
@@ -136,6 +157,12 @@ def _seal(buf: bytearray) -> bytes:
     return bytes(buf)
 
 
+def _envelope_error(data: bytes, header: bytes) -> NoReturn:
+    """Raise the error :func:`_check_envelope` finds in ``data``."""
+    _check_envelope(data, header)
+    raise RemoteProtocolError("malformed packet")  # pragma: no cover - _check_envelope raised
+
+
 def _check_envelope(data: bytes, header: bytes) -> int:
     """Check header, length, version and CRC; return the version."""
     n = len(data)
@@ -164,25 +191,37 @@ def decode_gcu_packet(data: bytes) -> GcuPacket:
     Raises :class:`RemoteProtocolError` for a bad header, length, CRC, version or a
     feedback longer than one status byte.
     """
-    version = _check_envelope(data, GCU_HEADER)
-    main = _new(GcuMainFrame, GCU_MAIN.unpack_from(data, 5))
-    sub_header = data[_OFFSET_SUB]
+    # Fast path of _check_envelope (same checks, one struct call); on any failure,
+    # _check_envelope names the first problem. A CRC-16/XMODEM over a whole packet, its
+    # CRC included high byte first, is 0 exactly when that CRC matches (crc.py).
+    n = len(data)
+    if n < BASE_LENGTH:
+        _envelope_error(data, GCU_HEADER)
+    fields = _GCU_BODY.unpack_from(data)
+    if (
+        fields[0] != GCU_HEADER
+        or fields[1] != n
+        or crc_hqx(data, 0)
+        or fields[2] not in SUPPORTED_VERSIONS
+    ):
+        _envelope_error(data, GCU_HEADER)
+    main = _new(GcuMainFrame, fields[3:16])
+    sub_header = fields[16]
     sub: GcuSub
     if sub_header == SUB_FRAME_HEADER:
-        sub = _new(GcuSubFrame, GCU_SUB.unpack_from(data, 38))
+        sub = _new(GcuSubFrame, fields[17:30])
     elif data[37:69] == _ZERO_SUB:
         sub = None
     else:
         sub = UnknownSubFrame(sub_header, bytes(data[38:69]))
-    n = len(data)
     if n == BASE_LENGTH:
-        feedback = Feedback(data[_OFFSET_OPCODE])
+        feedback = _new(Feedback, (fields[30], None))
     elif n == BASE_LENGTH + 1:
-        feedback = Feedback(data[_OFFSET_OPCODE], data[70])
+        feedback = _new(Feedback, (fields[30], data[70]))
     else:
         extra = n - BASE_LENGTH
         raise RemoteProtocolError(f"execution status of {extra} bytes; V2.0.6 defines one")
-    return _new(GcuPacket, (main, sub, feedback, version))
+    return _new(GcuPacket, (main, sub, feedback, fields[2]))
 
 
 def decode_host_packet(data: bytes) -> HostPacket:

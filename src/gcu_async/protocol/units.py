@@ -7,7 +7,6 @@ or :func:`check_raw` (raw → range-checked), so every out-of-range value raises
 
 from __future__ import annotations
 
-import math
 from enum import IntFlag
 from typing import NamedTuple
 
@@ -58,10 +57,15 @@ def quantize(
 ) -> int:
     """Return ``round(value * scale)`` after checking it lies in ``[raw_low, raw_high]``
     (``raw_high`` excluded when ``high_open``); errors speak in the caller's units."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    if type(value) is not float and (
+        isinstance(value, bool) or not isinstance(value, (int, float))
+    ):  # the common float takes one cheap test
         raise TypeError(f"{field}: expected a number, got {type(value).__name__} {value!r}")
     high_limit = raw_high - 1 if high_open else raw_high
-    raw = round(value * scale) if math.isfinite(value) else None
+    try:
+        raw: int | None = round(value * scale)
+    except (OverflowError, ValueError):  # inf, nan, or too large for a float
+        raw = None
     if raw is None or not raw_low <= raw <= high_limit:
         raise FieldRangeError(
             field, value, _unit(raw_low, scale), _unit(raw_high, scale), unit, high_open=high_open

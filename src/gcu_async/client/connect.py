@@ -1,0 +1,30 @@
+"""``connect(url, **options)``: a :class:`GcuClient` over the transport a URL names."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from gcu_async.client.client import GcuClient
+
+CLIENT_OPTIONS = frozenset({
+    "rate_hz", "command_timeout", "connect_timeout", "silence_timeout", "check_support",
+    "version", "clock",
+})  # fmt: skip
+
+
+def connect(url: str, **options: Any) -> GcuClient:
+    """A client for ``url`` — use it as ``async with connect(url) as gcu:``.
+
+    URLs: ``udp://HOST[:PORT]`` (GCU port, default 2337), ``tcp://HOST[:PORT]`` (default
+    2332), ``serial:///dev/ttyUSB0?baudrate=115200``. Options named like
+    :class:`GcuClient`'s keyword arguments (``rate_hz``, ``command_timeout``,
+    ``connect_timeout``, ``silence_timeout``, ``check_support``, ``version``) configure the
+    session; the rest go to the transport (e.g. ``local_port``, ``discovery``, ``baudrate``).
+    A bad URL or option raises ``ValueError`` before anything is opened.
+    """
+    from gcu_async.transport.url import open_transport
+
+    client_options = {k: v for k, v in options.items() if k in CLIENT_OPTIONS}
+    transport_options = {k: v for k, v in options.items() if k not in CLIENT_OPTIONS}
+    transport = open_transport(url, **transport_options)
+    return GcuClient(transport, **client_options)

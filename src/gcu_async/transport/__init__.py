@@ -1,0 +1,20 @@
+"""Transports: serial, UDP, TCP and in-memory. Bytes in, bytes out; no protocol logic."""
+
+from gcu_async.transport.base import (
+    DataHandler,
+    EventHandler,
+    LinkEvent,
+    LinkEventKind,
+    Transport,
+)
+from gcu_async.transport.memory import MemoryTransport
+from gcu_async.transport.serial import BAUDRATES, SerialTransport
+from gcu_async.transport.tcp import Backoff, TcpTransport
+from gcu_async.transport.udp import UdpTransport
+from gcu_async.transport.url import open_transport
+
+__all__ = [
+    "BAUDRATES", "Backoff", "DataHandler", "EventHandler", "LinkEvent", "LinkEventKind",
+    "MemoryTransport", "SerialTransport", "TcpTransport", "Transport", "UdpTransport",
+    "open_transport",
+]  # fmt: skip

@@ -1,0 +1,312 @@
+"""TCP transport: the host is the client, the GCU the server on port 2332 (NOTES §9/§13).
+
+When an established connection drops, a :attr:`~LinkEventKind.LOST` event is emitted at
+once; with ``reconnect=True`` (default) a background task then reconnects with exponential
+backoff and full jitter (:class:`Backoff`): before attempt *n* (0-based) it sleeps
+``uniform(0, min(cap, base * factor**n))``. On success it emits
+:attr:`~LinkEventKind.RESTORED`; when the attempts (``max_attempts``) or the time since the
+loss (``max_total``) run out it stops, stays down and emits a final ``LOST`` whose detail
+starts with ``"giving up"``. :meth:`TcpTransport.open` may be called again after that.
+While down, :meth:`TcpTransport.send` raises :class:`LinkLost`.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import random
+from dataclasses import dataclass
+from typing import Any
+
+from gcu_async.errors import LinkLost
+from gcu_async.transport._common import call_guarded, check_port, check_positive, format_hostport
+from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
+
+GCU_TCP_PORT = 2332
+"""Port the GCU's TCP server listens on (NOTES §9)."""
+
+_CLOSE_GRACE = 1.0
+"""Seconds :meth:`TcpTransport.close` lets unsent bytes flush before aborting."""
+
+
+@dataclass(frozen=True)
+class Backoff:
+    """Reconnect schedule: exponential backoff with full jitter, bounded.
+
+    ``base`` and ``cap`` are seconds, ``factor`` >= 1. At least one bound is required:
+    ``max_attempts`` (attempts per outage) and/or ``max_total`` (seconds since the loss
+    after which no new attempt starts).
+    """
+
+    base: float = 0.05
+    factor: float = 2.0
+    cap: float = 2.0
+    max_attempts: int | None = 20
+    max_total: float | None = None
+
+    def __post_init__(self) -> None:
+        check_positive("backoff_base", self.base)
+        check_positive("backoff_cap", self.cap)
+        if check_positive("backoff_factor", self.factor) < 1:
+            raise ValueError(f"backoff_factor: {self.factor!r} is out of range (allowed >= 1)")
+        if self.cap < self.base:
+            raise ValueError(
+                f"backoff_cap: {self.cap!r} is smaller than backoff_base {self.base!r}"
+            )
+        ma = self.max_attempts
+        if ma is not None and (isinstance(ma, bool) or not isinstance(ma, int) or ma < 1):
+            raise ValueError(f"max_attempts: {ma!r} is out of range (allowed: integer >= 1)")
+        if self.max_total is not None:
+            check_positive("max_total", self.max_total)
+        if ma is None and self.max_total is None:
+            raise ValueError("max_attempts, max_total: at least one must be set (got None, None)")
+
+    def ceiling(self, attempt: int) -> float:
+        """Upper bound of the delay before attempt ``attempt`` (0-based)."""
+        try:
+            return min(self.cap, self.base * self.factor**attempt)
+        except OverflowError:
+            return self.cap
+
+    def delay(self, attempt: int, rng: random.Random) -> float:
+        """Full jitter: ``rng.random() * ceiling(attempt)``."""
+        return rng.random() * self.ceiling(attempt)
+
+
+class _TcpProtocol(asyncio.Protocol):
+    def __init__(self, owner: TcpTransport) -> None:
+        self._owner = owner
+        self.transport: asyncio.Transport | None = None
+        self.attached = False
+        self.closed: asyncio.Future[None] = asyncio.get_running_loop().create_future()
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        assert isinstance(transport, asyncio.Transport)
+        self.transport = transport
+        self._owner._made(self)
+
+    def data_received(self, data: bytes) -> None:
+        self._owner._data(self, data)
+
+    def eof_received(self) -> bool:
+        return False  # close our side too; connection_lost follows
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        if not self.closed.done():
+            self.closed.set_result(None)
+        self._owner._lost(self, exc)
+
+
+class TcpTransport(Transport):
+    """Stream link to a GCU's TCP server at ``host:port``.
+
+    ``connect_timeout`` bounds every connection attempt (seconds). ``reconnect`` enables
+    the background reconnection described in the module docstring, scheduled by
+    ``backoff`` and randomised by ``rng`` (pass a seeded :class:`random.Random` for
+    reproducible delays).
+    """
+
+    def __init__(
+        self,
+        host: str,
+        port: int = GCU_TCP_PORT,
+        *,
+        connect_timeout: float = 3.0,
+        reconnect: bool = True,
+        backoff: Backoff | None = None,
+        rng: random.Random | None = None,
+    ) -> None:
+        super().__init__()
+        if not isinstance(host, str) or not host:
+            raise ValueError(f"host: {host!r} is not a host name or address")
+        self._host = host
+        self._port = check_port("port", port)
+        self._connect_timeout = check_positive("connect_timeout", connect_timeout)
+        self._reconnect = bool(reconnect)
+        self.backoff = backoff if backoff is not None else Backoff()
+        self._rng = rng if rng is not None else random.Random()
+        self._proto: _TcpProtocol | None = None
+        self._live: set[_TcpProtocol] = set()
+        self._task: asyncio.Task[None] | None = None
+        self._closing = False
+        self.bytes_sent = 0
+        self.bytes_received = 0
+        self.reconnect_attempts = 0
+        """Connection attempts made during the current (or last) outage."""
+        self.reconnects = 0
+        """Outages ended by a successful reconnection."""
+
+    async def __aenter__(self) -> TcpTransport:
+        await self.open()
+        return self
+
+    @property
+    def url(self) -> str:
+        return f"tcp://{format_hostport(self._host, self._port)}"
+
+    @property
+    def connected(self) -> bool:
+        proto = self._proto
+        return (
+            proto is not None and proto.transport is not None and not proto.transport.is_closing()
+        )
+
+    @property
+    def connect_timeout(self) -> float:
+        """Seconds allowed for each connection attempt."""
+        return self._connect_timeout
+
+    @property
+    def reconnect(self) -> bool:
+        """Whether a lost connection is re-established in the background."""
+        return self._reconnect
+
+    def get_extra_info(self, name: str, default: Any = None) -> Any:
+        """asyncio's transport information (``"socket"``, ``"peername"``, ...) while up."""
+        proto = self._proto
+        if proto is None or proto.transport is None:
+            return default
+        return proto.transport.get_extra_info(name, default)
+
+    @property
+    def reconnecting(self) -> bool:
+        """True while the link is down and the background reconnect task is trying."""
+        return self._task is not None and not self._task.done() and not self.connected
+
+    async def open(self) -> None:
+        """Connect (bounded by ``connect_timeout``). Raises :class:`LinkLost` on failure.
+
+        Does nothing if already connected; stops a running reconnect task first."""
+        if self.connected:
+            return
+        self._closing = False
+        await self._stop_task()
+        await self._connect(self._connect_timeout)
+
+    def send(self, data: bytes) -> None:
+        """Queue ``data`` on the socket. Raises :class:`LinkLost` while the link is down."""
+        proto = self._proto
+        if proto is None or proto.transport is None or proto.transport.is_closing():
+            state = " (reconnecting)" if self.reconnecting else ""
+            raise LinkLost(f"{self.url}: link is down{state}")
+        self.bytes_sent += len(data)
+        proto.transport.write(bytes(data))
+
+    async def close(self) -> None:
+        """Stop reconnecting and close the socket; returns once everything is released.
+        Idempotent."""
+        self._closing = True
+        self._proto = None
+        await self._stop_task()
+        protos = list(self._live)
+        if not protos:
+            return
+        for proto in protos:
+            if proto.transport is not None:
+                proto.transport.close()
+        closed = [proto.closed for proto in protos]
+        await asyncio.wait(closed, timeout=_CLOSE_GRACE)
+        for proto in protos:
+            if not proto.closed.done() and proto.transport is not None:
+                proto.transport.abort()
+        await asyncio.wait(closed)
+
+    # -- connection management -------------------------------------------------------------
+
+    async def _connect(self, timeout: float) -> None:
+        loop = asyncio.get_running_loop()
+        made: list[_TcpProtocol] = []
+
+        def factory() -> _TcpProtocol:
+            proto = _TcpProtocol(self)
+            made.append(proto)
+            return proto
+
+        try:
+            await asyncio.wait_for(loop.create_connection(factory, self._host, self._port), timeout)
+        except asyncio.TimeoutError as exc:
+            if made and made[0].attached:
+                return  # connected just as the timeout fired: keep it
+            raise LinkLost(f"{self.url}: connect timed out after {timeout:g} s") from exc
+        except OSError as exc:
+            raise LinkLost(f"{self.url}: cannot connect: {exc}") from exc
+        if not made or not made[0].attached:
+            reason = "transport closed" if self._closing else "socket connected to itself"
+            raise LinkLost(f"{self.url}: cannot connect: {reason}")
+
+    async def _stop_task(self) -> None:
+        task, self._task = self._task, None
+        if task is not None and not task.done():
+            task.cancel()
+            await asyncio.wait({task})
+
+    async def _reconnect_loop(self) -> None:
+        loop = asyncio.get_running_loop()
+        backoff = self.backoff
+        deadline = None if backoff.max_total is None else loop.time() + backoff.max_total
+        self.reconnect_attempts = 0
+        last: LinkLost | None = None
+        try:
+            while backoff.max_attempts is None or self.reconnect_attempts < backoff.max_attempts:
+                delay = backoff.delay(self.reconnect_attempts, self._rng)
+                timeout = self._connect_timeout
+                if deadline is not None:
+                    left = deadline - loop.time() - delay
+                    if left <= 0:
+                        break
+                    timeout = min(timeout, left)
+                await asyncio.sleep(delay)
+                self.reconnect_attempts += 1
+                try:
+                    await self._connect(timeout)
+                except LinkLost as exc:
+                    last = exc
+                    continue
+                return
+            n = self.reconnect_attempts
+            why = f": last error: {last}" if last is not None else f": {self.url}"
+            detail = f"giving up after {n} reconnect attempt{'s' if n != 1 else ''}{why}"
+            call_guarded(self._on_event, LinkEvent(LinkEventKind.LOST, detail), "event")
+        finally:
+            if self._task is asyncio.current_task():
+                self._task = None
+
+    # -- callbacks from _TcpProtocol --------------------------------------------------------
+
+    def _made(self, proto: _TcpProtocol) -> None:
+        transport = proto.transport
+        assert transport is not None
+        self._live.add(proto)
+        if self._closing:
+            transport.abort()
+            return
+        if transport.get_extra_info("sockname") == transport.get_extra_info("peername"):
+            transport.abort()  # TCP simultaneous open on loopback: no server there
+            return
+        restoring = self.reconnecting
+        proto.attached = True
+        self._proto = proto
+        if restoring:
+            self.reconnects += 1
+            detail = f"{self.url}: reconnected after {self.reconnect_attempts} attempt(s)"
+            call_guarded(self._on_event, LinkEvent(LinkEventKind.RESTORED, detail), "event")
+
+    def _data(self, proto: _TcpProtocol, data: bytes) -> None:
+        if proto is self._proto:
+            self.bytes_received += len(data)
+            call_guarded(self._on_data, data, "data")
+
+    def _lost(self, proto: _TcpProtocol, exc: Exception | None) -> None:
+        self._live.discard(proto)
+        if proto is not self._proto:
+            return
+        self._proto = None
+        if self._closing:
+            return
+        reason = f"connection lost: {exc}" if exc is not None else "peer closed the connection"
+        call_guarded(
+            self._on_event, LinkEvent(LinkEventKind.LOST, f"{self.url}: {reason}"), "event"
+        )
+        if self._reconnect:
+            self._task = asyncio.get_running_loop().create_task(
+                self._reconnect_loop(), name=f"gcu_async reconnect {self.url}"
+            )

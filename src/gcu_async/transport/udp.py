@@ -1,0 +1,269 @@
+"""UDP transport: the host listens on a local port (2338) and sends to the GCU (port 2337).
+
+Protocol NOTES §9/§13: the GCU sends from port 2337 to the LAN broadcast address, port
+2338; emulators answer by unicast to the sender. The socket is therefore *not* connected:
+it binds ``local_host:local_port`` (wildcard by default, so broadcasts arrive) and filters
+sources itself.
+
+Source filtering
+    By default only datagrams whose source is the configured GCU ``(host, port)`` are
+    delivered; any other datagram is counted in :attr:`UdpTransport.rejected_datagrams` and
+    dropped. With ``discovery=True`` every source is accepted; whenever a datagram comes
+    from an address other than the current :attr:`UdpTransport.peer` the peer is updated and
+    a :attr:`~LinkEventKind.PEER` event (``peer=(host, port)``) is emitted *before* its
+    bytes are delivered. Sends still go to the configured address unless
+    ``follow_peer=True``, in which case they go to the most recently discovered peer.
+    Note: a GCU answers from its own unicast address, so when ``host`` is a broadcast
+    address use ``discovery=True`` or nothing will be accepted.
+
+Errors
+    UDP is connectionless: send errors (``EMSGSIZE``, ICMP port unreachable reported as
+    ``ConnectionRefusedError``, ...) are counted in :attr:`UdpTransport.send_errors` and
+    kept in :attr:`UdpTransport.last_error`; the transport stays usable. Silence is
+    detected by the session's link health, not here.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import ipaddress
+import socket
+from typing import Any
+
+from gcu_async.errors import LinkLost
+from gcu_async.transport._common import (
+    call_guarded,
+    check_port,
+    format_hostport,
+    same_address,
+)
+from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
+
+GCU_UDP_PORT = 2337
+"""Port the GCU listens on (NOTES §9)."""
+HOST_UDP_PORT = 2338
+"""Port the host listens on; the GCU broadcasts to it (NOTES §9)."""
+
+
+def is_broadcast_address(host: str) -> bool:
+    """True for 255.255.255.255 and IPv4 addresses ending in .255 (the broadcast address of
+    any /24 or wider subnet; setting SO_BROADCAST for a unicast .255 host is harmless)."""
+    try:
+        ip = ipaddress.ip_address(host)
+    except ValueError:
+        return False
+    return isinstance(ip, ipaddress.IPv4Address) and ip.packed[3] == 255
+
+
+class _UdpProtocol(asyncio.DatagramProtocol):
+    def __init__(self, owner: UdpTransport) -> None:
+        self._owner = owner
+        self.closed: asyncio.Future[None] = asyncio.get_running_loop().create_future()
+
+    def datagram_received(self, data: bytes, addr: tuple[Any, ...]) -> None:
+        self._owner._datagram(data, (str(addr[0]), int(addr[1])))
+
+    def error_received(self, exc: Exception) -> None:
+        self._owner._error(exc)
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        if not self.closed.done():
+            self.closed.set_result(None)
+        self._owner._lost(self, exc)
+
+
+class UdpTransport(Transport):
+    """Datagram link to a GCU at ``host:port``.
+
+    ``local_host`` defaults to the wildcard address of the remote's address family;
+    ``local_port`` 0 picks an ephemeral port (see :attr:`local_address`). ``broadcast``
+    sets SO_BROADCAST; ``None`` (default) sets it when ``host`` looks like a broadcast
+    address (see :func:`is_broadcast_address`). ``discovery`` and ``follow_peer``: see the
+    module docstring.
+    """
+
+    def __init__(
+        self,
+        host: str,
+        port: int = GCU_UDP_PORT,
+        *,
+        local_host: str | None = None,
+        local_port: int = HOST_UDP_PORT,
+        broadcast: bool | None = None,
+        discovery: bool = False,
+        follow_peer: bool = False,
+    ) -> None:
+        super().__init__()
+        if not isinstance(host, str) or not host:
+            raise ValueError(f"host: {host!r} is not a host name or address")
+        self._host = host
+        self._port = check_port("port", port)
+        self._local_host = local_host
+        self._local_port = check_port("local_port", local_port, allow_zero=True)
+        self._broadcast = is_broadcast_address(host) if broadcast is None else bool(broadcast)
+        self._discovery = bool(discovery)
+        self._follow_peer = bool(follow_peer)
+        self._proto: _UdpProtocol | None = None
+        self._dtransport: asyncio.DatagramTransport | None = None
+        self._remote: tuple[str, int] | None = None
+        self._peer: tuple[str, int] | None = None
+        self._local: tuple[str, int] | None = None
+        self.rx_datagrams = 0
+        """Datagrams delivered to the data handler."""
+        self.rejected_datagrams = 0
+        """Datagrams dropped because they came from another source than the GCU."""
+        self.tx_datagrams = 0
+        """Datagrams handed to the OS."""
+        self.send_errors = 0
+        """Errors reported by the OS for this socket (sends and ICMP); never fatal."""
+        self.last_error: Exception | None = None
+        """The most recent of those errors."""
+
+    async def __aenter__(self) -> UdpTransport:
+        await self.open()
+        return self
+
+    @property
+    def url(self) -> str:
+        return f"udp://{format_hostport(self._host, self._port)}"
+
+    @property
+    def connected(self) -> bool:
+        return self._dtransport is not None and not self._dtransport.is_closing()
+
+    @property
+    def broadcast(self) -> bool:
+        """Whether SO_BROADCAST is (to be) set on the socket."""
+        return self._broadcast
+
+    @property
+    def discovery(self) -> bool:
+        """Whether datagrams from any source are accepted."""
+        return self._discovery
+
+    @property
+    def follow_peer(self) -> bool:
+        """Whether sends go to the discovered peer instead of the configured address."""
+        return self._follow_peer
+
+    @property
+    def local_port(self) -> int:
+        """The configured local port (0 = ephemeral; see :attr:`local_address`)."""
+        return self._local_port
+
+    @property
+    def local_host(self) -> str | None:
+        """The configured local address (None = wildcard)."""
+        return self._local_host
+
+    def get_extra_info(self, name: str, default: Any = None) -> Any:
+        """asyncio's transport information (``"socket"``, ``"sockname"``, ...) while open."""
+        if self._dtransport is None:
+            return default
+        return self._dtransport.get_extra_info(name, default)
+
+    @property
+    def peer(self) -> tuple[str, int] | None:
+        """Where datagrams are accepted from: the resolved GCU address, or with
+        ``discovery=True`` the last source that answered (None until one did)."""
+        return self._peer
+
+    @property
+    def remote_address(self) -> tuple[str, int] | None:
+        """Where :meth:`send` sends to right now (resolved), or None before :meth:`open`."""
+        if self._follow_peer and self._peer is not None:
+            return self._peer
+        return self._remote
+
+    @property
+    def local_address(self) -> tuple[str, int] | None:
+        """The bound (host, port) once open; useful with ``local_port=0``."""
+        return self._local
+
+    async def open(self) -> None:
+        """Resolve the GCU address, bind the local socket and start receiving.
+
+        Raises :class:`LinkLost` if the host cannot be resolved or the port bound."""
+        if self.connected:
+            return
+        loop = asyncio.get_running_loop()
+        try:
+            infos = await loop.getaddrinfo(
+                self._host, self._port, type=socket.SOCK_DGRAM, proto=socket.IPPROTO_UDP
+            )
+        except OSError as exc:
+            raise LinkLost(f"{self.url}: cannot resolve {self._host!r}: {exc}") from exc
+        family, _, _, _, sockaddr = infos[0]
+        remote = (str(sockaddr[0]), int(sockaddr[1]))
+        wildcard = "::" if family == socket.AF_INET6 else "0.0.0.0"
+        local_host = self._local_host if self._local_host is not None else wildcard
+        sock = socket.socket(family, socket.SOCK_DGRAM, socket.IPPROTO_UDP)
+        try:
+            if self._broadcast:
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_BROADCAST, 1)
+            sock.bind((local_host, self._local_port))
+            sock.setblocking(False)
+            proto = _UdpProtocol(self)
+            dtransport, _ = await loop.create_datagram_endpoint(lambda: proto, sock=sock)
+        except OSError as exc:
+            sock.close()
+            where = format_hostport(local_host, self._local_port)
+            raise LinkLost(f"{self.url}: cannot bind {where}: {exc}") from exc
+        except BaseException:
+            sock.close()
+            raise
+        bound = sock.getsockname()
+        self._local = (str(bound[0]), int(bound[1]))
+        self._remote = remote
+        self._peer = None if self._discovery else remote
+        self._proto = proto
+        self._dtransport = dtransport
+
+    def send(self, data: bytes) -> None:
+        """Send one datagram to :attr:`remote_address`. Raises :class:`LinkLost` if closed.
+
+        OS errors are counted (:attr:`send_errors`), not raised: see the module docstring."""
+        dtransport, dest = self._dtransport, self.remote_address
+        if dtransport is None or dtransport.is_closing() or dest is None:
+            raise LinkLost(f"{self.url}: transport is closed")
+        self.tx_datagrams += 1
+        dtransport.sendto(bytes(data), dest)
+
+    async def close(self) -> None:
+        """Close the socket; returns once it is released. Idempotent."""
+        dtransport, proto = self._dtransport, self._proto
+        self._dtransport = None
+        if dtransport is None or proto is None:
+            return
+        dtransport.close()
+        await asyncio.shield(proto.closed)
+
+    # -- callbacks from _UdpProtocol ------------------------------------------------------
+
+    def _datagram(self, data: bytes, source: tuple[str, int]) -> None:
+        if self._dtransport is None:
+            return
+        if self._discovery:
+            if self._peer is None or not same_address(self._peer, source):
+                self._peer = source
+                event = LinkEvent(
+                    LinkEventKind.PEER, f"{self.url}: datagram from {format_hostport(*source)}",
+                    peer=source,
+                )  # fmt: skip
+                call_guarded(self._on_event, event, "event")
+        elif self._remote is None or not same_address(self._remote, source):
+            self.rejected_datagrams += 1
+            return
+        self.rx_datagrams += 1
+        call_guarded(self._on_data, data, "data")
+
+    def _error(self, exc: Exception) -> None:
+        self.send_errors += 1
+        self.last_error = exc
+
+    def _lost(self, proto: _UdpProtocol, exc: Exception | None) -> None:
+        if proto is not self._proto or self._dtransport is None:
+            return  # closed by us
+        self._dtransport = None
+        detail = f"{self.url}: socket closed" + (f": {exc}" if exc else "")
+        call_guarded(self._on_event, LinkEvent(LinkEventKind.LOST, detail), "event")

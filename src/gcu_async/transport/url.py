@@ -1,0 +1,249 @@
+"""Make a transport from a URL: ``udp://HOST[:PORT]``, ``tcp://HOST[:PORT]``,
+``serial:///dev/ttyUSB0?baudrate=115200`` (or ``serial:/dev/ttyUSB0``).
+
+IPv6 literals go in brackets (``udp://[::1]:2337``). Default ports follow NOTES §9: UDP
+2337 (the host listens on 2338), TCP 2332.
+
+Options come from the query string and/or keyword arguments of :func:`open_transport`.
+Query values are text (booleans as 1/0, true/false, yes/no, on/off; ``none`` for an unset
+bound); keyword values may be text or the native type. **Giving the same option both
+ways is an error** (ValueError), as is an unknown option, a repeated query key, a user
+name, a path, or a fragment. Options per scheme:
+
+- udp: ``local_port`` (default 2338, 0 = ephemeral), ``local_host``, ``broadcast``,
+  ``discovery``, ``follow_peer`` (see :class:`~gcu_async.transport.udp.UdpTransport`)
+- tcp: ``connect_timeout`` (s), ``reconnect``, ``backoff_base`` (s), ``backoff_factor``,
+  ``backoff_cap`` (s), ``max_attempts`` (or none), ``max_total`` (s, or none); keyword only:
+  ``rng`` (a :class:`random.Random`)
+- serial: ``baudrate`` (115200, 250000, 500000 or 1000000)
+
+Every error is a one-line ValueError that starts with the URL and names the field.
+"""
+
+from __future__ import annotations
+
+import ipaddress
+import random
+import re
+from collections.abc import Callable, Mapping
+from urllib.parse import parse_qsl, unquote, urlsplit
+
+from gcu_async.transport.base import Transport
+from gcu_async.transport.serial import DEFAULT_BAUDRATE, SerialTransport
+from gcu_async.transport.tcp import GCU_TCP_PORT, Backoff, TcpTransport
+from gcu_async.transport.udp import GCU_UDP_PORT, UdpTransport
+
+Converter = Callable[[str, object], object]
+
+_LABEL = re.compile(r"(?!-)[A-Za-z0-9-]{1,63}(?<!-)\Z")
+_TRUE = {"1", "true", "yes", "on"}
+_FALSE = {"0", "false", "no", "off"}
+
+
+def check_host(field: str, host: str) -> str:
+    """Return ``host`` if it is an IP address or a valid DNS name, else raise ValueError."""
+    try:
+        ipaddress.ip_address(host)
+        return host
+    except ValueError:
+        pass
+    if ":" in host:
+        raise ValueError(f"{field}: {host!r} is not a valid IPv6 address")
+    if re.fullmatch(r"[0-9.]+", host):
+        raise ValueError(f"{field}: {host!r} is not a valid IPv4 address")
+    name = host[:-1] if host.endswith(".") else host
+    if not name or len(name) > 253 or not all(_LABEL.match(p) for p in name.split(".")):
+        raise ValueError(f"{field}: {host!r} is not a valid host name or address")
+    return host
+
+
+def _as_int(field: str, value: object) -> object:
+    if isinstance(value, str):
+        if not re.fullmatch(r"[+-]?[0-9]+", value.strip()):
+            raise ValueError(f"{field}: {value!r} is not an integer")
+        return int(value)
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ValueError(f"{field}: {value!r} is not an integer")
+    return value
+
+
+def _as_float(field: str, value: object) -> object:
+    if isinstance(value, str):
+        try:
+            return float(value)
+        except ValueError:
+            raise ValueError(f"{field}: {value!r} is not a number") from None
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"{field}: {value!r} is not a number")
+    return float(value)
+
+
+def _as_bool(field: str, value: object) -> object:
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, str) and value.strip().lower() in _TRUE | _FALSE:
+        return value.strip().lower() in _TRUE
+    raise ValueError(f"{field}: {value!r} is not a boolean (use 1/0, true/false, yes/no, on/off)")
+
+
+def _optional(conv: Converter) -> Converter:
+    def convert(field: str, value: object) -> object:
+        if value is None or (isinstance(value, str) and value.strip().lower() == "none"):
+            return None
+        return conv(field, value)
+
+    return convert
+
+
+def _as_host(field: str, value: object) -> object:
+    if not isinstance(value, str):
+        raise ValueError(f"{field}: {value!r} is not a host name or address")
+    return check_host(field, value)
+
+
+def _as_rng(field: str, value: object) -> object:
+    if not isinstance(value, random.Random):
+        raise ValueError(f"{field}: {value!r} is not a random.Random")
+    return value
+
+
+_UDP_OPTIONS: dict[str, Converter] = {
+    "local_port": _as_int,
+    "local_host": _as_host,
+    "broadcast": _as_bool,
+    "discovery": _as_bool,
+    "follow_peer": _as_bool,
+}
+_TCP_OPTIONS: dict[str, Converter] = {
+    "connect_timeout": _as_float,
+    "reconnect": _as_bool,
+    "backoff_base": _as_float,
+    "backoff_factor": _as_float,
+    "backoff_cap": _as_float,
+    "max_attempts": _optional(_as_int),
+    "max_total": _optional(_as_float),
+    "rng": _as_rng,
+}
+_KEYWORD_ONLY = {"rng"}
+_BACKOFF_FIELDS = (
+    ("backoff_base", "base"), ("backoff_factor", "factor"), ("backoff_cap", "cap"),
+    ("max_attempts", "max_attempts"), ("max_total", "max_total"),
+)  # fmt: skip
+_SERIAL_OPTIONS: dict[str, Converter] = {"baudrate": _as_int}
+_SCHEMES: dict[str, dict[str, Converter]] = {
+    "udp": _UDP_OPTIONS,
+    "tcp": _TCP_OPTIONS,
+    "serial": _SERIAL_OPTIONS,
+}
+
+
+def open_transport(url: str, **options: object) -> Transport:
+    """Build the transport ``url`` names (not yet opened: use ``async with`` or ``open()``).
+
+    Raises ValueError, starting with the URL and naming the field, for an unknown scheme or
+    option, a bad host, port or option value, or an option given both in the query and as
+    a keyword argument.
+    """
+    if not isinstance(url, str):
+        raise ValueError(f"url: {url!r} is not a string")
+    try:
+        return _build(url, options)
+    except ValueError as exc:
+        raise ValueError(f"{url or repr(url)}: {exc}") from exc
+
+
+def _build(url: str, kwargs: Mapping[str, object]) -> Transport:
+    try:
+        parts = urlsplit(url)
+    except ValueError as exc:
+        raise ValueError(f"host: cannot parse ({exc})") from None
+    scheme = parts.scheme.lower()
+    if not scheme:
+        raise ValueError("scheme: missing (use udp://, tcp:// or serial://)")
+    if scheme not in _SCHEMES:
+        raise ValueError(
+            f"scheme: {parts.scheme!r} is not supported (allowed: udp://, tcp://, serial://)"
+        )
+    if parts.fragment:
+        raise ValueError(f"fragment: {parts.fragment!r} is not allowed")
+    opts = _merge_options(scheme, parts.query, kwargs)
+    if scheme == "serial":
+        return _serial(parts.netloc, parts.path, opts)
+    if parts.path not in ("", "/"):
+        raise ValueError(f"path: {parts.path!r} is not allowed (use {scheme}://HOST[:PORT])")
+    host, port = _host_port(parts.netloc, GCU_UDP_PORT if scheme == "udp" else GCU_TCP_PORT)
+    if scheme == "udp":
+        return UdpTransport(host, port, **opts)  # type: ignore[arg-type]
+    backoff_opts = {field: opts.pop(name) for name, field in _BACKOFF_FIELDS if name in opts}
+    backoff = Backoff(**backoff_opts)  # type: ignore[arg-type]
+    return TcpTransport(host, port, backoff=backoff, **opts)  # type: ignore[arg-type]
+
+
+def _merge_options(scheme: str, query: str, kwargs: Mapping[str, object]) -> dict[str, object]:
+    allowed = _SCHEMES[scheme]
+    names = ", ".join(sorted(allowed))
+    query_names = ", ".join(sorted(set(allowed) - _KEYWORD_ONLY))
+    raw: dict[str, object] = {}
+    try:
+        pairs = parse_qsl(query, keep_blank_values=True, strict_parsing=bool(query))
+    except ValueError:
+        raise ValueError(f"query: {query!r} is not name=value pairs joined by &") from None
+    for name, value in pairs:
+        if name not in allowed or name in _KEYWORD_ONLY:
+            raise ValueError(
+                f"option: {name!r} is not a {scheme} URL option (allowed: {query_names})"
+            )
+        if name in raw:
+            raise ValueError(f"option: {name!r} is given twice in the query")
+        raw[name] = value
+    for name, option in kwargs.items():
+        if name not in allowed:
+            raise ValueError(f"option: {name!r} is not a {scheme} option (allowed: {names})")
+        if name in raw:
+            raise ValueError(
+                f"option: {name!r} is given both in the URL query and as a keyword argument"
+            )
+        raw[name] = option
+    return {name: allowed[name](name, value) for name, value in raw.items()}
+
+
+def _host_port(netloc: str, default_port: int) -> tuple[str, int]:
+    if "@" in netloc:
+        raise ValueError("host: user information ('...@') is not allowed")
+    port_text: str | None = None
+    if netloc.startswith("["):
+        end = netloc.find("]")
+        host = unquote(netloc[1:end])  # RFC 6874 zone id: [fe80::1%25eth0]
+        rest = netloc[end + 1 :]
+        if rest:
+            if not rest.startswith(":"):
+                raise ValueError(f"host: unexpected {rest!r} after {netloc[: end + 1]!r}")
+            port_text = rest[1:]
+        try:
+            ipaddress.IPv6Address(host)
+        except ValueError:
+            raise ValueError(f"host: {host!r} is not a valid IPv6 address") from None
+    else:
+        host, colon, port_part = netloc.partition(":")
+        if ":" in port_part:
+            raise ValueError(f"host: {netloc!r}: put an IPv6 address in brackets ([::1]:2337)")
+        if colon:
+            port_text = port_part
+        if not host:
+            raise ValueError("host: missing (use scheme://HOST[:PORT])")
+        check_host("host", host)
+    if port_text is None:
+        return host, default_port
+    if not port_text.isdigit() or not 1 <= int(port_text) <= 65535:
+        raise ValueError(f"port: {port_text!r} is not a valid port (allowed 1-65535)")
+    return host, int(port_text)
+
+
+def _serial(netloc: str, path: str, opts: dict[str, object]) -> Transport:
+    if netloc:
+        raise ValueError(f"device: host part {netloc!r} is not allowed (use serial:///dev/ttyUSB0)")
+    device = unquote(path)
+    if not device or device == "/":
+        raise ValueError("device: missing (use serial:///dev/ttyUSB0)")
+    baudrate = opts.get("baudrate", DEFAULT_BAUDRATE)
+    return SerialTransport(device, baudrate)  # type: ignore[arg-type]
