@@ -94,7 +94,8 @@ async def test_every_command_round_trip(gcu_sim: SimHandle, gcu_client: GcuClien
     # the one Appendix 8 command this pod lacks answers with the failure status
     with pytest.raises(CommandFailed) as info:
         await gcu_client.set_fill_light(100)
-    assert info.value.opcode == Opcode.FILL_LIGHT and info.value.status == 0x01
+    assert info.value.opcode == Opcode.FILL_LIGHT
+    assert info.value.status == 0x01
 
 
 async def test_telemetry_follows_the_gimbal(gcu_sim: SimHandle, gcu_client: GcuClient) -> None:
@@ -103,7 +104,7 @@ async def test_telemetry_follows_the_gimbal(gcu_sim: SimHandle, gcu_client: GcuC
     await g.euler_control(pitch=-30.0, yaw=120.0)
     await wait_for(lambda: g.status.mode is Mode.EULER_CONTROL, what="euler mode")
     await wait_for(
-        lambda: abs(g.status.attitude.pitch + 30.0) < 0.5 and abs(g.status.attitude.yaw - 120) < 0.5,
+        lambda: abs(g.status.attitude.pitch + 30) < 0.5 and abs(g.status.attitude.yaw - 120) < 0.5,
         timeout=5.0,
         what="camera at pitch -30, yaw 120",
     )
@@ -123,8 +124,11 @@ async def test_telemetry_follows_the_gimbal(gcu_sim: SimHandle, gcu_client: GcuC
     )
     assert g.info.pod_model.name == "D_90PRO_TA"
     link = g.link
-    assert link.up and link.packets_received > 0 and link.crc_errors == 0
-    assert link.last_reply_age is not None and link.last_reply_age < 0.5
+    assert link.up
+    assert link.packets_received > 0
+    assert link.crc_errors == 0
+    assert link.last_reply_age is not None
+    assert link.last_reply_age < 0.5
 
 
 async def test_telemetry_iterator_is_bounded_newest_wins(gcu_client: GcuClient) -> None:

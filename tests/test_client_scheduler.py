@@ -35,7 +35,8 @@ def test_command_repeats_until_feedback_then_idle() -> None:
     assert [s.next_command() for _ in range(3)] == [TakePhoto()] * 3
     assert t.sent == 3
     assert s.on_feedback(Feedback(Opcode.TAKE_PHOTO, 0)) is t
-    assert t.done and t.feedback == Feedback(Opcode.TAKE_PHOTO, 0)
+    assert t.done
+    assert t.feedback == Feedback(Opcode.TAKE_PHOTO, 0)
     assert s.next_command() == NULL
 
 
@@ -115,7 +116,8 @@ def test_in_progress_keeps_waiting_and_repeating() -> None:
     assert t.progress == [Feedback(Opcode.CALIBRATION, 2)]
     assert s.next_command() == Calibration()
     assert s.on_feedback(Feedback(Opcode.CALIBRATION, 0)) is t
-    assert t.feedback is not None and t.feedback.result is ExecutionStatus.SUCCESS
+    assert t.feedback is not None
+    assert t.feedback.result is ExecutionStatus.SUCCESS
 
 
 def test_failure_completes_the_ticket() -> None:
@@ -124,7 +126,8 @@ def test_failure_completes_the_ticket() -> None:
     s.submit(t)
     s.next_command()
     assert s.on_feedback(Feedback(Opcode.ZOOM_IN, 0x03)) is t
-    assert t.feedback is not None and t.feedback.result is ExecutionStatus.FAILED
+    assert t.feedback is not None
+    assert t.feedback.result is ExecutionStatus.FAILED
 
 
 def test_timeout_and_cancel_leave_scheduler_consistent() -> None:
@@ -134,16 +137,20 @@ def test_timeout_and_cancel_leave_scheduler_consistent() -> None:
         s.submit(t)
     s.next_command()
     assert s.expire(2.0) == [a]
-    assert a.timed_out and s.in_flight is None
+    assert a.timed_out
+    assert s.in_flight is None
     s.cancel(b)  # queued caller cancelled
-    assert b.done and s.pending == 1
+    assert b.done
+    assert s.pending == 1
     # c has the opcode of the timed-out a: it may still have run, so null first
     assert s.next_command() == NULL
     s.on_feedback(Feedback(Opcode.NULL))
     assert s.next_command() == TakePhoto()
     s.cancel(c)  # in-flight caller cancelled
-    assert s.in_flight is None and s.pending == 0
-    assert s.stats.commands_cancelled == 2 and s.stats.commands_timed_out == 1
+    assert s.in_flight is None
+    assert s.pending == 0
+    assert s.stats.commands_cancelled == 2
+    assert s.stats.commands_timed_out == 1
 
 
 def test_time_out_single_ticket() -> None:
@@ -162,5 +169,7 @@ def test_drain_returns_every_unfinished_ticket() -> None:
     s.submit(b)
     s.next_command()
     assert s.drain() == [a, b]
-    assert a.done and b.done and s.pending == 0
+    assert a.done
+    assert b.done
+    assert s.pending == 0
     assert s.next_command() == NULL
