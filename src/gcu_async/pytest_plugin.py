@@ -13,7 +13,8 @@ Choose the endpoint by overriding (or parametrizing) these fixtures:
 :class:`~gcu_async.sim.FaultPlan` / :class:`~gcu_async.sim.FaultConfig`), ``gcu_sim_seed``,
 ``gcu_sim_model_options`` (keyword arguments for :class:`~gcu_async.sim.SimulatorModel`,
 e.g. ``calibration_seconds``), ``gcu_client_options`` (keyword arguments for the client).
-Everything binds to 127.0.0.1 on ephemeral ports. The async fixtures need pytest-asyncio; without it they skip.
+Everything binds to 127.0.0.1 on ephemeral ports. The async fixtures need pytest-asyncio;
+without it they skip.
 """
 
 from __future__ import annotations
