@@ -173,3 +173,43 @@ def test_drain_returns_every_unfinished_ticket() -> None:
     assert b.done
     assert s.pending == 0
     assert s.next_command() == NULL
+
+
+def test_reorder_guard_holds_the_packet_after_a_finished_command() -> None:
+    s = CommandScheduler(reorder_guard=0.015)
+    s.submit(ticket(TakePhoto()))
+    s.submit(ticket(ZoomIn()))
+    assert s.next_command(1.000) == TakePhoto()
+    assert s.next_command(1.020) == TakePhoto()
+    s.on_feedback(Feedback(Opcode.TAKE_PHOTO, 0), 1.021)
+    # a late copy of the photo packet sent at 1.020 must not arrive after a zoom packet
+    assert s.hold_until == 1.020 + 0.015
+    assert s.next_command(1.035) == ZoomIn()
+
+
+def test_reorder_guard_after_null_ack_before_same_opcode() -> None:
+    s = CommandScheduler(reorder_guard=0.015)
+    s.submit(ticket(TakePhoto()))
+    s.submit(ticket(TakePhoto()))
+    s.next_command(1.0)
+    s.on_feedback(Feedback(Opcode.TAKE_PHOTO, 0), 1.001)
+    assert s.next_command(1.016) == NULL
+    s.on_feedback(Feedback(Opcode.NULL), 1.017)
+    # late replies to the first photo may still arrive: wait the guard after the ack
+    assert s.next_command(1.020) == NULL
+    assert s.next_command(1.033) == TakePhoto()
+
+
+def test_reorder_guard_zero_is_immediate() -> None:
+    s = CommandScheduler()
+    s.submit(ticket(TakePhoto()))
+    s.next_command(5.0)
+    s.on_feedback(Feedback(Opcode.TAKE_PHOTO, 0), 5.0)
+    assert s.hold_until == 5.0
+
+
+def test_reorder_guard_validation() -> None:
+    import pytest
+
+    with pytest.raises(ValueError, match="reorder_guard"):
+        CommandScheduler(reorder_guard=-0.1)

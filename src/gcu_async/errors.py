@@ -51,7 +51,7 @@ class FieldRangeError(LocalProtocolError, ValueError):
 
 
 def _fmt(x: float) -> str:
-    return f"{x:g}" if isinstance(x, float) else str(x)
+    return f"{x:.12g}" if isinstance(x, float) else str(x)
 
 
 class UnsupportedCommandError(LocalProtocolError):

@@ -27,7 +27,7 @@ import pytest
 
 from gcu_async.client.client import GcuClient
 from gcu_async.client.connect import connect
-from gcu_async.sim.faults import FaultConfig, FaultInjector, FaultPlan
+from gcu_async.sim.faults import FaultConfig, FaultPlan
 from gcu_async.sim.memory import MemoryServer
 from gcu_async.sim.model import SimulatorModel
 from gcu_async.sim.server import SimServer
@@ -62,13 +62,7 @@ class SimHandle:
 
     def set_faults(self, faults: FaultPlan | FaultConfig | None) -> None:
         """Replace the fault injection (``None`` clears it) from now on."""
-        if isinstance(faults, FaultConfig):
-            faults = FaultPlan.both(faults)
-        plan = faults if faults is not None else FaultPlan()
-        sim = self.simulator
-        sim.faults = plan
-        sim.request_faults = FaultInjector(plan.requests)
-        sim.reply_faults = FaultInjector(plan.replies)
+        self.simulator.set_faults(faults)
 
     def silence(self, seconds: float) -> None:
         """The GCU stops answering for ``seconds``."""

@@ -7,7 +7,7 @@ import sys
 from collections.abc import Sequence
 
 from gcu_async import __version__
-from gcu_async.cli import decode
+from gcu_async.cli import decode, demo, monitor, send, sim
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -18,6 +18,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"gcu-async {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     decode.register(sub)
+    send.register(sub)
+    monitor.register(sub)
+    sim.register(sub)
+    demo.register(sub)
     return parser
 
 

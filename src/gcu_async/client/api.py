@@ -117,24 +117,24 @@ class CommandMethods(abc.ABC):
         self, box: c.ImageBox | tuple[float, float, float, float], *, cameras: int = CAM1
     ) -> Feedback:
         """Track the target in ``box`` (left, top, right, bottom as image fractions)."""
-        return await self.execute(c.Track(True, c.ImageBox(*box), CameraMask(cameras)))
+        return await self.execute(c.Track(True, c.ImageBox(*box), cameras))
 
     async def stop_tracking(self, *, cameras: int = CAM1) -> Feedback:
         """Exit tracking (0x17 with TT = 0)."""
-        return await self.execute(c.Track(False, cameras=CameraMask(cameras)))
+        return await self.execute(c.Track(False, cameras=cameras))
 
     async def click_to_pan(self, x: float, y: float, *, cameras: int = CAM1) -> Feedback:
         """Bring image point (x, y) (fractions) to the centre (0x1A); ends in pointing-lock."""
-        return await self.execute(c.ClickToPan(c.ImagePoint(x, y), CameraMask(cameras)))
+        return await self.execute(c.ClickToPan(c.ImagePoint(x, y), cameras))
 
     # -- camera --------------------------------------------------------------------------
     async def take_photo(self, *, cameras: int = CAM1) -> Feedback:
         """Take a photo (0x20)."""
-        return await self.execute(c.TakePhoto(CameraMask(cameras)))
+        return await self.execute(c.TakePhoto(cameras))
 
     async def toggle_recording(self, *, cameras: int = CAM1) -> Feedback:
         """Start or stop recording (0x21, a toggle)."""
-        return await self.execute(c.Record(CameraMask(cameras)))
+        return await self.execute(c.Record(cameras))
 
     async def start_recording(self, *, cameras: int = CAM1) -> Feedback | None:
         """Start recording unless the camera flags say it already records (then ``None``)."""
@@ -150,37 +150,37 @@ class CommandMethods(abc.ABC):
 
     async def zoom_in(self, *, cameras: int = CAM1) -> Feedback:
         """Start zooming in (0x22) until :meth:`zoom_stop`."""
-        return await self.execute(c.ZoomIn(CameraMask(cameras)))
+        return await self.execute(c.ZoomIn(cameras))
 
     async def zoom_out(self, *, cameras: int = CAM1) -> Feedback:
         """Start zooming out (0x23) until :meth:`zoom_stop`."""
-        return await self.execute(c.ZoomOut(CameraMask(cameras)))
+        return await self.execute(c.ZoomOut(cameras))
 
     async def zoom_stop(self, *, cameras: int = CAM1) -> Feedback:
         """Stop a continuous zoom (0x24)."""
-        return await self.execute(c.ZoomStop(CameraMask(cameras)))
+        return await self.execute(c.ZoomStop(cameras))
 
     async def zoom_to(self, ratio: float, *, cameras: int = CAM1) -> Feedback:
         """Zoom to a ratio (0x25), e.g. ``10.0`` for 10×, 0.1× resolution."""
-        return await self.execute(c.ZoomTo(ratio=ratio, cameras=CameraMask(cameras)))
+        return await self.execute(c.ZoomTo(ratio=ratio, cameras=cameras))
 
     async def zoom_to_fraction(self, fraction: float, *, cameras: int = CAM1) -> Feedback:
         """Zoom to a fraction (0, 1] of the maximum ratio (0x25, positive form)."""
-        return await self.execute(c.ZoomTo(fraction=fraction, cameras=CameraMask(cameras)))
+        return await self.execute(c.ZoomTo(fraction=fraction, cameras=cameras))
 
     async def focus(self, *, cameras: int = CAM1) -> Feedback:
         """Trigger focus (0x26)."""
-        return await self.execute(c.Focus(CameraMask(cameras)))
+        return await self.execute(c.Focus(cameras))
 
     async def set_palette(self, palette: int = 0, *, cameras: int = CAM2) -> Feedback:
         """Thermal palette 1–10, or 0 to cycle (0x2A)."""
-        return await self.execute(c.Palette(palette, CameraMask(cameras)))
+        return await self.execute(c.Palette(palette, cameras))
 
     async def set_night_vision(
         self, mode: NightVisionMode | int = NightVisionMode.ON, *, cameras: int = CAM1
     ) -> Feedback:
         """Night vision off / on / auto (0x2B)."""
-        return await self.execute(c.NightVision(NightVisionMode(mode), CameraMask(cameras)))
+        return await self.execute(c.NightVision(NightVisionMode(mode), cameras))
 
     async def area_temperature(
         self,
@@ -190,25 +190,25 @@ class CommandMethods(abc.ABC):
         cameras: int = CAM2,
     ) -> Feedback:
         """Area temperature measurement over ``box`` (0x30)."""
-        return await self.execute(c.AreaTemperature(enabled, c.ImageBox(*box), CameraMask(cameras)))
+        return await self.execute(c.AreaTemperature(enabled, c.ImageBox(*box), cameras))
 
     async def temperature_alarm(
         self, enabled: bool = True, *, high: float = 0.0, low: float = 0.0, cameras: int = CAM2
     ) -> Feedback:
         """Temperature alarm with high/low thresholds in °C (0x31)."""
-        return await self.execute(c.TemperatureAlarm(enabled, high, low, CameraMask(cameras)))
+        return await self.execute(c.TemperatureAlarm(enabled, high, low, cameras))
 
     async def isotherm(
         self, enabled: bool = True, *, high: float = 0.0, low: float = 0.0, cameras: int = CAM2
     ) -> Feedback:
         """Isotherm between ``low`` and ``high`` °C (0x32)."""
-        return await self.execute(c.Isotherm(enabled, high, low, CameraMask(cameras)))
+        return await self.execute(c.Isotherm(enabled, high, low, cameras))
 
     async def spot_temperature(
         self, enabled: bool = True, x: float = 0.5, y: float = 0.5, *, cameras: int = CAM2
     ) -> Feedback:
         """Spot temperature at image point (x, y) (0x33)."""
-        command = c.SpotTemperature(enabled, c.ImagePoint(x, y), CameraMask(cameras))
+        command = c.SpotTemperature(enabled, c.ImagePoint(x, y), cameras)
         return await self.execute(command)
 
     async def set_osd(self, enabled: bool = True) -> Feedback:

@@ -46,6 +46,8 @@ from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 log = logging.getLogger("gcu_async.client")
 
 RATE_MAX_HZ = 200.0
+DEFAULT_REORDER_GUARD = 0.015
+"""Seconds; the reordering guard on links that may reorder (UDP)."""
 RATE_ADVISED = (30.0, 50.0)
 _UNSET: Any = object()
 
@@ -69,6 +71,9 @@ class GcuClient(CommandMethods):
         silence_timeout: seconds without a reply after which the link counts as lost.
         check_support: refuse commands the pod model does not support (Appendix 8) once the
             model is known, raising :class:`UnsupportedCommandError` without sending.
+        reorder_guard: seconds between the last packet of a finished command and the next
+            packet (see :mod:`gcu_async.client.scheduler`); must exceed the link's worst
+            reordering delay. Default: 0 on ordered transports (TCP, serial), 15 ms on UDP.
         version: protocol version byte to send (2; some field devices expect 1).
         clock: monotonic time source (seconds).
     """
@@ -82,6 +87,7 @@ class GcuClient(CommandMethods):
         connect_timeout: float = 3.0,
         silence_timeout: float = 1.0,
         check_support: bool = False,
+        reorder_guard: float | None = None,
         version: int = DEFAULT_VERSION,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
@@ -107,7 +113,10 @@ class GcuClient(CommandMethods):
         self.check_support = check_support
         self.version = version
         self._clock = clock
-        self._scheduler = CommandScheduler()
+        if reorder_guard is None:
+            reorder_guard = 0.0 if transport.ordered else DEFAULT_REORDER_GUARD
+        self._scheduler = CommandScheduler(reorder_guard)
+        self._deferred: asyncio.TimerHandle | None = None
         self._deframer = Deframer.for_gcu_packets()
         self._health = HealthTracker(silence_timeout)
         self._aircraft = AircraftState()
@@ -170,6 +179,9 @@ class GcuClient(CommandMethods):
         if not self._open:
             return
         self._closing = True
+        if self._deferred is not None:
+            self._deferred.cancel()
+            self._deferred = None
         tasks, self._tasks = self._tasks, []
         for task in tasks:
             task.cancel()
@@ -404,12 +416,31 @@ class GcuClient(CommandMethods):
             self._resolve(ticket, error=LinkLost(str(error)))
 
     # -- packets out ---------------------------------------------------------------------
+    _last_encoded: tuple[object, object, object, int, bytes] = (None, None, None, -1, b"")
+
+    def _encode(self, main: HostMainFrame, command: Command) -> bytes:
+        """The packet's bytes; the previous packet's are reused when it had the very same
+        (immutable) parts, as every heartbeat of an idle session has."""
+        sub, version, last = self._sub, self.version, self._last_encoded
+        if last[0] is main and last[1] is sub and last[2] is command and last[3] == version:
+            return last[4]
+        data = HostPacket(main, sub, command, version).encode()
+        self._last_encoded = (main, sub, command, version, data)
+        return data
+
     def _send_packet(self) -> None:
-        if not self._open or not self.transport.connected:
+        if not self._open or self._closing or not self.transport.connected:
             return
-        command = self._scheduler.next_command()
+        now = self._clock()
+        hold = self._scheduler.hold_until
+        if now < hold:  # reordering guard: send this packet a little later
+            if self._deferred is None:
+                loop = asyncio.get_running_loop()
+                self._deferred = loop.call_later(hold - now, self._send_deferred)
+            return
+        command = self._scheduler.next_command(now)
         main = self._main_invalid if self._scheduler.control_blocked else self._main_valid
-        data = HostPacket(main, self._sub, command, self.version).encode()
+        data = self._encode(main, command)
         try:
             self.transport.send(data)
         except (LinkLost, OSError) as exc:
@@ -417,6 +448,10 @@ class GcuClient(CommandMethods):
             log.debug("send failed: %s", exc)
             return
         self._health.packets_sent += 1
+
+    def _send_deferred(self) -> None:
+        self._deferred = None
+        self._send_packet()
 
     async def _heartbeat(self) -> None:
         """Send a packet every period on monotonic deadlines; never stops on errors."""
@@ -466,7 +501,7 @@ class GcuClient(CommandMethods):
                 self._first_reply.set()
         scheduler = self._scheduler
         unmatched = scheduler.stats.unmatched_feedback
-        ticket = scheduler.on_feedback(feedback)
+        ticket = scheduler.on_feedback(feedback, now)
         if ticket is not None:
             if feedback.result is ExecutionStatus.SUCCESS:
                 self._resolve(ticket, result=feedback)

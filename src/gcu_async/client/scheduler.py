@@ -14,10 +14,19 @@ Rules (NOTES §3):
   feedback — a silent loss.
 - Feedback is matched by opcode to the in-flight command only; anything else is counted as
   unmatched, never given to another waiter. "In progress" keeps the command in flight.
+- Reordering guard (``reorder_guard`` seconds, for links that may reorder, i.e. UDP): the
+  packets of a finished command may still be on their way. If one arrived after a packet
+  with another opcode, the GCU would run the command again. So the first packet after a
+  command finishes goes out no earlier than ``reorder_guard`` after the last packet that
+  carried it (:attr:`CommandScheduler.hold_until`), and after a null acknowledgement the
+  same opcode waits ``reorder_guard`` too, so late replies to the old command have arrived
+  before the new one is sent and cannot be mistaken for its feedback. The protocol has no
+  sequence numbers: exactly-once holds for reordering delays shorter than the guard.
 """
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import dataclass, field
 
@@ -64,7 +73,15 @@ class SchedulerStats:
 class CommandScheduler:
     """FIFO of commands; one in flight; null separation confirmed by the GCU."""
 
-    def __init__(self) -> None:
+    def __init__(self, reorder_guard: float = 0.0) -> None:
+        if not 0 <= reorder_guard < math.inf:
+            raise ValueError(f"reorder_guard: {reorder_guard!r} must be >= 0 seconds")
+        self.reorder_guard = reorder_guard
+        self._hold_until = -math.inf
+        self._last_sent_at = -math.inf
+        """When the in-flight command was last put in a packet."""
+        self._separated: tuple[int, float] | None = None
+        """(opcode, time) of the last null acknowledgement that cleared ``_last_opcode``."""
         self._queue: deque[Ticket] = deque()
         self._in_flight: Ticket | None = None
         self._last_opcode: int | None = None
@@ -91,6 +108,11 @@ class CommandScheduler:
         return t is not None and t.opcode in CONTROL_INVALID_WHILE
 
     @property
+    def hold_until(self) -> float:
+        """No packet may be sent before this time (the reordering guard after a command)."""
+        return self._hold_until
+
+    @property
     def waiting_for_null_ack(self) -> bool:
         """True when the next command repeats the last opcode and no null was acked yet."""
         head = self._queue[0] if self._queue else None
@@ -107,24 +129,27 @@ class CommandScheduler:
         self.stats.commands_submitted += 1
         self._queue.append(ticket)
 
-    def next_command(self) -> Command:
-        """The command for the next packet (NULL when idle or separating)."""
+    def next_command(self, now: float = 0.0) -> Command:
+        """The command for the packet sent at ``now`` (NULL when idle or separating).
+        Callers must not send before :attr:`hold_until`."""
         t = self._in_flight
         if t is None:
-            t = self._promote()
+            t = self._promote(now)
         if t is None:
             if self._last_opcode is not None:
                 self._nulls_since_last += 1
             return NULL
         t.sent += 1
+        self._last_sent_at = now
         return t.command
 
-    def on_feedback(self, feedback: Feedback) -> Ticket | None:
+    def on_feedback(self, feedback: Feedback, now: float = 0.0) -> Ticket | None:
         """Account for one received feedback; return the ticket it completed, if any."""
         opcode = feedback.opcode
         if opcode == Opcode.NULL:
             # the GCU has seen a null sent after the last command: any opcode runs next
-            if self._in_flight is None and self._nulls_since_last:
+            if self._in_flight is None and self._nulls_since_last and self._last_opcode is not None:
+                self._separated = (self._last_opcode, now)
                 self._last_opcode = None
             return None
         t = self._in_flight
@@ -195,13 +220,18 @@ class CommandScheduler:
         return tickets
 
     # -- internals ---------------------------------------------------------------------
-    def _promote(self) -> Ticket | None:
+    def _promote(self, now: float) -> Ticket | None:
         if not self._queue:
             return None
         head = self._queue[0]
         if self._last_opcode is not None and head.opcode == self._last_opcode:
             self.stats.null_waits += 1
             return None  # send NULL until the GCU acknowledges one
+        separated = self._separated
+        if separated is not None and head.opcode == separated[0]:
+            if now < separated[1] + self.reorder_guard:
+                return None  # late replies to the previous one may still arrive
+            self._separated = None
         self._queue.popleft()
         self._in_flight = head
         return head
@@ -213,3 +243,5 @@ class CommandScheduler:
             if ticket.sent:
                 self._last_opcode = ticket.opcode
                 self._nulls_since_last = 0
+                self._separated = None
+                self._hold_until = self._last_sent_at + self.reorder_guard

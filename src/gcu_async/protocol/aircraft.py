@@ -13,8 +13,13 @@ from datetime import datetime
 
 from gcu_async.protocol.enums import SubFrameRequest
 from gcu_async.protocol.gpstime import utc_to_gps
-from gcu_async.protocol.host_frames import ControlValues, HostMainFrame, HostSubFrame
-from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp
+from gcu_async.protocol.host_frames import (
+    MS_PER_WEEK,
+    ControlValues,
+    HostMainFrame,
+    HostSubFrame,
+)
+from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp, check_int, quantize
 
 
 @dataclass(frozen=True, slots=True)
@@ -34,6 +39,11 @@ class AircraftState:
 
     def __post_init__(self) -> None:
         self.main_frame()
+        # the sub-frame fields are checked even while no position makes a sub frame
+        check_int("satellites", self.satellites, 0, 255)
+        check_int("gnss_week", self.gnss_week, 0, 32767)
+        check_int("gnss_ms", self.gnss_ms, 0, MS_PER_WEEK - 1, "ms")
+        quantize("relative altitude", self.relative_altitude, 1000, -(2**31), 2**31 - 1, "m")
         self.sub_frame()
 
     @staticmethod

@@ -241,7 +241,7 @@ class Track(Command):
     LAYOUT = struct.Struct("<BBHHHH")
     enter: bool = True
     box: ImageBox = ImageBox(0.0, 0.0, 0.0, 0.0)
-    cameras: CameraMask = CameraMask.CAMERA_1
+    cameras: CameraMask | int = CameraMask.CAMERA_1
 
     def raw_params(self) -> tuple[int, ...]:
         return (_mask("cameras", self.cameras), int(bool(self.enter)), *_box_raw("box", self.box))
@@ -260,7 +260,7 @@ class ClickToPan(Command):
     OPCODE = Opcode.CLICK_TO_PAN
     LAYOUT = struct.Struct("<BHH")
     point: ImagePoint
-    cameras: CameraMask = CameraMask.CAMERA_1
+    cameras: CameraMask | int = CameraMask.CAMERA_1
 
     def raw_params(self) -> tuple[int, ...]:
         return (
@@ -327,7 +327,7 @@ class TimeZone(Command):
 @dataclass(frozen=True, slots=True)
 class _MaskOnly(Command):
     LAYOUT = struct.Struct("<B")
-    cameras: CameraMask = CameraMask.CAMERA_1
+    cameras: CameraMask | int = CameraMask.CAMERA_1
 
     def raw_params(self) -> tuple[int, ...]:
         return (_mask("cameras", self.cameras),)
@@ -393,7 +393,7 @@ class ZoomTo(Command):
     LAYOUT = struct.Struct("<Bh")
     ratio: float | None = None
     fraction: float | None = None
-    cameras: CameraMask = CameraMask.CAMERA_1
+    cameras: CameraMask | int = CameraMask.CAMERA_1
 
     def raw_params(self) -> tuple[int, ...]:
         return (_mask("cameras", self.cameras), self.raw_value)
@@ -428,7 +428,7 @@ class Palette(Command):
     OPCODE = Opcode.PALETTE
     LAYOUT = struct.Struct("<BB")
     palette: int = 0
-    cameras: CameraMask = CameraMask.CAMERA_2
+    cameras: CameraMask | int = CameraMask.CAMERA_2
 
     def raw_params(self) -> tuple[int, ...]:
         return (_mask("cameras", self.cameras), check_int("palette", self.palette, 0, 10))
@@ -445,7 +445,7 @@ class NightVision(Command):
     OPCODE = Opcode.NIGHT_VISION
     LAYOUT = struct.Struct("<BB")
     mode: NightVisionMode = NightVisionMode.ON
-    cameras: CameraMask = CameraMask.CAMERA_1
+    cameras: CameraMask | int = CameraMask.CAMERA_1
 
     def raw_params(self) -> tuple[int, ...]:
         return (_mask("cameras", self.cameras), check_int("mode", int(self.mode), 0, 2))
@@ -463,7 +463,7 @@ class AreaTemperature(Command):
     LAYOUT = struct.Struct("<BBHHHH")
     enabled: bool = True
     box: ImageBox = ImageBox(0.0, 0.0, 1.0, 1.0)
-    cameras: CameraMask = CameraMask.CAMERA_2
+    cameras: CameraMask | int = CameraMask.CAMERA_2
 
     def raw_params(self) -> tuple[int, ...]:
         return (_mask("cameras", self.cameras), int(bool(self.enabled)), *_box_raw("box", self.box))
@@ -495,7 +495,7 @@ class TemperatureAlarm(Command):
     enabled: bool = True
     high: float = 0.0
     low: float = 0.0
-    cameras: CameraMask = CameraMask.CAMERA_2
+    cameras: CameraMask | int = CameraMask.CAMERA_2
 
     def raw_params(self) -> tuple[int, ...]:
         return (_mask("cameras", self.cameras), int(bool(self.enabled)),
@@ -516,7 +516,7 @@ class Isotherm(Command):
     enabled: bool = True
     high: float = 0.0
     low: float = 0.0
-    cameras: CameraMask = CameraMask.CAMERA_2
+    cameras: CameraMask | int = CameraMask.CAMERA_2
 
     def raw_params(self) -> tuple[int, ...]:
         return (_mask("cameras", self.cameras), int(bool(self.enabled)),
@@ -536,7 +536,7 @@ class SpotTemperature(Command):
     LAYOUT = struct.Struct("<BBHH")
     enabled: bool = True
     point: ImagePoint = ImagePoint(0.5, 0.5)
-    cameras: CameraMask = CameraMask.CAMERA_2
+    cameras: CameraMask | int = CameraMask.CAMERA_2
 
     def raw_params(self) -> tuple[int, ...]:
         return (

@@ -36,6 +36,8 @@ def format_hostport(host: str, port: int) -> str:
 
 def same_address(a: tuple[str, int], b: tuple[str, int]) -> bool:
     """True when two (host, port) socket addresses name the same endpoint."""
+    if a == b:  # the common case, per received datagram: skip parsing the addresses
+        return True
     if a[1] != b[1]:
         return False
     try:

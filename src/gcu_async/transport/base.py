@@ -72,6 +72,12 @@ class Transport(abc.ABC):
     def connected(self) -> bool:
         """True while :meth:`send` can deliver bytes."""
 
+    @property
+    def ordered(self) -> bool:
+        """True when packets arrive in the order sent (stream transports). Datagram
+        transports (UDP) may reorder; the client then guards commands against it."""
+        return True
+
     @abc.abstractmethod
     async def open(self) -> None:
         """Open the link. Raises :class:`~gcu_async.errors.LinkLost` if it cannot."""

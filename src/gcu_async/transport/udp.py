@@ -128,6 +128,11 @@ class UdpTransport(Transport):
         return f"udp://{format_hostport(self._host, self._port)}"
 
     @property
+    def ordered(self) -> bool:
+        """UDP datagrams may arrive out of order."""
+        return False
+
+    @property
     def connected(self) -> bool:
         return self._dtransport is not None and not self._dtransport.is_closing()
 

@@ -1,0 +1,186 @@
+"""``gcu-async sim``: run the GCU simulator on UDP, TCP, a pty or a serial device.
+
+Prints one line saying where it listens, logs every executed command (info level, stderr),
+stops cleanly with exit status 0 on Ctrl-C / SIGTERM. Bad options: one line on stderr,
+exit status 2. Cannot bind / open: exit status 1.
+
+Switches while running (POSIX signals): SIGUSR1 kills the current TCP connection now;
+SIGUSR2 silences the GCU for ``--silence`` seconds (default 5).
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import logging
+import signal
+import sys
+from typing import Any
+
+from gcu_async.sim.faults import FaultConfig
+from gcu_async.sim.listen import ListenSpec, parse_hostport, parse_listen_url
+from gcu_async.sim.model import DEFAULT_POD, SimulatorModel
+from gcu_async.sim.serialport import SerialServer
+from gcu_async.sim.server import SimServer
+from gcu_async.sim.simulator import GcuSimulator
+from gcu_async.sim.tcp import TcpServer
+
+PROG = "gcu-async sim"
+DEFAULT_LISTEN = "udp://127.0.0.1:2337"
+log = logging.getLogger("gcu_async.sim")
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser(
+        "sim",
+        help="run a simulated GCU (UDP, TCP, pty or serial device)",
+        description="Run a simulated GCU and pod that answers host packets like the real one. "
+        "Listen URLs: udp://HOST[:PORT] (default port 2337), tcp://HOST[:PORT] (2332), pty, "
+        "serial:///dev/ttyX[?baudrate=N]. Fault options apply to requests and replies, "
+        "each direction with its own seeded random generator.",
+    )
+    p.add_argument("--listen", default=DEFAULT_LISTEN, metavar="URL",
+                   help=f"where to listen (default {DEFAULT_LISTEN})")  # fmt: skip
+    p.add_argument("--pod", default=DEFAULT_POD, metavar="NAME",
+                   help=f"pod model, Appendix 7 name or code (default {DEFAULT_POD})")  # fmt: skip
+    p.add_argument("--reply-to", metavar="HOST:PORT",
+                   help="UDP: send every reply here (e.g. the broadcast address, port 2338) "
+                   "instead of to the sender")  # fmt: skip
+    p.add_argument("--reply-port", type=int, metavar="PORT",
+                   help="UDP: reply to the sender's host at this port (e.g. 2338)")  # fmt: skip
+    p.add_argument("--silence", type=float, default=5.0, metavar="SECONDS",
+                   help="how long SIGUSR2 silences the GCU (default 5)")  # fmt: skip
+    p.add_argument("--loss", type=float, default=0.0, metavar="P",
+                   help="probability of losing a packet (each direction)")  # fmt: skip
+    p.add_argument("--corrupt", type=float, default=0.0, metavar="P",
+                   help="probability of flipping a bit in a packet")  # fmt: skip
+    p.add_argument("--duplicate", type=float, default=0.0, metavar="P",
+                   help="probability of sending a packet twice")  # fmt: skip
+    p.add_argument("--reorder", type=float, default=0.0, metavar="P",
+                   help="probability of letting the next packet overtake")  # fmt: skip
+    p.add_argument("--delay", type=float, default=0.0, metavar="SECONDS",
+                   help="maximum extra delay per packet (uniform)")  # fmt: skip
+    p.add_argument("--seed", type=int, default=0, metavar="N",
+                   help="seed for fault injection and the model's noise (default 0)")  # fmt: skip
+    p.add_argument("--max-zoom", type=float, default=None, metavar="X",
+                   help="maximum optical zoom of camera 1 (default: per pod model)")  # fmt: skip
+    p.add_argument("-q", "--quiet", action="store_true", help="do not log executed commands")
+    p.set_defaults(run=run)
+
+
+class _UsageError(ValueError):
+    pass
+
+
+def _build(args: argparse.Namespace) -> tuple[GcuSimulator, ListenSpec]:
+    try:
+        spec = parse_listen_url(args.listen)
+        if args.reply_to is not None or args.reply_port is not None:
+            option = "--reply-to" if args.reply_to is not None else "--reply-port"
+            if spec.kind != "udp":
+                raise ValueError(f"{option}: only for a udp:// listen URL")
+            if args.reply_to is not None and args.reply_port is not None:
+                raise ValueError("--reply-to and --reply-port: give at most one")
+            reply_to = None
+            if args.reply_to is not None:
+                reply_to = parse_hostport(args.reply_to, what="--reply-to")
+            if args.reply_port is not None and not 1 <= args.reply_port <= 65535:
+                raise ValueError(f"--reply-port: {args.reply_port} is outside 1-65535")
+            spec = ListenSpec(spec.kind, spec.host, spec.port, reply_to=reply_to,
+                              reply_port=args.reply_port)  # fmt: skip
+        if not 0.0 <= args.silence < float("inf"):
+            raise ValueError(f"--silence: {args.silence!r} is outside the allowed range [0, inf) s")
+        for option in ("loss", "corrupt", "duplicate", "reorder"):
+            value = getattr(args, option)
+            if not 0.0 <= value <= 1.0:
+                raise ValueError(f"--{option}: {value!r} is outside the allowed range [0, 1]")
+        if not 0.0 <= args.delay < float("inf"):
+            raise ValueError(f"--delay: {args.delay!r} is outside the allowed range [0, inf) s")
+        faults = FaultConfig(
+            drop=args.loss,
+            corrupt=args.corrupt,
+            duplicate=args.duplicate,
+            reorder=args.reorder,
+            delay=args.delay,
+            seed=args.seed,
+        )
+        model = SimulatorModel(args.pod, seed=args.seed, max_zoom=args.max_zoom)
+    except ValueError as exc:
+        raise _UsageError(str(exc)) from None
+    return GcuSimulator(model, faults=faults), spec
+
+
+def _install_switches(
+    loop: asyncio.AbstractEventLoop, sim: GcuSimulator, server: SimServer, silence: float
+) -> None:
+    """SIGUSR1: kill the TCP connection now; SIGUSR2: silence the GCU for ``silence`` s."""
+
+    def kill() -> None:
+        if isinstance(server, TcpServer):
+            if not server.kill_connection():
+                log.info("SIGUSR1: no TCP connection to kill")
+        else:
+            log.info("SIGUSR1: kill only applies to a tcp:// listen URL")
+
+    def mute() -> None:
+        log.info("SIGUSR2: silent for %g s", silence)
+        sim.silence(silence)
+
+    for name, action in (("SIGUSR1", kill), ("SIGUSR2", mute)):
+        sig = getattr(signal, name, None)
+        if sig is not None:
+            with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
+                loop.add_signal_handler(sig, action)
+
+
+async def _serve(sim: GcuSimulator, spec: ListenSpec, silence: float) -> int:
+    loop = asyncio.get_running_loop()
+    stop = asyncio.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
+            loop.add_signal_handler(sig, stop.set)
+    server = sim.serve(spec)
+    try:
+        await server.start()
+    except OSError as exc:
+        print(f"{PROG}: cannot listen on {args_url(spec)}: {exc}", file=sys.stderr)
+        return 1
+    _install_switches(loop, sim, server, silence)
+    try:
+        where = server.url
+        if isinstance(server, SerialServer) and spec.kind == "pty":
+            where += f" (pty: open {server.device_path})"
+        print(f"{PROG}: {sim.model.profile.name} listening on {where}", flush=True)
+        await stop.wait()
+    finally:
+        await server.aclose()
+    s = sim.model.stats
+    log.info("stopped: %d packets answered, %d repeated, %d CRC errors, %d malformed, "
+             "%d bytes discarded", s.answered, s.repeated, s.crc_errors, s.malformed,
+             s.bytes_discarded)  # fmt: skip
+    return 0
+
+
+def args_url(spec: ListenSpec) -> str:
+    if spec.kind in ("udp", "tcp"):
+        return f"{spec.kind}://{spec.host}:{spec.port}"
+    return spec.kind if spec.kind == "pty" else f"serial://{spec.path}"
+
+
+def run(args: argparse.Namespace) -> int:
+    try:
+        sim, spec = _build(args)
+    except _UsageError as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 2
+    if not args.quiet:
+        logging.basicConfig(
+            level=logging.INFO,
+            stream=sys.stderr,
+            format="%(asctime)s %(name)s %(levelname)s %(message)s",
+        )
+    try:
+        return asyncio.run(_serve(sim, spec, args.silence))
+    except KeyboardInterrupt:  # platforms without loop signal handlers
+        return 0

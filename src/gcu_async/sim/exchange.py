@@ -1,0 +1,131 @@
+"""One peer's path through a running simulator: request faults → model → reply faults.
+
+Servers create one :class:`Exchange` per connection (TCP, serial, memory) or one for all
+datagrams (UDP). Delays and reordering use event-loop timers, all cancelled on close.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+from gcu_async.errors import LinkLost
+from gcu_async.protocol.deframer import Deframer
+from gcu_async.sim.faults import FaultInjector
+
+if TYPE_CHECKING:
+    from gcu_async.sim.simulator import GcuSimulator
+
+log = logging.getLogger("gcu_async.sim")
+
+Deliver = Callable[[bytes], None]
+
+
+class _Direction:
+    """Faults of one direction. The injector is looked up on every packet, so
+    :meth:`GcuSimulator.set_faults` acts at once."""
+
+    def __init__(self, sim: GcuSimulator, attribute: str) -> None:
+        self._sim = sim
+        self._attribute = attribute
+
+    @property
+    def injector(self) -> FaultInjector:
+        injector: FaultInjector = getattr(self._sim, self._attribute)
+        return injector
+
+
+class Exchange:
+    """Carries bytes from one peer into the model and the replies back."""
+
+    def __init__(self, sim: GcuSimulator, *, stream: bool) -> None:
+        self._sim = sim
+        self._deframer = Deframer.for_host_packets() if stream else None
+        self._requests = _Direction(sim, "request_faults")
+        self._replies = _Direction(sim, "reply_faults")
+        self._timers: set[asyncio.TimerHandle] = set()
+        self._closed = False
+
+    def feed(self, data: bytes, send: Deliver) -> None:
+        """Bytes from the peer; replies go to ``send`` (a datagram is deframed on its own)."""
+        if self._closed:
+            return
+        model = self._sim.model
+        if self._deframer is not None:
+            packets = model.split(data, self._deframer)
+        else:
+            deframer = Deframer.for_host_packets()
+            packets = model.split(data, deframer)
+            model.discard(deframer)
+
+        def process(packet: bytes) -> None:
+            self._process(packet, send)
+
+        for packet in packets:
+            self._route(self._requests, packet, process)
+
+    def close(self) -> None:
+        """Cancel every pending delayed packet; count what a stream left half-received."""
+        if self._closed:
+            return
+        self._closed = True
+        for timer in self._timers:
+            timer.cancel()
+        self._timers.clear()
+        if self._deframer is not None:
+            self._sim.model.discard(self._deframer)
+
+    # -- internals ------------------------------------------------------------------------
+    def _process(self, packet: bytes, send: Deliver) -> None:
+        if self._closed:
+            return
+        sim = self._sim
+        if sim.silenced:
+            sim.stats.ignored_while_silent += 1
+            return
+        reply = sim.model.handle_bytes(packet)
+        if reply is not None:
+            self._route(self._replies, reply, lambda data: self._send(send, data))
+
+    def _send(self, send: Deliver, data: bytes) -> None:
+        try:
+            send(data)
+        except (OSError, LinkLost) as exc:
+            self._sim.stats.send_errors += 1
+            log.debug("reply not sent: %s", exc)
+        else:
+            self._sim.stats.replies_sent += 1
+
+    def _route(self, direction: _Direction, data: bytes, deliver: Deliver) -> None:
+        injector = direction.injector
+        if not injector.config.active:
+            deliver(data)
+            return
+        decision = injector.decide(len(data))
+        if decision.drop:
+            return
+        data = injector.apply(data, decision)
+        delay = decision.delay + (injector.config.reorder_hold if decision.hold else 0.0)
+        self._out(deliver, data, decision.copies, delay)
+
+    def _out(self, deliver: Deliver, data: bytes, copies: int, delay: float) -> None:
+        for _ in range(copies):
+            if delay <= 0:
+                deliver(data)
+            else:
+                self._later(delay, deliver, data)
+
+    def _later(self, delay: float, deliver: Deliver, data: bytes) -> None:
+        def fire() -> None:
+            self._timers.discard(timer)
+            if not self._closed:
+                deliver(data)
+
+        timer = self._loop().call_later(delay, fire)
+        self._timers.add(timer)
+
+    @staticmethod
+    def _loop() -> asyncio.AbstractEventLoop:
+        return asyncio.get_running_loop()

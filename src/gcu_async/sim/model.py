@@ -1,0 +1,200 @@
+"""The sans-I/O GCU model: host packets in, GCU packets out, with a pod behind them.
+
+``SimulatorModel.receive(bytes)`` takes raw bytes in any chunking and returns the encoded
+replies; ``handle(HostPacket)`` answers one decoded packet. Time comes from an injectable
+clock; on every packet the model first advances its physics to ``clock.now()``, then runs the
+command (the same-opcode rule applies, NOTES §3), then takes the packet's control values,
+and answers with main frame, the requested sub frame and the feedback (NOTES §1).
+"""
+
+from __future__ import annotations
+
+import logging
+import random
+from collections import Counter
+from dataclasses import dataclass
+
+from gcu_async.errors import RemoteProtocolError
+from gcu_async.protocol.commands import command_code
+from gcu_async.protocol.deframer import Deframer
+from gcu_async.protocol.enums import Mode, Opcode, PodModel, SubFrameRequest, opcode_name
+from gcu_async.protocol.feedback import Feedback
+from gcu_async.protocol.packets import DEFAULT_VERSION, GcuPacket, HostPacket, decode_host_packet
+from gcu_async.sim.aircraft import AircraftState
+from gcu_async.sim.camera import CameraState
+from gcu_async.sim.clock import Clock, MonotonicClock
+from gcu_async.sim.executor import Executor
+from gcu_async.sim.motion import DEFAULT_MAX_RATE, Gimbal
+from gcu_async.sim.profiles import PodProfile, profile_for
+from gcu_async.sim.rangefinder import Rangefinder
+from gcu_async.sim.report import main_frame, sub_frame
+from gcu_async.sim.state import SimState
+
+log = logging.getLogger("gcu_async.sim")
+
+DEFAULT_POD = "D-90Pro(TA)"
+"""Default pod: thermal (radiometric) + AI core, supports nearly every command."""
+CALIBRATION_SECONDS = 3.0
+
+
+@dataclass
+class ModelStats:
+    """Counters of one model."""
+
+    received: int = 0
+    """CRC-valid host packets handed to the model."""
+    answered: int = 0
+    malformed: int = 0
+    """CRC-valid packets that did not decode (bad parameters, version, length): no answer."""
+    crc_errors: int = 0
+    length_errors: int = 0
+    bytes_discarded: int = 0
+    """Bytes that belonged to no valid packet (garbage, bad CRC/length)."""
+    repeated: int = 0
+    """Packets whose opcode repeated the previous one: answered, not executed (NOTES §3)."""
+
+
+class SimulatorModel:
+    """A simulated GCU with a pod of model ``pod`` (Appendix 7 code or name).
+
+    ``executions`` counts, per opcode, how often a command was acted upon (successfully or
+    not) — a repeated opcode without a null command in between does not count again. The
+    null command is never counted. ``state`` is the live :class:`SimState`.
+    """
+
+    def __init__(
+        self,
+        pod: PodModel | int | str = DEFAULT_POD,
+        *,
+        clock: Clock | None = None,
+        seed: int = 0,
+        max_zoom: float | None = None,
+        thermal_max_zoom: float | None = None,
+        calibration_seconds: float = CALIBRATION_SECONDS,
+        max_slew_rate: float = DEFAULT_MAX_RATE,
+        initial_mode: Mode = Mode.POINTING_FOLLOW,
+        protocol_version: int = DEFAULT_VERSION,
+    ) -> None:
+        if not calibration_seconds >= 0:
+            raise ValueError(f"calibration_seconds: {calibration_seconds!r} must be >= 0")
+        if not max_slew_rate > 0:
+            raise ValueError(f"max_slew_rate: {max_slew_rate!r} must be > 0 deg/s")
+        if initial_mode not in (set(Mode) - {Mode.UNKNOWN}):
+            raise ValueError(f"initial_mode: {initial_mode!r} is not a pod working mode")
+        self.profile: PodProfile = profile_for(
+            pod, max_zoom=max_zoom, thermal_max_zoom=thermal_max_zoom
+        )
+        self.clock: Clock = clock if clock is not None else MonotonicClock()
+        self.rng = random.Random(seed)
+        self.protocol_version = protocol_version
+        aircraft = AircraftState()
+        self.state = SimState(
+            aircraft=aircraft,
+            gimbal=Gimbal(aircraft, mode=initial_mode, max_rate=max_slew_rate),
+            camera=CameraState.for_profile(self.profile),
+            rangefinder=Rangefinder(),
+        )
+        self.executor = Executor(self.state, self.profile, calibration_seconds)
+        self.executions: Counter[int] = Counter()
+        self.stats = ModelStats()
+        self.last_opcode: int | None = None
+        """Opcode of the last packet handled (the same-opcode rule compares with it)."""
+        self._last_feedback = Feedback(Opcode.NULL)
+        self._time = self.clock.now()
+        self._deframer = Deframer.for_host_packets()
+
+    # -- bytes in, bytes out ------------------------------------------------------------------
+    def receive(self, data: bytes | bytearray | memoryview) -> list[bytes]:
+        """Feed raw bytes (any chunking); return the encoded reply to every complete valid
+        packet. Garbage and bad packets are counted in :attr:`stats` and not answered."""
+        return [
+            reply
+            for packet in self.split(data, self._deframer)
+            if (reply := self.handle_bytes(packet)) is not None
+        ]
+
+    def split(self, data: bytes | bytearray | memoryview, deframer: Deframer) -> list[bytes]:
+        """Deframe ``data`` with ``deframer`` (one per stream or datagram), adding what it
+        discards to :attr:`stats`; return the CRC-valid packets."""
+        before = deframer.stats
+        crc, length, discarded = before.crc_errors, before.length_errors, before.bytes_discarded
+        packets = deframer.feed(data)
+        after = deframer.stats
+        self.stats.crc_errors += after.crc_errors - crc
+        self.stats.length_errors += after.length_errors - length
+        self.stats.bytes_discarded += after.bytes_discarded - discarded
+        return packets
+
+    def discard(self, deframer: Deframer) -> None:
+        """Drop what ``deframer`` still buffers (end of a datagram or connection), counted."""
+        before = deframer.stats.bytes_discarded
+        deframer.reset()
+        self.stats.bytes_discarded += deframer.stats.bytes_discarded - before
+
+    def handle_bytes(self, packet: bytes) -> bytes | None:
+        """Answer one complete packet; ``None`` (counted) when it is not a valid host packet."""
+        try:
+            decoded = decode_host_packet(packet)
+        except RemoteProtocolError as exc:
+            if "CRC" in str(exc):
+                self.stats.crc_errors += 1
+            else:
+                self.stats.malformed += 1
+            self.stats.bytes_discarded += len(packet)
+            log.debug("ignored a malformed packet: %s", exc)
+            return None
+        return self.handle(decoded).encode()
+
+    # -- the GCU ------------------------------------------------------------------------------
+    def handle(self, packet: HostPacket) -> GcuPacket:
+        """Answer one host packet: advance time, run its command, take its control values."""
+        now = self.clock.now()
+        self.stats.received += 1
+        main = packet.main
+        self.state.aircraft.update(main, packet.sub)
+        self.advance(now)
+        opcode = command_code(packet.command)
+        if opcode == Opcode.NULL:
+            feedback = Feedback(Opcode.NULL)
+        elif opcode == self.last_opcode:
+            self.stats.repeated += 1
+            feedback = self._last_feedback
+            if opcode == Opcode.CALIBRATION:
+                feedback = Feedback(opcode, self.executor.calibration_status(now))
+        else:
+            status = self.executor.execute(packet.command, main, now)
+            self.executions[opcode] += 1
+            feedback = Feedback(opcode, status)
+            self._last_feedback = feedback
+            log.info("executed %s %s -> status 0x%02X", opcode_name(opcode),
+                     packet.command.encode_params().hex(" ") or "-", status)  # fmt: skip
+        self.last_opcode = opcode
+        cam = self.state.camera
+        self.state.gimbal.control_input(main.control, main.control_valid, cam.main_zoom)
+        self.state.rangefinder.measure(self.state.attitude, self.state.aircraft, self.rng)
+        self.stats.answered += 1
+        sub = sub_frame(self.state, self.profile)
+        return GcuPacket(
+            main_frame(self.state),
+            sub if main.subframe_request == SubFrameRequest.STANDARD else None,
+            feedback,
+            self.protocol_version,
+        )
+
+    def advance(self, now: float | None = None) -> None:
+        """Move the physics (angles, zoom, calibration) forward to ``now`` (default: the
+        clock's time). Time never runs backwards."""
+        now = self.clock.now() if now is None else now
+        dt = now - self._time
+        if dt <= 0:
+            return
+        self._time = now
+        cam = self.state.camera
+        self.state.gimbal.step(dt, cam.main_zoom)
+        cam.step(dt)
+        if self.state.calibration_until is not None:
+            self.executor.calibration_status(now)
+
+    def __repr__(self) -> str:
+        return (f"<SimulatorModel {self.profile.name} mode={self.state.mode.name} "
+                f"answered={self.stats.answered}>")  # fmt: skip

@@ -1,0 +1,121 @@
+"""The simulator's serial endpoint: a pseudo-terminal pair, or a real device path.
+
+``serve_pty()`` creates a pty pair (POSIX), puts the follower side in raw mode and publishes
+its path (``device_path``) for a client to open like a serial port; the simulator keeps the
+follower open too, so clients may open and close it repeatedly. ``serve_serial(path)`` opens
+an existing device (8N1, the given baud rate) with pyserial. A pty ignores the baud rate;
+the real GCU detects 115200/250000/500000/1000000 (NOTES §9). Replies the other side does
+not read are dropped once the terminal buffer is full (counted in ``replies_dropped``).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import os
+import tty
+from typing import TYPE_CHECKING, Any
+
+from gcu_async.sim.exchange import Exchange
+from gcu_async.sim.server import SimServer
+
+if TYPE_CHECKING:
+    from gcu_async.sim.simulator import GcuSimulator
+
+log = logging.getLogger("gcu_async.sim")
+
+READ_SIZE = 4096
+DEFAULT_BAUDRATE = 115200
+
+
+class SerialServer(SimServer):
+    """Serial endpoint of a simulator; ``device_path`` is what a client opens."""
+
+    def __init__(
+        self, sim: GcuSimulator, path: str | None = None, baudrate: int = DEFAULT_BAUDRATE
+    ) -> None:
+        self._sim = sim
+        self._path = path
+        self.baudrate = baudrate
+        self.device_path: str = path or ""
+        self._fd: int | None = None
+        self._follower_fd: int | None = None
+        self._serial: Any = None
+        self._exchange: Exchange | None = None
+        self.replies_dropped = 0
+
+    @property
+    def url(self) -> str:
+        return f"serial://{self.device_path}"
+
+    async def start(self) -> None:
+        if self._fd is not None:
+            return
+        if self._path is None:
+            leader, follower = os.openpty()
+            try:
+                tty.setraw(follower)
+                self.device_path = os.ttyname(follower)
+            except BaseException:
+                os.close(leader)
+                os.close(follower)
+                raise
+            self._fd, self._follower_fd = leader, follower
+        else:
+            self._serial = _open_device(self._path, self.baudrate)
+            self._fd = int(self._serial.fileno())
+        os.set_blocking(self._fd, False)
+        self._exchange = Exchange(self._sim, stream=True)
+        asyncio.get_running_loop().add_reader(self._fd, self._readable)
+
+    def _readable(self) -> None:
+        fd, exchange = self._fd, self._exchange
+        if fd is None or exchange is None:
+            return
+        try:
+            data = os.read(fd, READ_SIZE)
+        except (BlockingIOError, InterruptedError):
+            return
+        except OSError as exc:  # e.g. EIO from a pty whose other side is gone
+            log.debug("serial read: %s", exc)
+            return
+        if data:
+            exchange.feed(data, self._write)
+
+    def _write(self, data: bytes) -> None:
+        fd = self._fd
+        if fd is None:
+            return
+        view = memoryview(data)
+        while view:
+            try:
+                n = os.write(fd, view)
+            except (BlockingIOError, InterruptedError):
+                self.replies_dropped += 1
+                return
+            view = view[n:]
+
+    async def aclose(self) -> None:
+        fd, self._fd = self._fd, None
+        if self._exchange is not None:
+            self._exchange.close()
+        if fd is None:
+            return
+        asyncio.get_running_loop().remove_reader(fd)
+        if self._serial is not None:
+            self._serial.close()
+            self._serial = None
+        else:
+            os.close(fd)
+        if self._follower_fd is not None:
+            os.close(self._follower_fd)
+            self._follower_fd = None
+
+
+def _open_device(path: str, baudrate: int) -> Any:
+    import serial  # type: ignore[import-untyped]
+
+    try:
+        return serial.Serial(path, baudrate=baudrate, timeout=0, write_timeout=0)
+    except serial.SerialException as exc:
+        raise OSError(f"{path}: {exc}") from exc

@@ -1,0 +1,116 @@
+"""``GcuSimulator``: a :class:`SimulatorModel` behind UDP, TCP, serial/pty or in-memory
+endpoints, with fault injection and a "silence" switch."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from gcu_async.protocol.enums import PodModel
+from gcu_async.sim.clock import Clock
+from gcu_async.sim.faults import FaultConfig, FaultInjector, FaultPlan
+from gcu_async.sim.listen import ListenSpec, parse_listen_url
+from gcu_async.sim.memory import MemoryServer
+from gcu_async.sim.model import DEFAULT_POD, SimulatorModel
+from gcu_async.sim.serialport import DEFAULT_BAUDRATE, SerialServer
+from gcu_async.sim.server import SimServer
+from gcu_async.sim.tcp import GCU_TCP_PORT, TcpServer
+from gcu_async.sim.udp import GCU_UDP_PORT, UdpServer
+
+
+@dataclass
+class SimulatorStats:
+    replies_sent: int = 0
+    send_errors: int = 0
+    ignored_while_silent: int = 0
+    """Requests that arrived while the GCU was silenced (not processed, not answered)."""
+
+
+class GcuSimulator:
+    """A simulated GCU you can reach over the network, a pty or in memory.
+
+    ``faults`` is a :class:`FaultPlan` (requests and replies configured separately) or one
+    :class:`FaultConfig` for both directions (see :meth:`FaultPlan.both`). Endpoints of one
+    simulator share its model and fault injectors.
+    """
+
+    def __init__(
+        self,
+        model: SimulatorModel | None = None,
+        *,
+        pod: PodModel | int | str = DEFAULT_POD,
+        faults: FaultPlan | FaultConfig | None = None,
+        clock: Clock | None = None,
+        seed: int = 0,
+    ) -> None:
+        if model is not None and (clock is not None or seed != 0 or pod != DEFAULT_POD):
+            raise ValueError("GcuSimulator: give either model= or pod=/clock=/seed=, not both")
+        self.model = model if model is not None else SimulatorModel(pod, clock=clock, seed=seed)
+        self.faults = FaultPlan()
+        self.request_faults = FaultInjector(self.faults.requests)
+        self.reply_faults = FaultInjector(self.faults.replies)
+        self.set_faults(faults)
+        self.stats = SimulatorStats()
+        self._silent_until = -math.inf
+
+    # -- switches -----------------------------------------------------------------------------
+    def set_faults(self, faults: FaultPlan | FaultConfig | None) -> None:
+        """Replace the fault injection from the next packet on (``None``: a perfect link).
+        Each direction restarts from its configured seed."""
+        if isinstance(faults, FaultConfig):
+            faults = FaultPlan.both(faults)
+        self.faults = faults if faults is not None else FaultPlan()
+        self.request_faults = FaultInjector(self.faults.requests)
+        self.reply_faults = FaultInjector(self.faults.replies)
+
+    def silence(self, seconds: float) -> None:
+        """Stop answering (and processing) for ``seconds`` of the model's clock; 0 ends a
+        silence early."""
+        if not 0 <= seconds < math.inf:
+            raise ValueError(f"seconds: {seconds!r} is outside the allowed range [0, inf)")
+        self._silent_until = self.model.clock.now() + seconds if seconds else -math.inf
+
+    @property
+    def silenced(self) -> bool:
+        return self.model.clock.now() < self._silent_until
+
+    # -- endpoints ----------------------------------------------------------------------------
+    def serve_udp(
+        self,
+        host: str = "127.0.0.1",
+        port: int = GCU_UDP_PORT,
+        reply_to: tuple[str, int] | None = None,
+        reply_port: int | None = None,
+    ) -> UdpServer:
+        """UDP endpoint (``async with``); port 0 picks a free port (see ``.address``).
+        Replies go to the sender, to the sender's host at ``reply_port``, or to ``reply_to``."""
+        return UdpServer(self, host, port, reply_to, reply_port)
+
+    def serve_tcp(self, host: str = "127.0.0.1", port: int = GCU_TCP_PORT) -> TcpServer:
+        """TCP server endpoint (``async with``); port 0 picks a free port."""
+        return TcpServer(self, host, port)
+
+    def serve_pty(self) -> SerialServer:
+        """A pseudo-terminal; a client opens ``.device_path`` as its serial port (POSIX)."""
+        return SerialServer(self)
+
+    def serve_serial(self, path: str, baudrate: int = DEFAULT_BAUDRATE) -> SerialServer:
+        """Answer on an existing serial device (8N1 at ``baudrate``)."""
+        return SerialServer(self, path, baudrate)
+
+    def serve_memory(self) -> MemoryServer:
+        """``async with sim.serve_memory() as transport`` — an in-memory
+        :class:`~gcu_async.transport.memory.MemoryTransport` whose peer is this simulator."""
+        return MemoryServer(self)
+
+    def serve(self, listen: str | ListenSpec) -> SimServer:
+        """The endpoint a listen URL names: ``udp://HOST[:PORT]``, ``tcp://HOST[:PORT]``,
+        ``pty`` or ``serial:///dev/ttyX[?baudrate=N]``."""
+        spec = parse_listen_url(listen) if isinstance(listen, str) else listen
+        if spec.kind == "udp":
+            return self.serve_udp(spec.host, spec.port, spec.reply_to, spec.reply_port)
+        if spec.kind == "tcp":
+            return self.serve_tcp(spec.host, spec.port)
+        if spec.kind == "pty":
+            return self.serve_pty()
+        return self.serve_serial(spec.path, spec.baudrate)

@@ -1,0 +1,218 @@
+"""The client over bad links, against the simulator: loss, corruption, duplication,
+reordering, TCP connection kills, silence; and bad arguments that must never be sent."""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import time
+import warnings
+from collections import Counter
+from collections.abc import Awaitable, Callable
+from typing import Any
+
+import pytest
+
+from gcu_async import GcuClient, LinkLost, Opcode
+from gcu_async.pytest_plugin import SimHandle
+from gcu_async.sim import FaultConfig, FaultPlan
+
+Step = tuple[Opcode, Callable[[GcuClient], Awaitable[Any]]]
+STEPS: list[Step] = [
+    (Opcode.TAKE_PHOTO, lambda g: g.take_photo()),
+    (Opcode.FOCUS, lambda g: g.focus()),
+    (Opcode.ZOOM_STOP, lambda g: g.zoom_stop()),
+    (Opcode.OSD, lambda g: g.set_osd(True)),
+    (Opcode.TAKE_PHOTO, lambda g: g.take_photo()),  # same opcode twice in a row
+    (Opcode.DIGITAL_ZOOM, lambda g: g.set_digital_zoom(True)),
+    (Opcode.TARGET_DETECTION, lambda g: g.set_target_detection(False)),
+]
+
+
+def bad_link(seed: int) -> FaultPlan:
+    def one(s: int) -> FaultConfig:
+        return FaultConfig(
+            drop=0.3, corrupt=0.05, duplicate=0.05, reorder=0.05, delay=0.004, seed=s
+        )
+
+    return FaultPlan(requests=one(seed), replies=one(seed + 1))
+
+
+@pytest.fixture
+def gcu_sim_transport() -> str:
+    return "udp"
+
+
+def client(gcu_sim: SimHandle, rate_hz: float = 200.0, **options: Any) -> GcuClient:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # > 50 Hz to keep the test short
+        return gcu_sim.client(rate_hz=rate_hz, **options)
+
+
+@pytest.mark.parametrize("seed", [11, 29])
+async def test_500_commands_over_a_bad_link_run_exactly_once(gcu_sim: SimHandle, seed: int) -> None:
+    gcu_sim.set_faults(bad_link(seed))
+    model = gcu_sim.simulator.model
+    submitted: Counter[int] = Counter()
+    async with client(gcu_sim, command_timeout=10.0, connect_timeout=5.0) as gcu:
+        start = time.monotonic()
+        ticks0 = gcu.heartbeat_ticks
+        for i in range(500):
+            opcode, call = STEPS[i % len(STEPS)]
+            submitted[opcode] += 1
+            feedback = await call(gcu)
+            assert feedback.opcode == opcode
+        elapsed = time.monotonic() - start
+        # the heartbeat never stopped: ticks kept coming at the configured rate
+        assert gcu.heartbeat_ticks - ticks0 >= 0.8 * elapsed * gcu.rate_hz
+        assert gcu.link.lost_count == 0
+        faults = gcu_sim.simulator.request_faults.stats
+    # every command ran exactly once on the GCU: none twice, none skipped
+    assert {op: model.executions[op] for op in submitted} == dict(submitted)
+    assert faults.dropped > 0  # the link really was bad
+    assert model.stats.crc_errors > 0
+
+
+@pytest.fixture
+def tcp_options() -> dict[str, Any]:
+    return {}
+
+
+@pytest.mark.parametrize("gcu_sim_transport", ["tcp"])
+async def test_tcp_connection_killed_20_times(gcu_sim: SimHandle) -> None:
+    model = gcu_sim.simulator.model
+    ok: Counter[int] = Counter()
+    attempted: Counter[int] = Counter()
+    lost_fast = 0
+    async with client(gcu_sim, rate_hz=50.0, silence_timeout=2.0) as gcu:
+        for kill in range(20):
+            for i in range(3):
+                opcode, call = STEPS[(kill * 3 + i) % len(STEPS)]
+                attempted[opcode] += 1
+                await call(gcu)
+                ok[opcode] += 1
+            assert gcu_sim.kill_connection()
+            # the link is lost at once: a command now fails fast instead of hanging
+            deadline = time.monotonic() + 2.0
+            while gcu.link.up and time.monotonic() < deadline:
+                await asyncio.sleep(0.005)
+            assert not gcu.link.up
+            t0 = time.monotonic()
+            with pytest.raises(LinkLost):
+                await gcu.take_photo()
+            assert time.monotonic() - t0 < 0.05
+            lost_fast += 1
+            # ... and comes back by itself
+            deadline = time.monotonic() + 5.0
+            while not gcu.link.up and time.monotonic() < deadline:
+                await asyncio.sleep(0.01)
+            assert gcu.link.up, f"no reconnect after kill {kill + 1}"
+        await gcu.take_photo()
+        ok[Opcode.TAKE_PHOTO] += 1
+        attempted[Opcode.TAKE_PHOTO] += 1
+        assert gcu.link.lost_count == 20
+        assert gcu.link.restored_count == 20
+    assert lost_fast == 20
+    for opcode in attempted:
+        assert ok[opcode] <= model.executions[opcode] <= attempted[opcode]
+
+
+async def test_waiting_command_fails_fast_when_link_goes_down(gcu_sim: SimHandle) -> None:
+    async with client(gcu_sim, rate_hz=50.0, silence_timeout=0.3) as gcu:
+        await gcu.take_photo()
+        gcu_sim.silence(3.0)
+        t0 = time.monotonic()
+        with pytest.raises(LinkLost) as info:
+            await gcu.execute(gcu_command_focus(), timeout=10.0)
+        waited = time.monotonic() - t0
+        assert isinstance(info.value, ConnectionError)
+        assert waited < 1.5  # the silence timeout, not the 10 s command timeout
+        t0 = time.monotonic()
+        with pytest.raises(LinkLost):
+            await gcu.take_photo()
+        assert time.monotonic() - t0 < 0.05
+        gcu_sim.silence(0)
+        deadline = time.monotonic() + 3.0
+        while not gcu.link.up and time.monotonic() < deadline:
+            await asyncio.sleep(0.01)
+        assert gcu.link.up
+        assert gcu.link.restored_count == 1
+        await gcu.take_photo()
+
+
+def gcu_command_focus() -> Any:
+    from gcu_async.protocol import Focus
+
+    return Focus()
+
+
+BAD_CALLS: list[tuple[str, Callable[[GcuClient], Any]]] = [
+    ("euler pitch 200", lambda g: g.euler_control(pitch=200.0)),
+    ("angle roll nan", lambda g: g.angle_control(roll=math.nan)),
+    ("fpv yaw 181", lambda g: g.fpv(yaw=181.0)),
+    ("lock rate 1000", lambda g: g.pointing_lock(pitch_rate=1000.0)),
+    ("follow rate inf", lambda g: g.pointing_follow(yaw_rate=math.inf)),
+    ("top-down rate", lambda g: g.top_down(yaw_rate=-151.0)),
+    ("gaze-lock rate", lambda g: g.gaze_lock(pitch_rate=151.0)),
+    ("gaze-at lat 91", lambda g: g.gaze_at(91.0, 8.5, 400.0)),
+    ("track inverted box", lambda g: g.track((0.6, 0.4, 0.5, 0.6))),
+    ("track box > 1", lambda g: g.track((0.1, 0.1, 1.5, 0.6))),
+    ("click x 1.2", lambda g: g.click_to_pan(1.2, 0.5)),
+    ("photo mask 0", lambda g: g.take_photo(cameras=0)),
+    ("record mask 256", lambda g: g.toggle_recording(cameras=256)),
+    ("zoom-in mask 0", lambda g: g.zoom_in(cameras=0)),
+    ("zoom-to 0.5", lambda g: g.zoom_to(0.5)),
+    ("zoom-fraction 0", lambda g: g.zoom_to_fraction(0.0)),
+    ("zoom-fraction 1.1", lambda g: g.zoom_to_fraction(1.1)),
+    ("focus mask -1", lambda g: g.focus(cameras=-1)),
+    ("palette 11", lambda g: g.set_palette(11)),
+    ("night vision 3", lambda g: g.set_night_vision(3)),
+    ("area box", lambda g: g.area_temperature(True, (0.5, 0.5, 0.2, 0.9))),
+    ("alarm low > high", lambda g: g.temperature_alarm(True, high=10.0, low=20.0)),
+    ("isotherm 4000", lambda g: g.isotherm(True, high=4000.0, low=0.0)),
+    ("spot x -0.1", lambda g: g.spot_temperature(True, -0.1, 0.5)),
+    ("osd coords 2", lambda g: g.set_osd_coordinates(2)),
+    ("time zone 15", lambda g: g.set_time_zone(15)),
+    ("pip 5", lambda g: g.set_picture_in_picture(5)),
+    ("fill light 256", lambda g: g.set_fill_light(256)),
+    ("calibrate timeout 0", lambda g: g.calibrate(timeout=0)),
+    ("execute not a command", lambda g: g.execute("photo")),
+    ("execute timeout -1", lambda g: g.execute(gcu_command_focus(), timeout=-1)),
+    ("aircraft pitch 95", lambda g: g.update_aircraft(attitude=(0.0, 95.0, 0.0))),
+    ("aircraft yaw 360", lambda g: g.update_aircraft(attitude=(0.0, 0.0, 360.0))),
+    ("aircraft lon 200", lambda g: g.update_aircraft(position=(10.0, 200.0, 0.0))),
+    ("aircraft velocity", lambda g: g.update_aircraft(velocity=(400.0, 0.0, 0.0))),
+    ("aircraft naive time", lambda g: g.update_aircraft(gnss_time=_naive())),
+    ("satellites 300", lambda g: g.update_aircraft(satellites=300)),
+    ("rates 200 deg/s", lambda g: g.set_rates(pitch=200.0)),
+    ("angles 190", lambda g: g.set_angles(yaw=190.0)),
+]
+
+
+def _naive() -> Any:
+    from datetime import datetime
+
+    return datetime(2026, 1, 1, 12, 0, 0)
+
+
+@pytest.mark.parametrize("gcu_sim_transport", ["memory"])
+async def test_bad_arguments_raise_before_anything_is_sent(gcu_sim: SimHandle) -> None:
+    model = gcu_sim.simulator.model
+    async with gcu_sim.client() as gcu:
+        await gcu.take_photo()
+        control, aircraft = gcu.control, gcu.aircraft
+        for name, call in BAD_CALLS:
+            submitted = gcu.scheduler.stats.commands_submitted
+            executions = dict(model.executions)
+            async def attempt(call: Callable[[GcuClient], Any] = call) -> None:
+                result = call(gcu)
+                if asyncio.iscoroutine(result):
+                    await result
+
+            with pytest.raises((ValueError, TypeError)) as info:
+                await attempt()
+            assert str(info.value), name
+            assert gcu.scheduler.stats.commands_submitted == submitted, name
+            assert dict(model.executions) == executions, name
+            assert gcu.control == control, name
+            assert gcu.aircraft == aircraft, name

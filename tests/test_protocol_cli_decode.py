@@ -1,0 +1,220 @@
+"""``gcu-async decode`` through the real console script: hex arguments, hex on stdin in loose
+formats, binary captures with junk around packets of both directions; JSON lines with
+direction, opcode name, execution status and unit + raw fields; exit 1 with a one-line reason
+when there is no valid packet."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
+from gcu_async.protocol import (
+    Feedback,
+    GcuMainFrame,
+    GcuPacket,
+    HostMainFrame,
+    HostPacket,
+    Opcode,
+    Palette,
+    ZoomTo,
+)
+
+
+def _entry_point() -> list[str]:
+    script = Path(sys.executable).with_name("gcu-async")
+    if script.exists():
+        return [str(script)]
+    found = shutil.which("gcu-async")
+    if found is None:
+        pytest.fail("the gcu-async console script is not installed (pip install -e .)")
+    return [found]
+
+
+def run_cli(*args: str, stdin: str | bytes | None = None) -> subprocess.CompletedProcess[str]:
+    data = stdin.decode() if isinstance(stdin, bytes) else stdin
+    return subprocess.run(
+        [*_entry_point(), "decode", *args],
+        input=data if data is not None else "",
+        capture_output=True,
+        text=True,
+        timeout=30,
+        check=False,
+    )
+
+
+def json_lines(out: str) -> list[dict[str, Any]]:
+    return [json.loads(line) for line in out.splitlines() if line.strip()]
+
+
+def assert_one_line_failure(proc: subprocess.CompletedProcess[str], reason: str) -> None:
+    assert proc.returncode == 1
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1, proc.stderr
+    assert lines[0].startswith("gcu-async decode: ")
+    assert reason in lines[0]
+    assert "Traceback" not in proc.stderr
+
+
+def check_gcu_example(obj: dict[str, Any]) -> None:
+    assert obj["direction"] == "gcu_to_host"
+    assert obj["version"] == 2
+    assert obj["feedback"] == {
+        "command": "TAKE_PHOTO",
+        "opcode": 0x20,
+        "status": "SUCCESS",
+        "status_raw": 0,
+        "failed_cameras": 0,
+    }
+    main, sub = obj["main"], obj["sub"]
+    assert (main["mode"], main["mode_raw"]) == ("POINTING_FOLLOW", 0x12)
+    assert main["pod_status_raw"] == 0x8001
+    assert main["pod_status"] == ["TRACKING_OK"]
+    assert main["attitude_deg"] == {"roll": -0.01, "pitch": 9.33, "yaw": 62.15}
+    assert main["attitude_raw"] == [-1, 933, 6215]
+    assert main["relative_angles_deg"] == {"x": -8.03, "y": 0.32, "z": 62.18}
+    assert (sub["pod_model"], sub["pod_code"]) == ("D_90AI", 41)
+    assert (sub["target_distance_m"], sub["target_distance_raw"]) == (589.4, 5894)
+    assert (sub["camera1_zoom"], sub["camera1_zoom_raw"]) == (29.9, 299)
+    assert sub["time_zone"] == 8
+
+
+def check_host_example(obj: dict[str, Any]) -> None:
+    assert obj["direction"] == "host_to_gcu"
+    assert obj["command"]["command"] == "NULL"
+    assert obj["command"]["opcode"] == 0
+    main, sub = obj["main"], obj["sub"]
+    assert main["aircraft_attitude_deg"] == {"roll": -11.32, "pitch": 1.01, "yaw": 240.0}
+    assert main["aircraft_attitude_raw"] == [-1132, 101, 24000]
+    assert main["control_raw"] == [0, 100, -100]
+    assert (sub["latitude_raw"], sub["longitude_raw"]) == (380300822, 1709175332)
+    assert sub["gnss_time_utc"] == "2023-09-07T01:58:38+00:00"
+
+
+def test_hex_on_the_command_line() -> None:
+    proc = run_cli(*GCU_EXAMPLE.hex(" ").split())
+    assert proc.returncode == 0, proc.stderr
+    [obj] = json_lines(proc.stdout)
+    check_gcu_example(obj)
+    # one argument of unbroken hex works too
+    assert json_lines(run_cli(HOST_EXAMPLE.hex()).stdout)[0]["direction"] == "host_to_gcu"
+
+
+def test_hex_on_stdin_with_prefixes_commas_and_newlines() -> None:
+    def loose(data: bytes) -> str:
+        tokens = [f"0x{b:02X}" if i % 3 else f"{b:02x}" for i, b in enumerate(data)]
+        return "\n".join(", ".join(tokens[i : i + 16]) for i in range(0, len(tokens), 16))
+
+    proc = run_cli(stdin=loose(HOST_EXAMPLE) + ",\n\n" + loose(GCU_EXAMPLE) + "\n")
+    assert proc.returncode == 0, proc.stderr
+    host, gcu = json_lines(proc.stdout)  # stream order
+    check_host_example(host)
+    check_gcu_example(gcu)
+
+
+def test_binary_capture_with_junk_both_directions(tmp_path: Path) -> None:
+    zoom = HostPacket(HostMainFrame(), None, ZoomTo(ratio=10.0)).encode()
+    zoom_failed = GcuPacket(GcuMainFrame(), None, Feedback(Opcode.ZOOM_TO, 0x02)).encode()
+    palette = HostPacket(HostMainFrame(), None, Palette(3)).encode()
+    calibrating = GcuPacket(GcuMainFrame(), None, Feedback(Opcode.CALIBRATION, 0x02)).encode()
+    no_status = GcuPacket(GcuMainFrame(), None, Feedback(Opcode.NULL)).encode()
+    capture = (
+        b"\x00\xff\x8a"
+        + HOST_EXAMPLE
+        + b"\xa8\xe5\x10\x00junk"
+        + GCU_EXAMPLE
+        + zoom[:30]
+        + b"\x8a\x5e"
+        + zoom
+        + zoom_failed
+        + b"\x01\x02"
+        + palette
+        + calibrating
+        + no_status
+        + b"\xa8"
+    )
+    path = tmp_path / "capture.bin"
+    path.write_bytes(capture)
+    proc = run_cli("--file", str(path))
+    assert proc.returncode == 0, proc.stderr
+    objs = json_lines(proc.stdout)
+    assert [o["direction"] for o in objs] == [
+        "host_to_gcu",
+        "gcu_to_host",
+        "host_to_gcu",
+        "gcu_to_host",
+        "host_to_gcu",
+        "gcu_to_host",
+        "gcu_to_host",
+    ]
+    check_host_example(objs[0])
+    check_gcu_example(objs[1])
+    cmd = objs[2]["command"]
+    assert cmd["command"] == "ZOOM_TO"
+    assert cmd["opcode"] == 0x25
+    assert cmd["params"]["ratio"] == 10.0
+    assert cmd["params_raw"] == [1, -100]
+    assert objs[3]["feedback"] == {
+        "command": "ZOOM_TO",
+        "opcode": 0x25,
+        "status": "FAILED",
+        "status_raw": 2,
+        "failed_cameras": 2,
+    }
+    assert objs[4]["command"]["command"] == "PALETTE"
+    assert objs[4]["command"]["params"] == {"palette": 3, "cameras": 2}
+    assert objs[5]["feedback"]["status"] == "IN_PROGRESS"
+    assert objs[6]["feedback"]["status"] == "NONE"
+    assert objs[6]["feedback"]["status_raw"] is None
+
+
+def test_indent_pretty_prints() -> None:
+    proc = run_cli("--indent", "2", GCU_EXAMPLE.hex())
+    assert proc.returncode == 0
+    assert json.loads(proc.stdout)["feedback"]["command"] == "TAKE_PHOTO"
+    assert proc.stdout.count("\n") > 20
+
+
+@pytest.mark.parametrize(
+    ("args", "stdin", "reason"),
+    [
+        (["00", "11", "22", "8a", "5e"], None, "no valid packet in 5 bytes"),
+        ([], "", "no valid packet in 0 bytes"),
+        ([], "\n  \n", "no valid packet in 0 bytes"),
+        (["zz", "00"], None, "not hex: 'zz'"),
+        ([], "8a 5e 49 0g", "not hex: '0g'"),
+        ([GCU_EXAMPLE[:-1].hex()], None, "no valid packet in 72 bytes"),
+        ([(GCU_EXAMPLE[:-1] + b"\x00").hex()], None, "no valid packet in 73 bytes"),  # bad CRC
+    ],
+)
+def test_no_valid_packet_exits_1_with_one_line(
+    args: list[str], stdin: str | None, reason: str
+) -> None:
+    proc = run_cli(*args, stdin=stdin)
+    assert_one_line_failure(proc, reason)
+    assert proc.stdout == ""
+
+
+def test_missing_file_exits_1(tmp_path: Path) -> None:
+    assert_one_line_failure(run_cli("--file", str(tmp_path / "nope.bin")), "nope.bin")
+
+
+def test_garbage_file_exits_1(tmp_path: Path) -> None:
+    path = tmp_path / "noise.bin"
+    path.write_bytes(bytes(range(256)) * 4)
+    assert_one_line_failure(run_cli("--file", str(path)), "no valid packet in 1024 bytes")
+
+
+def test_framed_but_undecodable_packet_is_reported_and_exits_1() -> None:
+    v3 = GcuPacket(GcuMainFrame(), version=3).encode()
+    proc = run_cli(v3.hex())
+    assert_one_line_failure(proc, "no valid packet in 72 bytes")
+    [obj] = json_lines(proc.stdout)
+    assert "protocol version 3" in obj["error"]
+    assert bytes.fromhex(obj["hex"]) == v3

@@ -1,0 +1,240 @@
+"""``gcu-async sim`` through the real console script, in a subprocess."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import selectors
+import signal
+import socket
+import subprocess
+import sys
+import time
+import tty
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from _sim_helpers import host_bytes
+from gcu_async.cli import main
+from gcu_async.protocol import Deframer, GcuPacket, Opcode, Palette, TakePhoto, decode_gcu_packet
+from gcu_async.sim import parse_listen_url
+
+pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals and ptys")
+
+_SCRIPT = Path(sys.executable).with_name("gcu-async")
+CLI = (
+    [str(_SCRIPT)]
+    if _SCRIPT.exists()
+    else [sys.executable, "-c", "import sys; from gcu_async.cli import main; sys.exit(main())"]
+)
+
+
+def _readline(proc: subprocess.Popen[str], timeout: float = 10.0) -> str:
+    assert proc.stdout is not None
+    with selectors.DefaultSelector() as sel:
+        sel.register(proc.stdout, selectors.EVENT_READ)
+        if not sel.select(timeout):
+            raise TimeoutError("the simulator printed nothing")
+    return proc.stdout.readline()
+
+
+class Sim:
+    def __init__(self, *args: str) -> None:
+        self.proc = subprocess.Popen(
+            [*CLI, "sim", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        )
+        self.line = _readline(self.proc)
+        match = re.search(r"listening on (\S+)", self.line)
+        assert match, self.line
+        self.url = match.group(1)
+
+    def stop(self, sig: int = signal.SIGTERM) -> tuple[int, str]:
+        self.proc.send_signal(sig)
+        _, err = self.proc.communicate(timeout=10)
+        return self.proc.returncode, err
+
+    def kill(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.communicate(timeout=10)
+
+
+@pytest.fixture
+def sims() -> Iterator[list[Sim]]:
+    made: list[Sim] = []
+    yield made
+    for sim in made:
+        sim.kill()
+
+
+def _udp_request(address: tuple[str, int], data: bytes, timeout: float = 2.0) -> GcuPacket:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.settimeout(timeout)
+        s.sendto(data, address)
+        reply, source = s.recvfrom(4096)
+        assert source == address
+        return decode_gcu_packet(reply)
+
+
+def _address(url: str) -> tuple[str, int]:
+    spec = parse_listen_url(url)
+    return spec.host, spec.port
+
+
+def test_udp_sim_answers_logs_and_stops_on_sigterm(sims: list[Sim]) -> None:
+    sim = Sim("--listen", "udp://127.0.0.1:0")
+    sims.append(sim)
+    assert sim.url.startswith("udp://127.0.0.1:")
+    assert "D-90Pro(TA)" in sim.line
+    reply = _udp_request(_address(sim.url), host_bytes(TakePhoto()))
+    assert (reply.feedback.opcode, reply.feedback.status) == (Opcode.TAKE_PHOTO, 0)
+    status, err = sim.stop(signal.SIGTERM)
+    assert status == 0
+    assert "executed TAKE_PHOTO" in err
+    assert "Traceback" not in err
+
+
+def test_tcp_sim_with_a_pod_and_ctrl_c(sims: list[Sim]) -> None:
+    sim = Sim("--listen", "tcp://127.0.0.1:0", "--pod", "Z-6A")
+    sims.append(sim)
+    deframer = Deframer.for_gcu_packets()
+    with socket.create_connection(_address(sim.url), timeout=2.0) as s:
+        s.sendall(host_bytes(Palette(1)))
+        packets: list[bytes] = []
+        deadline = time.monotonic() + 2.0
+        while not packets and time.monotonic() < deadline:
+            packets += deframer.feed(s.recv(4096))
+    reply = decode_gcu_packet(packets[0])
+    assert (reply.feedback.opcode, reply.feedback.status) == (Opcode.PALETTE, 0x02)
+    status, err = sim.stop(signal.SIGINT)
+    assert status == 0
+    assert "Traceback" not in err
+
+
+def test_pty_sim_prints_the_device_path(sims: list[Sim]) -> None:
+    sim = Sim("--listen", "pty", "--quiet")
+    sims.append(sim)
+    path = parse_listen_url(sim.url).path
+    assert path in sim.line
+    fd = os.open(path, os.O_RDWR | os.O_NOCTTY)
+    try:
+        tty.setraw(fd)
+        os.write(fd, host_bytes(TakePhoto()))
+        deframer = Deframer.for_gcu_packets()
+        packets: list[bytes] = []
+        with selectors.DefaultSelector() as sel:
+            sel.register(fd, selectors.EVENT_READ)
+            deadline = time.monotonic() + 2.0
+            while not packets and time.monotonic() < deadline:
+                if sel.select(0.1):
+                    packets += deframer.feed(os.read(fd, 4096))
+        assert decode_gcu_packet(packets[0]).feedback.opcode == Opcode.TAKE_PHOTO
+    finally:
+        os.close(fd)
+    status, err = sim.stop()
+    assert status == 0
+    assert "executed" not in err  # --quiet
+
+
+def test_sigusr2_silences_and_sigusr1_kills_the_tcp_connection(sims: list[Sim]) -> None:
+    udp = Sim("--listen", "udp://127.0.0.1:0", "--silence", "30")
+    sims.append(udp)
+    _udp_request(_address(udp.url), host_bytes())
+    udp.proc.send_signal(signal.SIGUSR2)
+    silenced = False
+    deadline = time.monotonic() + 3.0
+    while not silenced and time.monotonic() < deadline:  # the signal lands asynchronously
+        try:
+            _udp_request(_address(udp.url), host_bytes(), timeout=0.25)
+        except TimeoutError:
+            silenced = True
+    assert silenced
+    assert udp.stop()[0] == 0
+
+    tcp = Sim("--listen", "tcp://127.0.0.1:0")
+    sims.append(tcp)
+    with socket.create_connection(_address(tcp.url), timeout=2.0) as s:
+        s.sendall(host_bytes())
+        assert s.recv(4096)
+        tcp.proc.send_signal(signal.SIGUSR1)
+        s.settimeout(2.0)
+        with contextlib.suppress(ConnectionResetError):  # a reset, or an orderly end
+            assert s.recv(4096) == b""
+    status, err = tcp.stop()
+    assert status == 0
+    assert "killing the TCP connection" in err
+
+
+def test_reply_port_sends_to_the_senders_host(sims: list[Sim]) -> None:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as listener:
+        listener.bind(("127.0.0.1", 0))
+        listener.settimeout(2.0)
+        port = listener.getsockname()[1]
+        sim = Sim("--listen", "udp://127.0.0.1:0", "--reply-port", str(port))
+        sims.append(sim)
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sender:
+            sender.sendto(host_bytes(TakePhoto()), _address(sim.url))
+            reply, source = listener.recvfrom(4096)
+        assert source == _address(sim.url)
+        assert decode_gcu_packet(reply).feedback.opcode == Opcode.TAKE_PHOTO
+    assert sim.stop()[0] == 0
+
+
+def test_loss_one_drops_everything(sims: list[Sim]) -> None:
+    sim = Sim("--listen", "udp://127.0.0.1:0", "--loss", "1", "--seed", "5")
+    sims.append(sim)
+    with pytest.raises(TimeoutError):
+        _udp_request(_address(sim.url), host_bytes(TakePhoto()), timeout=0.3)
+    assert sim.stop()[0] == 0
+
+
+BAD_OPTIONS = [
+    (["--listen", "ftp://127.0.0.1"], "listen URL"),
+    (["--listen", "udp://127.0.0.1:70000"], "port"),
+    (["--listen", "tcp://"], "missing host"),
+    (["--pod", "X-1"], "pod model"),
+    (["--loss", "1.5"], "--loss"),
+    (["--delay", "-1"], "--delay"),
+    (["--listen", "tcp://127.0.0.1:0", "--reply-to", "127.0.0.1:2338"], "--reply-to"),
+    (["--reply-to", "nohost"], "--reply-to"),
+    (["--reply-port", "0"], "--reply-port"),
+    (["--silence", "-2"], "--silence"),
+    (["--max-zoom", "0.5"], "max_zoom"),
+]
+
+
+@pytest.mark.parametrize(("args", "message"), BAD_OPTIONS[:2])
+def test_bad_options_give_one_line_and_status_2(args: list[str], message: str) -> None:
+    done = subprocess.run([*CLI, "sim", *args], capture_output=True, text=True, timeout=20)
+    assert done.returncode == 2
+    assert done.stdout == ""
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1, done.stderr
+    assert message in lines[0]
+
+
+@pytest.mark.parametrize(("args", "message"), BAD_OPTIONS)
+def test_every_bad_option_is_one_line_status_2(
+    args: list[str], message: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["sim", *args]) == 2  # the same entry point, in-process (fast)
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert len(err.strip().splitlines()) == 1, err
+    assert message in err
+
+
+def test_listen_url_parsing() -> None:
+    assert parse_listen_url("udp://127.0.0.1").port == 2337
+    assert parse_listen_url("tcp://127.0.0.1").port == 2332
+    assert parse_listen_url("tcp://[::1]:5000").host == "::1"
+    spec = parse_listen_url("serial:///dev/ttyUSB0?baudrate=1000000")
+    assert (spec.kind, spec.path, spec.baudrate) == ("serial", "/dev/ttyUSB0", 1000000)
+    assert parse_listen_url("pty").kind == "pty"
+    with pytest.raises(ValueError, match="baudrate"):
+        parse_listen_url("serial:///dev/ttyUSB0?baudrate=fast")
+    with pytest.raises(ValueError, match="unknown option"):
+        parse_listen_url("serial:///dev/ttyUSB0?parity=E")

@@ -1,0 +1,74 @@
+"""The simulator on an in-memory link (what the client's unit tests use)."""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+
+from _sim_helpers import host_bytes
+from gcu_async.errors import LinkLost
+from gcu_async.protocol import Deframer, Opcode, TakePhoto, decode_gcu_packet
+from gcu_async.sim import FaultConfig, FaultPlan, GcuSimulator
+from gcu_async.transport import LinkEvent, LinkEventKind, MemoryTransport
+
+
+async def test_memory_link_answers_like_the_gcu() -> None:
+    sim = GcuSimulator()
+    received: asyncio.Queue[bytes] = asyncio.Queue()
+    async with sim.serve_memory() as transport:
+        assert isinstance(transport, MemoryTransport)
+        transport.set_handlers(received.put_nowait)
+        await transport.open()
+        assert transport.connected
+        transport.send(host_bytes(TakePhoto())[:30])
+        transport.send(host_bytes(TakePhoto())[30:])  # any chunking
+        reply = decode_gcu_packet(await asyncio.wait_for(received.get(), 1.0))
+        assert (reply.feedback.opcode, reply.feedback.status) == (Opcode.TAKE_PHOTO, 0)
+        await transport.close()
+    assert sim.model.executions[Opcode.TAKE_PHOTO] == 1
+
+
+async def test_closing_the_simulator_loses_the_link() -> None:
+    events: list[LinkEvent] = []
+    server = GcuSimulator().serve_memory()
+    transport = await server.__aenter__()
+    transport.set_handlers(lambda data: None, events.append)
+    await transport.open()
+    await server.aclose()
+    assert [e.kind for e in events] == [LinkEventKind.LOST]
+    with pytest.raises(LinkLost):
+        transport.send(host_bytes())
+    await transport.close()
+
+
+async def test_a_reply_to_a_closed_client_is_counted_not_raised() -> None:
+    sim = GcuSimulator(faults=FaultPlan(replies=FaultConfig(delay=0.05, seed=2)))
+    async with sim.serve_memory() as transport:
+        await transport.open()
+        transport.send(host_bytes())
+        await asyncio.sleep(0)  # delivered to the simulator; its reply is delayed
+        await transport.close()
+        for _ in range(50):
+            if sim.stats.send_errors:
+                break
+            await asyncio.sleep(0.01)
+    assert sim.stats.send_errors == 1
+    assert sim.stats.replies_sent == 0
+
+
+async def test_faults_apply_on_the_memory_link_too() -> None:
+    sim = GcuSimulator(faults=FaultPlan(replies=FaultConfig(duplicate=1.0)))
+    deframer = Deframer.for_gcu_packets()
+    packets: list[bytes] = []
+    async with sim.serve_memory() as transport:
+        transport.set_handlers(lambda data: packets.extend(deframer.feed(data)))
+        await transport.open()
+        transport.send(host_bytes())
+        for _ in range(50):
+            if len(packets) >= 2:
+                break
+            await asyncio.sleep(0.01)
+        await transport.close()
+    assert len(packets) == 2
+    assert packets[0] == packets[1]

@@ -1,0 +1,104 @@
+"""The simulator as a TCP server on 127.0.0.1 (ephemeral ports): clients in turn, chunking,
+killing the connection, clean shutdown."""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+
+from _sim_helpers import FAMILIES, StreamPeer, host_bytes
+from gcu_async.protocol import Opcode, TakePhoto
+from gcu_async.sim import GcuSimulator
+
+
+async def test_every_command_family_over_tcp() -> None:
+    sim = GcuSimulator()
+    async with sim.serve_tcp(port=0) as server:
+        peer = await StreamPeer.connect(server.address)
+        try:
+            for command, status in FAMILIES:
+                await peer.request(host_bytes())
+                reply = await peer.request(host_bytes(command))
+                assert (reply.feedback.opcode, reply.feedback.status) == (command.opcode, status)
+        finally:
+            await peer.close()
+
+
+async def test_several_clients_in_turn() -> None:
+    sim = GcuSimulator()
+    async with sim.serve_tcp(port=0) as server:
+        for _ in range(3):
+            peer = await StreamPeer.connect(server.address)
+            reply = await peer.request(host_bytes(TakePhoto()))
+            assert reply.feedback.opcode == Opcode.TAKE_PHOTO
+            await peer.request(host_bytes())
+            await peer.close()
+        assert server.clients_served == 3
+    assert sim.model.executions[Opcode.TAKE_PHOTO] == 3
+
+
+async def test_a_second_client_waits_until_the_first_leaves() -> None:
+    async with GcuSimulator().serve_tcp(port=0) as server:
+        first = await StreamPeer.connect(server.address)
+        await first.request(host_bytes())
+        second = await StreamPeer.connect(server.address)
+        second.writer.write(host_bytes(TakePhoto()))
+        with pytest.raises(asyncio.TimeoutError):
+            await second.reply(timeout=0.2)
+        await first.close()
+        reply = await second.reply(timeout=2.0)  # served now, its waiting packet answered
+        assert reply.feedback.opcode == Opcode.TAKE_PHOTO
+        await second.close()
+        assert server.clients_served == 2
+
+
+async def test_packets_split_into_single_bytes_and_glued_together() -> None:
+    sim = GcuSimulator()
+    async with sim.serve_tcp(port=0) as server:
+        peer = await StreamPeer.connect(server.address)
+        try:
+            for byte in host_bytes(TakePhoto()):
+                peer.writer.write(bytes([byte]))
+                await peer.writer.drain()
+            assert (await peer.reply()).feedback.opcode == Opcode.TAKE_PHOTO
+            peer.writer.write(b"noise" + host_bytes() + host_bytes(TakePhoto()) + b"\xa8")
+            assert (await peer.reply()).feedback.opcode == 0
+            assert (await peer.reply()).feedback.opcode == Opcode.TAKE_PHOTO
+        finally:
+            await peer.close()
+    assert sim.model.executions[Opcode.TAKE_PHOTO] == 2
+    assert sim.model.stats.bytes_discarded >= 6  # the noise and the dangling header byte
+
+
+async def test_kill_connection_resets_the_client_and_serves_the_next() -> None:
+    async with GcuSimulator().serve_tcp(port=0) as server:
+        assert not server.kill_connection()
+        peer = await StreamPeer.connect(server.address)
+        await peer.request(host_bytes())
+        assert server.client_connected
+        assert server.kill_connection()
+        with pytest.raises(ConnectionError):
+            await peer.request(host_bytes(), timeout=2.0)
+        await peer.close()
+        again = await StreamPeer.connect(server.address)
+        assert (await again.request(host_bytes(TakePhoto()))).feedback.status == 0
+        await again.close()
+
+
+async def test_closing_the_server_disconnects_clients() -> None:
+    server = GcuSimulator().serve_tcp(port=0)
+    await server.start()
+    peer = await StreamPeer.connect(server.address)
+    waiting = await StreamPeer.connect(server.address)
+    await peer.request(host_bytes())
+    await asyncio.wait_for(server.aclose(), 3.0)
+    try:
+        leftover = await asyncio.wait_for(peer.reader.read(100), 2.0)
+    except ConnectionResetError:
+        leftover = b""
+    assert leftover == b""
+    with pytest.raises((ConnectionError, OSError)):
+        await asyncio.wait_for(asyncio.open_connection(*server.address), 2.0)
+    await peer.close()
+    await waiting.close()
