@@ -1,0 +1,135 @@
+"""`gcu-async send` and `gcu-async monitor` through the real entry point, against a
+`gcu-async sim` process on loopback."""
+
+from __future__ import annotations
+
+import json
+import re
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+
+import pytest
+
+from gcu_async import Mode
+
+CLI = [sys.executable, "-m", "gcu_async.cli"]
+
+
+def run(*args: str, timeout: float = 20.0) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [*CLI, *args], capture_output=True, text=True, timeout=timeout, check=False
+    )
+
+
+@pytest.fixture(scope="module")
+def sim_url() -> Iterator[str]:
+    proc = subprocess.Popen(
+        [*CLI, "sim", "--listen", "udp://127.0.0.1:0", "--pod", "D-90Pro(TA)"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+    )
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        match = re.search(r"listening on (udp://\S+)", line)
+        assert match, f"unexpected sim output: {line!r}"
+        yield match.group(1)
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        try:
+            assert proc.wait(timeout=10) == 0
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+            if proc.stdout is not None:
+                proc.stdout.close()
+
+
+@pytest.mark.parametrize(
+    ("command", "opcode"),
+    [
+        (["photo"], 0x20),
+        (["zoom-to", "12.5"], 0x25),
+        (["euler", "0", "-30", "45"], 0x14),
+        (["pointing-lock"], 0x11),
+        (["pointing-lock", "1.5", "-2"], 0x11),
+        (["track", "0.4", "0.4", "0.6", "0.6"], 0x17),
+        (["night-vision", "auto"], 0x2B),
+        (["ranging", "on"], 0x81),
+        (["area-temperature", "on", "0.1", "0.1", "0.9", "0.9"], 0x30),
+    ],
+)
+def test_send_prints_feedback_json(sim_url: str, command: list[str], opcode: int) -> None:
+    result = run("send", f"{sim_url}?local_port=0", *command)
+    assert result.returncode == 0, result.stderr
+    out = json.loads(result.stdout)
+    assert out["ok"] is True
+    assert out["opcode"] == opcode
+    assert out["status"] == "SUCCESS"
+    assert out["status_raw"] == 0
+
+
+def test_send_failure_exits_1_with_status(sim_url: str) -> None:
+    result = run("send", f"{sim_url}?local_port=0", "fill-light", "100")  # not on this pod
+    assert result.returncode == 1
+    out = json.loads(result.stdout)
+    assert out["ok"] is False
+    assert out["opcode"] == 0x80
+    assert out["status_raw"] == 1
+
+
+def test_send_timeout_exits_1() -> None:
+    # nothing listens on this port: no reply, so the connect wait times out
+    result = run("send", "udp://127.0.0.1:9?local_port=0", "photo", "--timeout", "0.3")
+    assert result.returncode == 1
+    assert json.loads(result.stdout)["ok"] is False
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["udp://127.0.0.1:2337", "frobnicate"], "unknown command 'frobnicate'"),
+        (["udp://127.0.0.1:2337", "zoom-to"], "zoom-to takes ratio"),
+        (["udp://127.0.0.1:2337", "zoom-to", "fast"], "ratio"),
+        (["udp://127.0.0.1:2337", "ranging", "maybe"], "expected on/off"),
+        (["ftp://127.0.0.1", "photo"], "scheme"),
+        (["udp://127.0.0.1:99999", "photo"], "port"),
+    ],
+)
+def test_send_usage_errors_exit_2_with_one_line(args: list[str], message: str) -> None:
+    result = run("send", *args)
+    assert result.returncode == 2
+    assert message in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1
+
+
+def test_send_out_of_range_argument_exits_2_before_sending(sim_url: str) -> None:
+    result = run("send", f"{sim_url}?local_port=0", "zoom-to", "0.5")
+    assert result.returncode == 2
+    assert "ratio: 0.5 is outside the allowed range" in result.stderr
+
+
+def test_monitor_prints_live_lines(sim_url: str) -> None:
+    start = time.monotonic()
+    result = run("monitor", f"{sim_url}?local_port=0", "--count", "3", "--interval", "0.1")
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.strip().splitlines()
+    assert len(lines) == 3
+    for line in lines:
+        mode = line.split("|")[0].strip()
+        assert mode in {m.name for m in Mode}
+        assert re.search(r"att r[+-]\d+\.\d\d p[+-]\d+\.\d\d y", line)
+        assert re.search(r"zoom +\d+\.\dx", line)
+        assert "link up" in line
+    assert time.monotonic() - start < 15
+
+
+def test_monitor_bad_url_exits_2() -> None:
+    result = run("monitor", "udp://")
+    assert result.returncode == 2
+    assert result.stderr.startswith("gcu-async monitor:")
