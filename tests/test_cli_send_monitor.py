@@ -74,6 +74,15 @@ def test_send_prints_feedback_json(sim_url: str, command: list[str], opcode: int
     assert out["status_raw"] == 0
 
 
+def test_send_euler_holds_the_control_values_until_the_camera_arrives(sim_url: str) -> None:
+    result = run("send", f"{sim_url}?local_port=0", "euler", "0", "-40", "30", "--hold", "3")
+    assert result.returncode == 0, result.stderr
+    out = json.loads(result.stdout)
+    assert out["opcode"] == 0x14
+    assert abs(out["attitude_deg"]["pitch"] + 40) < 1.0
+    assert abs(out["attitude_deg"]["yaw"] - 30) < 1.0
+
+
 def test_send_failure_exits_1_with_status(sim_url: str) -> None:
     result = run("send", f"{sim_url}?local_port=0", "fill-light", "100")  # not on this pod
     assert result.returncode == 1
@@ -123,7 +132,7 @@ def test_monitor_prints_live_lines(sim_url: str) -> None:
     for line in lines:
         mode = line.split("|")[0].strip()
         assert mode in {m.name for m in Mode}
-        assert re.search(r"att r[+-]\d+\.\d\d p[+-]\d+\.\d\d y", line)
+        assert re.search(r"att r *[+-]\d+\.\d\d p *[+-]\d+\.\d\d y", line)
         assert re.search(r"zoom +\d+\.\dx", line)
         assert "link up" in line
     assert time.monotonic() - start < 15

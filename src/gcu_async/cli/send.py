@@ -9,6 +9,7 @@ import argparse
 import asyncio
 import json
 import sys
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -52,6 +53,10 @@ class CliCommand:
     call: Call
     optional: int = 0
     """How many trailing parameters may be omitted (the method's defaults apply)."""
+    angle_target: bool = False
+    """The parameters are roll/pitch/yaw targets of an angle mode."""
+    holds: bool = False
+    """A mode command whose control values need packets to act (default ``--hold`` 3 s)."""
 
 
 F, N = float, int
@@ -59,11 +64,13 @@ COMMANDS: dict[str, CliCommand] = {
     "calibrate": CliCommand((), lambda g, a: g.calibrate()),
     "centre": CliCommand((), lambda g, a: g.centre()),
     "euler": CliCommand((("roll", F), ("pitch", F), ("yaw", F)),
-                        lambda g, a: g.euler_control(roll=a[0], pitch=a[1], yaw=a[2])),
+                        lambda g, a: g.euler_control(roll=a[0], pitch=a[1], yaw=a[2]),
+                        angle_target=True, holds=True),
     "angle-control": CliCommand((("roll", F), ("pitch", F), ("yaw", F)),
-                                lambda g, a: g.angle_control(roll=a[0], pitch=a[1], yaw=a[2])),
+                                lambda g, a: g.angle_control(roll=a[0], pitch=a[1], yaw=a[2]),
+                                holds=True),
     "fpv": CliCommand((("roll", F), ("pitch", F), ("yaw", F)),
-                      lambda g, a: g.fpv(roll=a[0], pitch=a[1], yaw=a[2])),
+                      lambda g, a: g.fpv(roll=a[0], pitch=a[1], yaw=a[2]), holds=True),
     "pointing-lock": CliCommand((("pitch_rate", F), ("yaw_rate", F)),
                                 lambda g, a: g.pointing_lock(**_kw(a, "pitch_rate", "yaw_rate")),
                                 optional=2),
@@ -131,6 +138,14 @@ def register(sub: Any) -> None:
     p.add_argument("args", nargs="*", metavar="ARG", help="command arguments")
     p.add_argument("--timeout", type=float, default=5.0, help="seconds to wait (default 5)")
     p.add_argument("--rate", type=float, default=50.0, help="heartbeat rate in Hz (default 50)")
+    p.add_argument(
+        "--hold",
+        type=float,
+        default=None,
+        metavar="SECONDS",
+        help="after a mode command, keep sending its control values this long (default 3 s "
+        "for euler/angle-control/fpv, stopping early once the camera is there; 0 otherwise)",
+    )
     p.set_defaults(run=run)
 
 
@@ -152,9 +167,29 @@ def parse_args(name: str, raw: Sequence[str]) -> tuple[CliCommand, list[Any]]:
     return spec, values
 
 
-async def _send(url: str, spec: CliCommand, values: list[Any], timeout: float, rate: float) -> Any:
+ANGLE_MODES = {"euler", "angle-control", "fpv"}
+
+
+async def _send(
+    url: str, spec: CliCommand, values: list[Any], timeout: float, rate: float, hold: float
+) -> tuple[Any, dict[str, Any]]:
     async with connect(url, command_timeout=timeout, connect_timeout=timeout, rate_hz=rate) as gcu:
-        return await spec.call(gcu, values)
+        feedback = await spec.call(gcu, values)
+        # Control values only act while packets carry them: hold them for a while (angle
+        # modes stop early once the camera's attitude matches the target).
+        deadline = time.monotonic() + hold
+        while time.monotonic() < deadline:
+            if spec.angle_target and _arrived(gcu, values):
+                break
+            await asyncio.sleep(0.05)
+        return feedback, {"attitude_deg": gcu.status.attitude._asdict(),
+                          "mode": gcu.status.mode.name}  # fmt: skip
+
+
+def _arrived(gcu: GcuClient, values: list[Any]) -> bool:
+    pitch, yaw = float(values[1]), float(values[2])
+    att = gcu.status.attitude
+    return abs(att.pitch - pitch) < 0.5 and abs((att.yaw - yaw + 180) % 360 - 180) < 0.5
 
 
 def run(args: argparse.Namespace) -> int:
@@ -167,8 +202,14 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         print(f"gcu-async send: {exc}", file=sys.stderr)
         return 2
+    hold = args.hold if args.hold is not None else (3.0 if spec.holds else 0.0)
+    if not 0 <= hold <= 3600:
+        print(f"gcu-async send: --hold: {hold!r} is outside [0, 3600] s", file=sys.stderr)
+        return 2
     try:
-        feedback = asyncio.run(_send(args.url, spec, values, args.timeout, args.rate))
+        feedback, state = asyncio.run(
+            _send(args.url, spec, values, args.timeout, args.rate, hold)
+        )
     except ValueError as exc:
         print(f"gcu-async send: {exc}", file=sys.stderr)
         return 2
@@ -184,5 +225,5 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps({"ok": True, "skipped": True}))
         return 0
     assert isinstance(feedback, Feedback)
-    print(json.dumps({"ok": True, **feedback.as_dict()}))
+    print(json.dumps({"ok": True, **feedback.as_dict(), **state}))
     return 0
