@@ -240,3 +240,11 @@ def test_rate_validation() -> None:
             GcuClient(a, **{name: 0})
     with pytest.raises(ValueError, match="version"):
         GcuClient(a, version=3)
+
+
+def test_built_frames_hold_plain_integers() -> None:
+    from gcu_async.protocol import ControlValues, HostMainFrame
+
+    frame = HostMainFrame.build(control=ControlValues.angles(pitch=-10), attitude=(0, 0, 0))
+    assert type(frame.flags_raw) is int
+    assert frame.flags_raw == 0x05

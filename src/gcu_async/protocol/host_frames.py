@@ -140,7 +140,7 @@ class HostMainFrame(NamedTuple):
         an, ae, au = _neu("aircraft acceleration", acceleration, "m/s^2")
         vn, ve, vu = _neu("aircraft velocity", velocity, "m/s")
         check_int("subframe_request", subframe_request, 0, 255)
-        return cls(*c, flags, roll, pitch, yaw, an, ae, au, vn, ve, vu, int(subframe_request))
+        return cls(*c, int(flags), roll, pitch, yaw, an, ae, au, vn, ve, vu, int(subframe_request))
 
     # -- unit views --------------------------------------------------------------------
     @property
