@@ -1,17 +1,18 @@
-# Two commands do all the set-up on a fresh machine (python3 >= 3.10 with venv):
+# Two commands do all the set-up on a fresh machine (python3 >= 3.10 with venv, and make):
 #   make demo   - the main job: the demo against the built-in simulator
-#   make test   - the tests, ruff and mypy --strict (what .ci/run calls)
+#   make test   - ruff, mypy --strict, the strict docs build and the tests (what .ci/run calls)
 VENV ?= .venv
 PYTHON ?= python3
 BIN := $(VENV)/bin
+EXTRAS := test,bench,mavlink,web,docs
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: demo test lint bench clean
+.PHONY: demo test lint docs browser bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[test,bench]'
+	$(BIN)/python -m pip install --quiet -e '.[$(EXTRAS)]'
 	touch $(STAMP)
 
 demo: $(STAMP)
@@ -21,11 +22,25 @@ lint: $(STAMP)
 	$(BIN)/ruff check src tests examples benchmarks
 	$(BIN)/mypy
 
-test: lint
+docs: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet --site-dir $(CURDIR)/site
+
+# The web example's page is tested in Debian's Chromium when it is there. In CI (CI=true,
+# root, apt available) it is installed; elsewhere the test skips and says why.
+browser:
+	@if [ ! -x /usr/bin/chromium ] && [ "$${CI:-}" = "true" ] && [ "$$(id -u)" = 0 ] \
+	    && command -v apt-get >/dev/null; then \
+	  echo "installing Debian's chromium for the browser test"; \
+	  (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium \
+	    >/dev/null) || echo "chromium could not be installed: the browser test will skip"; \
+	fi
+
+test: lint docs browser
 	$(BIN)/python -m pytest
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_codec.py
+	$(BIN)/python benchmarks/bench_client.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache .hypothesis
+	rm -rf $(VENV) site .pytest_cache .mypy_cache .ruff_cache .hypothesis

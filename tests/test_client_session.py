@@ -248,3 +248,25 @@ def test_built_frames_hold_plain_integers() -> None:
     frame = HostMainFrame.build(control=ControlValues.angles(pitch=-10), attitude=(0, 0, 0))
     assert type(frame.flags_raw) is int
     assert frame.flags_raw == 0x05
+
+
+async def test_click_to_pan_and_track_release_the_control_values(fake: FakeGcu) -> None:
+    async with GcuClient(fake.client_end) as gcu:
+        gcu.set_angles(pitch=-30.0)
+        await gcu.click_to_pan(0.8, 0.2)
+        assert gcu.control is None  # pointing-lock would read angle targets as rates
+        n = len(fake.packets)
+        await until(lambda: len(fake.packets) > n + 1)
+        assert not last(fake).main.control_valid
+        gcu.set_angles(pitch=-30.0)
+        await gcu.track((0.4, 0.4, 0.6, 0.6))
+        assert gcu.control is None
+
+
+async def test_connect_passes_reorder_guard() -> None:
+    from gcu_async import connect
+
+    client = connect("udp://127.0.0.1:2337", reorder_guard=0.05, local_port=0)
+    assert client.scheduler.reorder_guard == 0.05
+    assert connect("udp://127.0.0.1:2337").scheduler.reorder_guard == 0.015
+    assert connect("tcp://127.0.0.1:2332").scheduler.reorder_guard == 0.0

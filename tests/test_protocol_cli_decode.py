@@ -218,3 +218,23 @@ def test_framed_but_undecodable_packet_is_reported_and_exits_1() -> None:
     [obj] = json_lines(proc.stdout)
     assert "protocol version 3" in obj["error"]
     assert bytes.fromhex(obj["hex"]) == v3
+
+
+def test_decode_into_a_closed_pipe_exits_quietly() -> None:
+    import subprocess
+    import sys
+
+    from _vectors import SPEC_DIR
+
+    hex_text = (SPEC_DIR / "gcu-example.hex").read_text() * 200
+    proc = subprocess.run(
+        f"{sys.executable} -m gcu_async.cli decode | head -c 10",
+        shell=True,
+        input=hex_text,
+        capture_output=True,
+        text=True,
+        timeout=30,
+        check=False,
+    )
+    assert "Traceback" not in proc.stderr
+    assert "BrokenPipeError" not in proc.stderr

@@ -67,6 +67,14 @@ def decode_stream(data: bytes) -> tuple[list[dict[str, Any]], dict[str, int]]:
     return [obj for _, obj in found], {"decode_errors": errors}
 
 
+def _silence_stdout() -> None:
+    import os
+
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
+
+
 def run(args: argparse.Namespace) -> int:
     try:
         if args.file is not None:
@@ -79,8 +87,13 @@ def run(args: argparse.Namespace) -> int:
         return 1
     packets, _ = decode_stream(data)
     valid = [p for p in packets if "error" not in p]
-    for obj in packets:
-        print(json.dumps(obj, indent=args.indent))
+    try:
+        for obj in packets:
+            print(json.dumps(obj, indent=args.indent))
+        sys.stdout.flush()
+    except BrokenPipeError:  # e.g. piped into `head`: the reader has all it wants
+        _silence_stdout()
+        return 0 if valid else 1
     if not valid:
         print(f"gcu-async decode: no valid packet in {len(data)} bytes of input", file=sys.stderr)
         return 1

@@ -116,16 +116,23 @@ class CommandMethods(abc.ABC):
     async def track(
         self, box: c.ImageBox | tuple[float, float, float, float], *, cameras: int = CAM1
     ) -> Feedback:
-        """Track the target in ``box`` (left, top, right, bottom as image fractions)."""
-        return await self.execute(c.Track(True, c.ImageBox(*box), cameras))
+        """Track the target in ``box`` (left, top, right, bottom as image fractions). The
+        pod steers itself while tracking: control values are sent invalid from now on."""
+        command = c.Track(True, c.ImageBox(*box), cameras)
+        self.set_control(None)
+        return await self.execute(command)
 
     async def stop_tracking(self, *, cameras: int = CAM1) -> Feedback:
         """Exit tracking (0x17 with TT = 0)."""
         return await self.execute(c.Track(False, cameras=cameras))
 
     async def click_to_pan(self, x: float, y: float, *, cameras: int = CAM1) -> Feedback:
-        """Bring image point (x, y) (fractions) to the centre (0x1A); ends in pointing-lock."""
-        return await self.execute(c.ClickToPan(c.ImagePoint(x, y), cameras))
+        """Bring image point (x, y) (fractions) to the centre (0x1A). The pod ends in
+        pointing-lock, where control values are rates: they are sent invalid (hold) from now
+        on, so earlier angle targets are never read as rates."""
+        command = c.ClickToPan(c.ImagePoint(x, y), cameras)
+        self.set_control(None)
+        return await self.execute(command)
 
     # -- camera --------------------------------------------------------------------------
     async def take_photo(self, *, cameras: int = CAM1) -> Feedback:

@@ -13,7 +13,7 @@ import contextlib
 import logging
 import time
 import warnings
-from collections.abc import AsyncIterator, Callable
+from collections.abc import AsyncGenerator, Callable
 from dataclasses import replace
 from datetime import datetime
 from types import TracebackType
@@ -314,7 +314,7 @@ class GcuClient(CommandMethods):
         """The command scheduler (for its statistics)."""
         return self._scheduler
 
-    async def telemetry(self, maxsize: int = 1) -> AsyncIterator[TelemetrySample]:
+    async def telemetry(self, maxsize: int = 1) -> AsyncGenerator[TelemetrySample, None]:
         """Iterate over replies as they arrive. The queue holds ``maxsize`` samples; when
         the consumer falls behind the oldest are dropped (counted in
         ``telemetry_dropped``). Ends when the client closes."""

@@ -8,7 +8,7 @@ from gcu_async.client.client import GcuClient
 
 CLIENT_OPTIONS = frozenset({
     "rate_hz", "command_timeout", "connect_timeout", "silence_timeout", "check_support",
-    "version", "clock",
+    "reorder_guard", "version", "clock",
 })  # fmt: skip
 
 
@@ -18,7 +18,8 @@ def connect(url: str, **options: Any) -> GcuClient:
     URLs: ``udp://HOST[:PORT]`` (GCU port, default 2337), ``tcp://HOST[:PORT]`` (default
     2332), ``serial:///dev/ttyUSB0?baudrate=115200``. Options named like
     :class:`GcuClient`'s keyword arguments (``rate_hz``, ``command_timeout``,
-    ``connect_timeout``, ``silence_timeout``, ``check_support``, ``version``) configure the
+    ``connect_timeout``, ``silence_timeout``, ``check_support``, ``reorder_guard``,
+    ``version``) configure the
     session; the rest go to the transport (e.g. ``local_port``, ``discovery``, ``baudrate``).
     A bad URL or option raises ``ValueError`` before anything is opened.
     """

@@ -20,9 +20,13 @@ CALIBRATION_IN_PROGRESS = 0x02
 
 
 def failure_status(opcode: int, failed_cameras: int = CameraMask.CAMERA_1) -> int:
-    """The status byte a GCU sends when ``opcode`` fails (for the simulator and tests)."""
+    """The status byte a GCU sends when ``opcode`` fails (for the simulator and tests).
+    For zoom commands it is the mask of the failed cameras, which must not be empty
+    (0x00 would read as success)."""
     if opcode in ZOOM_OPCODES:
-        return failed_cameras
+        if not 1 <= failed_cameras <= 0xFF:
+            raise ValueError(f"failed_cameras: {failed_cameras!r} is outside [1, 255]")
+        return int(failed_cameras)
     return 0x02 if opcode in THERMAL_OPCODES else 0x01
 
 

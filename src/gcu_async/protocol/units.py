@@ -81,13 +81,11 @@ def _unit(raw: int, scale: float) -> float | int:
 
 def check_int(field: str, value: int, low: int, high: int, unit: str = "") -> int:
     """Check an integer-valued field (flags, counts, raw values) against ``[low, high]``."""
-    if isinstance(value, bool):
-        value = int(value)
-    if not isinstance(value, int):
+    if isinstance(value, bool) or not isinstance(value, int):
         raise TypeError(f"{field}: expected an integer, got {type(value).__name__} {value!r}")
     if not low <= value <= high:
         raise FieldRangeError(field, value, low, high, unit)
-    return value
+    return int(value)
 
 
 def check_flags(field: str, value: int, allowed: int | type[IntFlag]) -> int:

@@ -1,0 +1,164 @@
+// gcu_async web example: live telemetry over a WebSocket, commands over JSON POST.
+"use strict";
+
+const $ = (id) => document.getElementById(id);
+const SVG = "http://www.w3.org/2000/svg";
+const PX_PER_DEG = 1.4; // horizon pitch scale
+const fmt = (v, digits = 2) => (v === null || v === undefined ? "—" : v.toFixed(digits));
+
+function svg(parent, tag, attrs, text) {
+  const el = document.createElementNS(SVG, tag);
+  for (const [k, v] of Object.entries(attrs)) el.setAttribute(k, v);
+  if (text !== undefined) el.textContent = text;
+  parent.appendChild(el);
+  return el;
+}
+
+function drawInstruments() {
+  const ladder = $("pitch-ladder");
+  ladder.setAttribute("class", "ladder");
+  for (let p = -90; p <= 90; p += 10) {
+    if (p === 0) continue;
+    const y = -p * PX_PER_DEG;
+    const half = p % 30 === 0 ? 28 : 14;
+    svg(ladder, "line", { x1: -half, x2: half, y1: y, y2: y });
+    if (p % 30 === 0) svg(ladder, "text", { x: half + 4, y }, String(p));
+  }
+  const card = $("compass-card");
+  for (let d = 0; d < 360; d += 10) {
+    const major = d % 30 === 0;
+    svg(card, "line", {
+      x1: 0, x2: 0, y1: -90, y2: major ? -78 : -84,
+      class: major ? "tick major" : "tick", transform: `rotate(${d})`,
+    });
+  }
+  for (const [d, label] of [[0, "N"], [90, "E"], [180, "S"], [270, "W"]]) {
+    const t = svg(card, "text", { x: 0, y: -66, class: "card-label" }, label);
+    if (label === "N") t.classList.add("north");
+    t.setAttribute("transform", `rotate(${d})`);
+  }
+}
+
+function renderLink(link, note) {
+  const el = $("link");
+  const up = Boolean(link && link.up);
+  el.className = up ? "link up" : "link down";
+  if (note) $("link-text").textContent = note;
+  else if (up) $("link-text").textContent = `link up · ${link.reply_rate.toFixed(0)} replies/s`;
+  else $("link-text").textContent = "link DOWN — no replies from the GCU";
+}
+
+function render(s) {
+  const a = s.attitude;
+  $("roll").textContent = fmt(a.roll);
+  $("pitch").textContent = fmt(a.pitch);
+  $("yaw").textContent = fmt(a.yaw);
+  $("rel-x").textContent = fmt(s.relative.x);
+  $("rel-y").textContent = fmt(s.relative.y);
+  $("rel-z").textContent = fmt(s.relative.z);
+  $("rate-x").textContent = fmt(s.rates.x, 1);
+  $("rate-y").textContent = fmt(s.rates.y, 1);
+  $("rate-z").textContent = fmt(s.rates.z, 1);
+  $("horizon-ball").setAttribute(
+    "transform", `rotate(${-a.roll}) translate(0 ${a.pitch * PX_PER_DEG})`);
+  $("compass-card").setAttribute("transform", `rotate(${-a.yaw})`);
+  $("compass-value").textContent = `${a.yaw.toFixed(0)}°`;
+  $("mode").textContent = s.mode;
+  $("tracking").textContent = s.tracking ? "target locked" : "no";
+  if (s.zoom) {
+    $("zoom").textContent = fmt(s.zoom.camera1, 1);
+    $("zoom2").textContent = `${fmt(s.zoom.camera2, 1)}×`;
+  }
+  const rec = $("recording");
+  rec.textContent = s.recording ? "● REC" : "no";
+  rec.className = s.recording ? "on" : "";
+  const button = $("record-button");
+  button.textContent = s.recording ? "Stop recording" : "Record";
+  button.classList.toggle("recording", Boolean(s.recording));
+  $("distance").textContent =
+    s.target_distance_m === null ? "—" : `${s.target_distance_m.toFixed(1)} m`;
+  const flags = [...s.pod_status];
+  if (s.flags) flags.push(...s.flags.camera, ...s.flags.thermal, ...s.flags.faults);
+  $("flags").textContent = flags.length ? flags.join(", ") : "none";
+  if (s.pod) {
+    $("pod").textContent =
+      `${s.pod.model} · hw ${s.pod.hardware_version} · fw ${s.pod.firmware_version}`;
+  }
+  renderLink(s.link);
+}
+
+const arrivals = [];
+function countMessage() {
+  const now = performance.now();
+  arrivals.push(now);
+  while (arrivals.length && now - arrivals[0] > 1000) arrivals.shift();
+  $("rx").textContent = String(Number($("rx").textContent) + 1);
+  $("rx-rate").textContent = String(arrivals.length);
+}
+
+let retryMs = 500;
+function connect() {
+  const scheme = location.protocol === "https:" ? "wss" : "ws";
+  const ws = new WebSocket(`${scheme}://${location.host}/ws/telemetry`);
+  ws.onopen = () => { retryMs = 500; };
+  ws.onmessage = (event) => {
+    const message = JSON.parse(event.data);
+    countMessage();
+    if (message.type === "telemetry") render(message);
+    else if (message.type === "link") renderLink(message.link);
+  };
+  ws.onclose = () => {
+    renderLink(null, "telemetry socket closed — reconnecting…");
+    setTimeout(connect, retryMs);
+    retryMs = Math.min(retryMs * 2, 5000);
+  };
+}
+
+async function send(name, params) {
+  const out = $("result");
+  out.className = "pending";
+  out.textContent = `${name}…`;
+  try {
+    const response = await fetch(`/api/commands/${encodeURIComponent(name)}`, {
+      method: "POST",
+      headers: { "Content-Type": "application/json" },
+      body: JSON.stringify(params),
+    });
+    const body = await response.json();
+    if (response.ok) {
+      out.className = "ok";
+      out.textContent = body.feedback
+        ? `${name}: ${body.feedback.command} ${body.feedback.status}`
+        : `${name}: nothing to do`;
+    } else {
+      out.className = "error";
+      out.textContent = `${name}: HTTP ${response.status} — ${body.error}`;
+    }
+  } catch (error) {
+    out.className = "error";
+    out.textContent = `${name}: ${error}`;
+  }
+}
+
+function wireButtons() {
+  for (const button of document.querySelectorAll("button[data-command]")) {
+    button.addEventListener("click", () => {
+      const params = button.dataset.params ? JSON.parse(button.dataset.params) : {};
+      send(button.dataset.command, params);
+    });
+  }
+}
+
+async function start() {
+  drawInstruments();
+  wireButtons();
+  try {
+    const response = await fetch("/api/status");
+    if (response.ok) render(await response.json());
+  } catch (error) {
+    renderLink(null, `status unavailable: ${error}`);
+  }
+  connect();
+}
+
+start();

@@ -1,0 +1,174 @@
+"""The README's command table must match the client: names, parameters and opcodes.
+
+The table (between the ``commands`` snippet markers of README.md, also included in the docs
+site) is parsed, and every row is checked against ``GcuClient``: the method exists and is
+awaitable, the backticked lower-case names of the parameters column are exactly the
+method's parameters, and calling the method sends the command with the opcode of the row.
+Every command method of the client must have a row, so the table cannot silently drift.
+"""
+
+from __future__ import annotations
+
+import inspect
+import re
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import pytest
+
+from gcu_async import CameraFlags, GcuClient, GcuSubFrame
+from gcu_async.client.api import CommandMethods
+from gcu_async.protocol import Command, ControlValues, Feedback, command_code
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+START = "<!-- --8<-- [start:commands] -->"
+END = "<!-- --8<-- [end:commands] -->"
+PARAM_NAME = re.compile(r"`([a-z_][a-z0-9_]*)`")
+# Values for the parameters without a default (by name), in range for every method.
+SAMPLES: dict[str, Any] = {
+    "latitude": 47.39, "longitude": 8.54, "altitude": 420.0, "box": (0.4, 0.4, 0.6, 0.6),
+    "x": 0.5, "y": 0.5, "ratio": 10.0, "fraction": 0.5, "offset_hours": 1, "brightness": 128,
+}  # fmt: skip
+
+
+class Row(NamedTuple):
+    method: str
+    opcode: int
+    params: frozenset[str]
+
+
+def table_rows(text: str) -> list[Row]:
+    """The rows of the command table in ``text``."""
+    start, end = text.index(START), text.index(END)
+    rows = []
+    for line in text[start:end].splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) != 4 or not cells[0].startswith("`"):
+            continue  # header, separator, markers
+        method = cells[0].strip("`")
+        params = frozenset(PARAM_NAME.findall(cells[2]))
+        rows.append(Row(method, int(cells[1], 16), params))
+    return rows
+
+
+ROWS = table_rows(README.read_text(encoding="utf-8"))
+
+
+class Recorder(CommandMethods):
+    """The client's command methods with ``execute`` recording instead of sending."""
+
+    def __init__(self, info: GcuSubFrame | None) -> None:
+        self._info = info
+        self.commands: list[Command] = []
+
+    async def execute(self, command: Command, *, timeout: float | None = None) -> Feedback:
+        self.commands.append(command)
+        return Feedback(command_code(command), 0)
+
+    def set_control(self, control: ControlValues | None) -> None:
+        pass
+
+
+def command_methods() -> set[str]:
+    return {
+        name
+        for name, member in inspect.getmembers(CommandMethods, inspect.iscoroutinefunction)
+        if not name.startswith("_") and name != "execute"
+    }
+
+
+def test_table_was_found() -> None:
+    assert len(ROWS) >= 30
+    assert len({r.method for r in ROWS}) == len(ROWS), "a method is listed twice"
+
+
+def test_every_command_method_has_a_row() -> None:
+    listed = {r.method for r in ROWS}
+    assert command_methods() - listed == set(), "command methods missing from the README table"
+    assert listed - command_methods() == set(), "README rows without a command method"
+
+
+@pytest.mark.parametrize("row", ROWS, ids=lambda r: r.method)
+def test_row_matches_the_client(row: Row) -> None:
+    method = getattr(GcuClient, row.method, None)
+    assert method is not None, f"GcuClient has no method {row.method}"
+    assert inspect.iscoroutinefunction(method), f"{row.method} is not awaitable"
+    params = [p for p in inspect.signature(method).parameters.values() if p.name != "self"]
+    assert {p.name for p in params} == row.params, f"{row.method}: parameters differ"
+
+
+@pytest.mark.parametrize("row", ROWS, ids=lambda r: r.method)
+async def test_row_sends_its_opcode(row: Row) -> None:
+    signature = inspect.signature(getattr(CommandMethods, row.method))
+    kwargs = {
+        p.name: SAMPLES[p.name]
+        for p in signature.parameters.values()
+        if p.name != "self" and p.default is inspect.Parameter.empty
+    }
+    # start/stop_recording act only when the camera flags allow it: try both states
+    for info in (None, GcuSubFrame.build(camera_flags=CameraFlags.RECORDING)):
+        recorder = Recorder(info)
+        await getattr(recorder, row.method)(**kwargs)
+        if recorder.commands:
+            break
+    assert [command_code(c) for c in recorder.commands] == [row.opcode]
+
+
+def test_parser_rejects_a_drifted_table() -> None:
+    """The checks above can fail: a wrong opcode or parameter shows up in the parsed row."""
+    text = f"{START}\n| `zoom_to` | 0x26 | `ratio`, `speed` | |\n{END}"
+    (row,) = table_rows(text)
+    assert row == Row("zoom_to", 0x26, frozenset({"ratio", "speed"}))
+    signature = inspect.signature(GcuClient.zoom_to)
+    assert set(signature.parameters) - {"self"} != row.params
+
+
+# -- the `gcu-async send` table of docs/cli.md ------------------------------------------
+CLI_DOC = Path(__file__).resolve().parents[1] / "docs" / "cli.md"
+CLI_START = "<!-- --8<-- [start:send-commands] -->"
+CLI_END = "<!-- --8<-- [end:send-commands] -->"
+
+
+class CliRow(NamedTuple):
+    command: str
+    params: tuple[str, ...]
+    method: str
+
+
+def cli_rows(text: str) -> list[CliRow]:
+    start, end = text.index(CLI_START), text.index(CLI_END)
+    rows = []
+    for line in text[start:end].splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) != 3 or not cells[0].startswith("`"):
+            continue
+        params = tuple(PARAM_NAME.findall(cells[1]))
+        rows.append(CliRow(cells[0].strip("`"), params, cells[2].strip("`")))
+    return rows
+
+
+class Spy:
+    """Records which client method a CLI command calls."""
+
+    def __init__(self) -> None:
+        self.called: list[str] = []
+
+    def __getattr__(self, name: str) -> Any:
+        def method(*args: Any, **kwargs: Any) -> None:
+            self.called.append(name)
+
+        return method
+
+
+def test_cli_send_table_matches_the_cli() -> None:
+    from gcu_async.cli.send import COMMANDS
+
+    rows = cli_rows(CLI_DOC.read_text(encoding="utf-8"))
+    assert [r.command for r in rows] == list(COMMANDS)
+    for row in rows:
+        spec = COMMANDS[row.command]
+        assert row.params == tuple(name for name, _ in spec.params), row.command
+        spy = Spy()
+        spec.call(spy, [0.5] * len(spec.params))  # type: ignore[arg-type]
+        assert spy.called == [row.method], row.command
+        assert hasattr(GcuClient, row.method)

@@ -1,0 +1,598 @@
+"""The web example (examples/web) end to end: the real app under uvicorn on 127.0.0.1 (an
+ephemeral port), connected to the simulator over UDP, driven by an HTTP client (httpx), a
+WebSocket client (websockets) and, where Playwright and /usr/bin/chromium exist, a headless
+browser. Needs the ``web`` extra (starlette, uvicorn, websockets) and httpx; skips without.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import math
+import os
+import sys
+import time
+from collections.abc import AsyncIterator, Awaitable, Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from gcu_async import GcuClient, Opcode
+from gcu_async.pytest_plugin import SimHandle
+
+_INSTALL = "pip install -e '.[web,test]'"
+pytest.importorskip("starlette", reason=f"the web example needs starlette: {_INSTALL}")
+uvicorn = pytest.importorskip("uvicorn", reason=f"the web example needs uvicorn: {_INSTALL}")
+httpx = pytest.importorskip("httpx", reason=f"the web example tests need httpx: {_INSTALL}")
+pytest.importorskip(
+    "websockets.asyncio.client", reason=f"the web example tests need websockets>=13: {_INSTALL}"
+)
+from websockets.asyncio.client import ClientConnection  # noqa: E402
+from websockets.asyncio.client import connect as ws_connect  # noqa: E402
+from websockets.exceptions import ConnectionClosed  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:  # the examples live beside src/, not inside the package
+    sys.path.insert(0, str(ROOT))
+
+from examples.web.app import create_app  # noqa: E402
+from examples.web.commands import COMMANDS  # noqa: E402
+
+CHROMIUM = "/usr/bin/chromium"
+CHROMIUM_ARGS = [
+    "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+    "--disable-component-update", "--disable-sync", "--no-first-run",
+]  # fmt: skip
+START_TIMEOUT = 5.0
+
+
+@pytest.fixture
+def gcu_sim_model_options() -> dict[str, Any]:
+    return {"calibration_seconds": 0.2}
+
+
+@pytest.fixture
+def web_options() -> dict[str, Any]:
+    """Keyword arguments for ``create_app`` besides the URL (override per test)."""
+    return {}
+
+
+@dataclass
+class Web:
+    """The running app and its simulator."""
+
+    sim: SimHandle
+    base_url: str
+    http: Any  # httpx.AsyncClient
+    gcu: GcuClient
+
+    @property
+    def ws_url(self) -> str:
+        return self.base_url.replace("http://", "ws://", 1) + "/ws/telemetry"
+
+    async def command(self, name: str, params: Any = None) -> Any:
+        """POST a command with a JSON body (Python's encoder: ``Infinity`` passes through);
+        returns the httpx response."""
+        body = json.dumps(params).encode()
+        headers = {"content-type": "application/json"}
+        return await self.http.post(f"/api/commands/{name}", content=body, headers=headers)
+
+    async def status(self) -> dict[str, Any]:
+        response = await self.http.get("/api/status")
+        assert response.status_code == 200, response.text
+        result: dict[str, Any] = response.json()
+        return result
+
+
+@contextlib.asynccontextmanager
+async def serve(app: Any) -> AsyncIterator[str]:
+    """Run ``app`` under uvicorn on 127.0.0.1, an ephemeral port; yield its base URL."""
+    config = uvicorn.Config(app, host="127.0.0.1", port=0, log_level="warning", lifespan="on")
+    server = uvicorn.Server(config)
+
+    async def run() -> None:
+        try:
+            await server.serve()
+        except SystemExit as exc:  # uvicorn exits when the app's startup fails
+            raise RuntimeError(f"uvicorn did not start (exit status {exc.code})") from None
+
+    task = asyncio.create_task(run())
+    deadline = time.monotonic() + START_TIMEOUT
+    while not server.started and not task.done() and time.monotonic() < deadline:
+        await asyncio.sleep(0.01)
+    if not server.started:
+        server.should_exit = True
+        await asyncio.wait_for(task, START_TIMEOUT)  # raises the startup failure, if any
+        raise RuntimeError(f"uvicorn did not start within {START_TIMEOUT} s")
+    port = server.servers[0].sockets[0].getsockname()[1]
+    try:
+        yield f"http://127.0.0.1:{port}"
+    finally:
+        server.should_exit = True
+        await asyncio.wait_for(task, START_TIMEOUT)
+
+
+@pytest.fixture
+async def web(gcu_sim: SimHandle, web_options: dict[str, Any]) -> AsyncIterator[Web]:
+    options = {"local_port": 0, **web_options}
+    app = create_app(gcu_sim.url, **options)
+    async with serve(app) as base_url, httpx.AsyncClient(base_url=base_url, timeout=5.0) as http:
+        yield Web(gcu_sim, base_url, http, app.state.gcu)
+
+
+async def eventually(
+    check: Callable[[], Awaitable[bool]], timeout: float = 4.0, what: str = "condition"
+) -> None:
+    deadline = time.monotonic() + timeout
+    while not await check():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+        await asyncio.sleep(0.02)
+
+
+async def next_message(ws: ClientConnection, timeout: float = 2.0) -> dict[str, Any]:
+    message: dict[str, Any] = json.loads(await asyncio.wait_for(ws.recv(), timeout))
+    return message
+
+
+def angle_near(a: float, b: float, tol: float = 0.5) -> bool:
+    return abs((a - b + 180.0) % 360.0 - 180.0) < tol
+
+
+# -- status and the page ------------------------------------------------------------------
+async def test_status_reports_the_simulated_gimbal(web: Web) -> None:
+    state = web.sim.simulator.model.state
+    status = await web.status()
+    assert status["mode"] == state.mode.name == "POINTING_FOLLOW"
+    assert status["mode_raw"] == int(state.mode)
+    assert status["pod"]["model"] == "D-90Pro(TA)"
+    assert status["pod"]["code"] == 45
+    assert status["zoom"]["camera1"] == pytest.approx(state.zoom[1])
+    assert status["recording"] is False
+    link = status["link"]
+    assert link["up"] is True
+    assert link["packets_received"] > 0
+    assert link["crc_errors"] == 0
+    # raw wire integers beside the units
+    assert status["raw"]["main"]["mode_raw"] == status["mode_raw"]
+    assert status["raw"]["sub"]["camera1_zoom_raw"] == round(status["zoom"]["camera1"] * 10)
+
+    assert (await web.command("euler_control", {"pitch": -30.0, "yaw": 120.0})).status_code == 200
+
+    async def pointed() -> bool:
+        s = await web.status()
+        a = s["attitude"]
+        return (
+            s["mode"] == "EULER_CONTROL"
+            and angle_near(a["pitch"], -30.0)
+            and angle_near(a["yaw"], 120.0)
+        )
+
+    await eventually(pointed, what="status at pitch -30, yaw 120")
+    status = await web.status()
+    assert status["raw"]["main"]["attitude_raw"][2] == round(status["attitude"]["yaw"] * 100)
+    assert status["relative"]["z"] == pytest.approx(state.relative_axes.z, abs=0.5)
+
+
+async def test_page_and_assets_are_served_locally(web: Web) -> None:
+    page = await web.http.get("/")
+    assert page.status_code == 200
+    assert page.headers["content-type"].startswith("text/html")
+    html = page.text
+    for element in ('id="zoom"', 'id="horizon"', 'id="compass"', 'data-command="photo"'):
+        assert element in html
+    for forbidden in ('src="http', "src='http", 'href="http', "href='http", "//cdn"):
+        assert forbidden not in html  # everything comes from this server
+    for asset in ("/static/app.js", "/static/style.css"):
+        assert f'"{asset}"' in html
+        response = await web.http.get(asset)
+        assert response.status_code == 200, asset
+        assert len(response.content) > 500
+    script = (await web.http.get("/static/app.js")).text
+    assert "/ws/telemetry" in script and "/api/commands/" in script
+    # every command a button names exists in the API
+    for name in {part.split('"')[0] for part in html.split('data-command="')[1:]}:
+        assert name in COMMANDS, name
+
+
+async def test_command_listing_matches_the_client(web: Web) -> None:
+    response = await web.http.get("/api/commands")
+    assert response.status_code == 200
+    listed = {c["name"]: c for c in response.json()["commands"]}
+    assert set(listed) == set(COMMANDS)
+    assert listed["zoom_to"]["params"]["ratio"] == {"type": "float", "required": True}
+    assert listed["photo"]["params"]["cameras"] == {"type": "int", "default": 1}
+    for spec in COMMANDS.values():
+        assert callable(getattr(GcuClient, spec.method)), spec.method
+
+
+# -- commands -----------------------------------------------------------------------------
+# name -> (parameters, opcode the simulator must execute)
+EVERY_COMMAND: dict[str, tuple[dict[str, Any], Opcode]] = {
+    "photo": ({}, Opcode.TAKE_PHOTO),
+    "record_start": ({}, Opcode.RECORD),
+    "record_stop": ({}, Opcode.RECORD),
+    "record": ({}, Opcode.RECORD),
+    "zoom_in": ({}, Opcode.ZOOM_IN),
+    "zoom_stop": ({}, Opcode.ZOOM_STOP),
+    "zoom_out": ({"cameras": 1}, Opcode.ZOOM_OUT),
+    "zoom_to": ({"ratio": 4.0}, Opcode.ZOOM_TO),
+    "zoom_to_fraction": ({"fraction": 0.5}, Opcode.ZOOM_TO),
+    "focus": ({}, Opcode.FOCUS),
+    "euler_control": ({"pitch": -10.0, "yaw": 350.0}, Opcode.EULER_CONTROL),
+    "angle_control": ({"pitch": -5.0, "yaw": 5.0}, Opcode.ANGLE_CONTROL),
+    "fpv": ({"pitch": -5.0}, Opcode.FPV),
+    "pointing_lock": ({"pitch_rate": 0.0, "yaw_rate": 2.0}, Opcode.POINTING_LOCK),
+    "pointing_follow": ({}, Opcode.POINTING_FOLLOW),
+    "top_down": ({"yaw_rate": 1.0}, Opcode.TOP_DOWN),
+    "centre": ({}, Opcode.CENTRE),
+    "calibrate": ({"timeout": 5.0}, Opcode.CALIBRATION),
+    "track": ({"box": [0.45, 0.45, 0.55, 0.55]}, Opcode.TRACK),
+    "stop_tracking": ({}, Opcode.TRACK),
+    "click_to_pan": ({"x": 0.7, "y": 0.3}, Opcode.CLICK_TO_PAN),
+    "palette": ({"palette": 3}, Opcode.PALETTE),
+    "night_vision": ({"mode": 2}, Opcode.NIGHT_VISION),
+    "ranging": ({"enabled": True}, Opcode.RANGING),
+    "osd": ({"enabled": True}, Opcode.OSD),
+    "digital_zoom": ({}, Opcode.DIGITAL_ZOOM),
+    "target_detection": ({"enabled": True}, Opcode.TARGET_DETECTION),
+    "picture_in_picture": ({"mode": 2}, Opcode.PICTURE_IN_PICTURE),
+}
+FAILS_ON_D90PRO_TA = {"fill_light": ({"brightness": 100}, Opcode.FILL_LIGHT)}
+
+
+def test_every_exposed_command_is_covered() -> None:
+    assert set(EVERY_COMMAND) | set(FAILS_ON_D90PRO_TA) == set(COMMANDS)
+
+
+async def test_every_command_runs_on_the_simulator(web: Web) -> None:
+    model = web.sim.simulator.model
+    expected: dict[int, int] = {}
+    for name, (params, opcode) in EVERY_COMMAND.items():
+        if name == "record_stop":  # the client decides from the flags it has seen
+            await eventually(lambda: _recording(web, True), what="recording flag")
+        response = await web.command(name, params)
+        assert response.status_code == 200, (name, response.text)
+        body = response.json()
+        assert body["command"] == name
+        assert body["feedback"]["opcode"] == opcode, name
+        assert body["feedback"]["status"] == "SUCCESS", name
+        expected[opcode] = expected.get(opcode, 0) + 1
+    assert {op: model.executions[op] for op in expected} == expected
+    state = model.state
+    assert state.camera.photos == {1: 1}
+    assert state.camera.palette == 3
+    assert state.camera.pip_mode == 2
+    assert state.rangefinder.on is True
+    assert state.camera.osd_on is True
+    assert state.camera.recording is True  # start, stop, toggle
+
+
+async def _recording(web: Web, value: bool) -> bool:
+    return (await web.status())["recording"] is value
+
+
+async def test_record_start_when_recording_sends_nothing(web: Web) -> None:
+    executions = web.sim.simulator.model.executions
+    assert (await web.command("record_start")).status_code == 200
+    await eventually(lambda: _recording(web, True), what="recording flag")
+    response = await web.command("record_start")
+    assert response.status_code == 200
+    assert response.json() == {"command": "record_start", "feedback": None}
+    assert executions[Opcode.RECORD] == 1
+
+
+async def test_zoom_to_moves_the_zoom_in_status(web: Web) -> None:
+    assert (await web.command("zoom_to", {"ratio": 6.0})).status_code == 200
+
+    async def zoomed() -> bool:
+        return bool((await web.status())["zoom"]["camera1"] == pytest.approx(6.0, abs=0.05))
+
+    await eventually(zoomed, what="zoom 6x")
+    assert web.sim.simulator.model.state.zoom[1] == pytest.approx(6.0, abs=0.05)
+
+
+BAD_PARAMETERS: list[tuple[str, Any, str]] = [
+    ("zoom_to", {"ratio": 5000}, "ratio: 5000.0 is outside the allowed range"),
+    ("zoom_to", {}, "ratio: required parameter of zoom_to is missing"),
+    ("zoom_to", {"ratio": "ten"}, "ratio: expected a number, got string 'ten'"),
+    ("zoom_to", {"ratio": True}, "ratio: expected a number"),
+    ("zoom_to_fraction", {"fraction": 1.5}, "fraction"),
+    ("photo", {"camera": 1}, "unknown parameter(s) camera (allowed: cameras)"),
+    ("photo", {"cameras": 1.5}, "cameras: expected an integer"),
+    ("photo", [1, 2], "the body must be a JSON object, got array"),
+    ("euler_control", {"pitch": -200.0}, "pitch"),
+    ("pointing_lock", {"yaw_rate": math.inf}, "yaw_rate: inf is not a finite number"),
+    ("track", {"box": [0.1, 0.2, 0.3]}, "box: expected [left, top, right, bottom]"),
+    ("track", {"box": [0.6, 0.6, 0.4, 0.4]}, "box"),
+    ("click_to_pan", {"x": 0.5}, "y: required parameter"),
+    ("night_vision", {"mode": 7}, "7"),
+    ("palette", {"palette": 11}, "palette"),
+    ("ranging", {"enabled": 1}, "enabled: expected true or false"),
+    ("fill_light", {"brightness": 256}, "brightness"),
+    ("calibrate", {"timeout": -1.0}, "timeout"),
+    ("centre", {"now": True}, "unknown parameter(s) now (allowed: none)"),
+]
+
+
+async def test_bad_parameters_are_422_and_send_nothing(web: Web) -> None:
+    executions = web.sim.simulator.model.executions
+    for name, params, message in BAD_PARAMETERS:
+        response = await web.command(name, params)
+        assert response.status_code == 422, (name, params, response.text)
+        body = response.json()
+        assert message in body["error"], (name, params, body)
+    assert sum(executions.values()) == 0  # nothing reached the GCU
+    # a FieldRangeError names the field and range in the body
+    body = (await web.command("zoom_to", {"ratio": 0.5})).json()
+    assert body["kind"] == "FieldRangeError"
+    assert body["field"] == "ratio"
+    assert (body["low"], body["high"]) == (1.0, pytest.approx(3276.8))
+
+
+async def test_unknown_command_malformed_body_and_wrong_method(web: Web) -> None:
+    response = await web.command("self_destruct")
+    assert response.status_code == 404
+    assert "self_destruct" in response.json()["error"]
+    assert "photo" in response.json()["commands"]
+    response = await web.http.post(
+        "/api/commands/photo", content=b"{not json", headers={"content-type": "application/json"}
+    )
+    assert response.status_code == 400
+    assert "not valid JSON" in response.json()["error"]
+    assert (await web.http.get("/api/commands/photo")).status_code == 405
+    # an empty body means "all defaults"
+    response = await web.http.post("/api/commands/photo", content=b"")
+    assert response.status_code == 200
+    assert web.sim.simulator.model.state.camera.photos == {1: 1}
+
+
+async def test_gcu_failure_is_409_with_opcode_and_status(web: Web) -> None:
+    response = await web.command("fill_light", {"brightness": 100})
+    assert response.status_code == 409
+    body = response.json()
+    assert body["kind"] == "CommandFailed"
+    assert (body["opcode"], body["command"], body["status"]) == (0x80, "FILL_LIGHT", 0x01)
+    assert web.sim.simulator.model.executions[Opcode.FILL_LIGHT] == 1
+
+
+@pytest.mark.parametrize("gcu_sim_pod", ["Z-6A"])
+async def test_commands_a_z6a_lacks_are_409(web: Web) -> None:
+    status = await web.status()
+    assert status["pod"]["model"] == "Z-6A"
+    response = await web.command("zoom_to", {"ratio": 4.0})
+    assert response.status_code == 409
+    body = response.json()
+    assert (body["opcode"], body["status"], body["failed_cameras"]) == (0x25, 0x01, 0x01)
+    response = await web.command("palette", {"palette": 2})
+    assert response.status_code == 409
+    assert (response.json()["opcode"], response.json()["status"]) == (0x2A, 0x02)
+    # what the Z-6A does support still works
+    assert (await web.command("track", {"box": [0.4, 0.4, 0.6, 0.6]})).status_code == 200
+    assert (await web.command("zoom_in")).status_code == 200
+
+
+@pytest.mark.parametrize("gcu_sim_pod", ["Z-6A"])
+@pytest.mark.parametrize("web_options", [{"check_support": True}])
+async def test_check_support_refuses_before_sending(web: Web) -> None:
+    response = await web.command("zoom_to", {"ratio": 4.0})
+    assert response.status_code == 409
+    body = response.json()
+    assert body["kind"] == "UnsupportedCommandError"
+    assert (body["command"], body["pod_model"]) == ("ZOOM_TO", "Z-6A")
+    assert web.sim.simulator.model.executions[Opcode.ZOOM_TO] == 0
+
+
+async def test_no_feedback_in_time_is_504(web: Web) -> None:
+    # calibration runs 0.2 s on this simulator: a 0.1 s timeout cannot be met
+    response = await web.command("calibrate", {"timeout": 0.1})
+    assert response.status_code == 504
+    body = response.json()
+    assert body["kind"] == "CommandTimeout"
+    assert "in progress" in body["error"]
+
+
+@pytest.mark.parametrize("web_options", [{"silence_timeout": 0.3}])
+async def test_link_lost_is_503_and_reported_live(web: Web) -> None:
+    async with ws_connect(web.ws_url) as ws:
+        assert (await next_message(ws))["type"] == "telemetry"
+        web.sim.silence(10.0)
+
+        async def link_down() -> bool:
+            return (await web.status())["link"]["up"] is False
+
+        await eventually(link_down, what="link down in /api/status")
+        response = await web.command("photo")
+        assert response.status_code == 503
+        assert response.json()["kind"] == "LinkLost"
+        # the socket keeps reporting the link while no telemetry arrives
+        deadline = time.monotonic() + 3.0
+        while True:
+            message = await next_message(ws)
+            if message["type"] == "link":
+                assert message["link"]["up"] is False
+                break
+            assert time.monotonic() < deadline, "no link report on the socket"
+        web.sim.silence(0)  # replies resume: the link comes back, commands work again
+
+        async def link_up() -> bool:
+            return (await web.status())["link"]["up"] is True
+
+        await eventually(link_up, what="link restored")
+        assert (await web.command("photo")).status_code == 200
+        message = await next_message(ws)
+        assert message["type"] == "telemetry"
+        assert message["link"]["restored_count"] >= 1
+
+
+# -- telemetry ----------------------------------------------------------------------------
+async def test_telemetry_follows_a_command(web: Web) -> None:
+    async with ws_connect(web.ws_url) as ws:
+        first = await next_message(ws)
+        assert first["type"] == "telemetry"
+        assert first["mode"] == "POINTING_FOLLOW"
+        assert first["pod"]["model"] == "D-90Pro(TA)"
+        assert first["link"]["up"] is True
+        response = await web.command("euler_control", {"pitch": -30.0, "yaw": 90.0})
+        assert response.status_code == 200
+        yaws: list[float] = []
+        seqs: list[int] = [first["seq"]]
+        deadline = time.monotonic() + 5.0
+        while True:
+            message = await next_message(ws)
+            assert message["type"] == "telemetry"
+            seqs.append(message["seq"])
+            yaws.append(message["attitude"]["yaw"])
+            if (
+                message["mode"] == "EULER_CONTROL"
+                and angle_near(message["attitude"]["yaw"], 90.0)
+                and angle_near(message["attitude"]["pitch"], -30.0)
+            ):
+                break
+            assert time.monotonic() < deadline, f"gimbal never reached yaw 90: {yaws[-5:]}"
+    assert len(set(yaws)) > 2  # values changed on the way, not one jump
+    assert seqs == sorted(seqs) and len(set(seqs)) == len(seqs)
+
+
+@pytest.mark.parametrize("web_options", [{"telemetry_hz": 10.0}])
+async def test_telemetry_rate_is_bounded_and_newest_wins(web: Web) -> None:
+    async with ws_connect(web.ws_url) as ws:
+        await next_message(ws)
+        dropped_before = web.gcu.telemetry_dropped
+        start = time.monotonic()
+        count = 0
+        while time.monotonic() - start < 1.0:
+            with contextlib.suppress(asyncio.TimeoutError):
+                await next_message(ws, timeout=max(0.01, 1.0 - (time.monotonic() - start)))
+                count += 1
+        # the simulator answers 50 times a second; the socket sends at most 10
+        assert 3 <= count <= 11, count
+        # the samples in between were dropped (newest wins), not queued
+        assert web.gcu.telemetry_dropped > dropped_before
+        assert web.gcu.link.up
+
+
+async def test_several_sockets_and_a_silent_reader(web: Web) -> None:
+    async with ws_connect(web.ws_url) as slow, ws_connect(web.ws_url) as fast:
+        await asyncio.sleep(0.5)  # `slow` reads nothing meanwhile
+        for _ in range(5):
+            assert (await next_message(fast))["type"] == "telemetry"
+        assert web.gcu.link.up
+        assert web.gcu.link.reply_rate > 10  # the heartbeat (50 Hz) is not held up
+        assert (await next_message(slow))["type"] == "telemetry"
+    # both subscriptions are gone once the sockets closed
+    await eventually(lambda: _no_subscribers(web.gcu), timeout=2.0, what="subscriptions released")
+
+
+async def _no_subscribers(gcu: GcuClient) -> bool:
+    return not gcu._subscriptions
+
+
+# -- lifecycle ----------------------------------------------------------------------------
+async def test_app_does_not_start_without_a_gcu(gcu_sim: SimHandle) -> None:
+    gcu_sim.silence(10.0)
+    app = create_app(gcu_sim.url, local_port=0, connect_timeout=0.3)
+    with pytest.raises(RuntimeError, match="did not start"):
+        async with serve(app):
+            pass  # pragma: no cover
+
+
+async def test_app_closes_its_client_on_shutdown(gcu_sim: SimHandle) -> None:
+    app = create_app(gcu_sim.url, local_port=0)
+    async with serve(app):
+        gcu: GcuClient = app.state.gcu
+        assert gcu.transport.connected
+    assert not gcu.transport.connected
+    received = gcu_sim.simulator.model.stats.received
+    await asyncio.sleep(0.1)
+    assert gcu_sim.simulator.model.stats.received == received  # heartbeat stopped
+
+
+async def test_socket_closes_when_the_app_stops(gcu_sim: SimHandle) -> None:
+    app = create_app(gcu_sim.url, local_port=0)
+    async with serve(app) as base_url:
+        ws = await ws_connect(base_url.replace("http://", "ws://") + "/ws/telemetry")
+        assert (await next_message(ws))["type"] == "telemetry"
+    try:  # the server is gone: the socket ends with a "going away" / "restart" close
+        with pytest.raises(ConnectionClosed) as info:
+            await _read_until_closed(ws)
+        assert info.value.rcvd is not None
+        assert info.value.rcvd.code in (1001, 1012), info.value.rcvd
+    finally:
+        await ws.close()
+
+
+async def _read_until_closed(ws: ClientConnection) -> None:
+    for _ in range(100):  # bounded: the buffered messages, then the close
+        await asyncio.wait_for(ws.recv(), 2.0)
+
+
+def test_create_app_rejects_a_bad_rate() -> None:
+    for hz in (0.0, -1.0, 51.0):
+        with pytest.raises(ValueError, match="telemetry_hz"):
+            create_app("udp://127.0.0.1:2337", telemetry_hz=hz)
+
+
+# -- the page in a browser ----------------------------------------------------------------
+async def test_page_in_headless_chromium(web: Web) -> None:
+    try:
+        from playwright.async_api import async_playwright
+    except ImportError:
+        pytest.skip("browser test needs Playwright: pip install playwright (never "
+                    "`playwright install`; it drives Debian's chromium)")  # fmt: skip
+    if not os.access(CHROMIUM, os.X_OK):
+        pytest.skip(f"browser test needs {CHROMIUM}: apt-get install chromium")
+    state = web.sim.simulator.model.state
+    async with async_playwright() as pw:
+        browser = await pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        try:
+            page = await browser.new_page(viewport={"width": 1400, "height": 800})
+            errors: list[str] = []
+            page.on("pageerror", lambda exc: errors.append(str(exc)))
+            page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+            await page.goto(web.base_url + "/")
+            # live values: mode and pod from the simulator, telemetry count rising
+            await page.wait_for_function(
+                "document.getElementById('mode').textContent === 'POINTING_FOLLOW'",
+                timeout=5000,
+            )
+            assert "D-90Pro(TA)" in (await page.text_content("#pod") or "")
+            await page.wait_for_function(
+                "Number(document.getElementById('rx').textContent) > 5", timeout=5000
+            )
+            assert "link up" in (await page.text_content("#link-text") or "")
+            # a button drives the simulator, and the page shows the result
+            await page.get_by_role("button", name="Photo").click()
+            await page.wait_for_function(
+                "document.getElementById('result').textContent.includes('TAKE_PHOTO SUCCESS')",
+                timeout=5000,
+            )
+            assert state.camera.photos == {1: 1}
+            # zoom and slew at once (the client queues the two commands)
+            await page.get_by_role("button", name="10×").click()
+            await page.get_by_role("button", name="East").click()
+            await page.wait_for_function(
+                "Number(document.getElementById('zoom').textContent) >= 9.95", timeout=5000
+            )
+            assert state.zoom[1] == pytest.approx(10.0, abs=0.05)
+            await page.wait_for_function(
+                "Math.abs(Number(document.getElementById('yaw').textContent) - 90) < 0.5"
+                " && document.getElementById('mode').textContent === 'EULER_CONTROL'",
+                timeout=5000,
+            )
+            assert state.mode.name == "EULER_CONTROL"
+            transform = await page.get_attribute("#compass-card", "transform") or ""
+            assert transform.startswith("rotate(-9")  # the compass card turned to east
+            assert errors == []  # no script errors, no failed loads (e.g. a favicon)
+            # an error shows up on the page too (fill light: the pod lacks it)
+            await page.evaluate("send('fill_light', {brightness: 10})")
+            await page.wait_for_function(
+                "document.getElementById('result').textContent.includes('HTTP 409')",
+                timeout=5000,
+            )
+            assert [e for e in errors if "status of 409" not in e] == []
+        finally:
+            await browser.close()
