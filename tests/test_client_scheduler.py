@@ -97,6 +97,17 @@ def test_different_opcode_needs_no_null() -> None:
     assert s.next_command() == ZoomTo(ratio=2.0)
 
 
+def test_late_replies_to_a_finished_command_are_not_unmatched() -> None:
+    s = CommandScheduler()
+    s.submit(ticket(TakePhoto()))
+    s.next_command()
+    s.next_command()  # repeated: two replies will come
+    s.on_feedback(Feedback(Opcode.TAKE_PHOTO, 0))
+    s.on_feedback(Feedback(Opcode.TAKE_PHOTO, 0))
+    assert s.stats.late_feedback == 1
+    assert s.stats.unmatched_feedback == 0
+
+
 def test_unmatched_feedback_is_counted_never_given_to_another_waiter() -> None:
     s = CommandScheduler()
     t = ticket(TakePhoto())

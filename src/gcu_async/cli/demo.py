@@ -17,14 +17,15 @@ import argparse
 import asyncio
 import contextlib
 import math
+import os
 import signal
 import statistics
 import sys
 import time
-from collections.abc import AsyncGenerator, Awaitable, Callable
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
-from typing import Any, cast
+from typing import Any
 
 from gcu_async.cli.liveview import Console, LiveView
 from gcu_async.client.client import GcuClient
@@ -74,15 +75,22 @@ def register(sub: Any) -> None:
     p.add_argument("--listen", metavar="URL",
                    help=f"where the in-process simulator listens (default {DEFAULT_LISTEN}): "
                    "udp://HOST[:PORT], tcp://HOST[:PORT] or pty; port 0 = a free port")  # fmt: skip
-    p.add_argument("--pod", metavar="NAME",
-                   help=f"simulated pod model, Appendix 7 name or code (default {DEFAULT_POD})")
+    p.add_argument(
+        "--pod",
+        metavar="NAME",
+        help=f"simulated pod model, Appendix 7 name or code (default {DEFAULT_POD})",
+    )
     p.add_argument("--speed", metavar="FACTOR",
                    help="divide the script's pauses by FACTOR (default 1); the gimbal and zoom "
                    "still move at their own pace")  # fmt: skip
-    p.add_argument("--quick", action="store_true",
-                   help=f"short pauses, same as --speed {QUICK_SPEED:g} (--speed wins)")
-    p.add_argument("--no-live", action="store_true",
-                   help="no live status view, only the progress lines")
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help=f"short pauses, same as --speed {QUICK_SPEED:g} (--speed wins)",
+    )
+    p.add_argument(
+        "--no-live", action="store_true", help="no live status view, only the progress lines"
+    )
     p.set_defaults(run=run)
 
 
@@ -103,14 +111,23 @@ def parse_options(args: argparse.Namespace, *, isatty: bool) -> DemoOptions:
         for option, value in (("--listen", args.listen), ("--pod", args.pod)):
             if value is not None:
                 raise ValueError(f"{option}: only for the in-process simulator, not with --url")
-        connect(args.url)  # validates the URL and its options; opens nothing
-    listen = parse_listen_url(args.listen if args.listen is not None else DEFAULT_LISTEN)
+        try:
+            connect(args.url)  # validates the URL and its options; opens nothing
+        except ValueError as exc:
+            raise ValueError(f"--url: {exc}") from None
+    try:
+        listen = parse_listen_url(args.listen if args.listen is not None else DEFAULT_LISTEN)
+    except ValueError as exc:
+        raise ValueError(f"--listen: {exc}") from None
     if listen.kind == "serial":
         raise ValueError(
             "--listen: a serial device would be shared by simulator and client; use pty, or "
-            "run `gcu-async sim --listen serial://…` and `gcu-async demo --url serial://…`"
+            "run `gcu-async sim --listen serial://...` and `gcu-async demo --url serial://...`"
         )
-    pod = resolve_pod_model(args.pod if args.pod is not None else DEFAULT_POD)
+    try:
+        pod = resolve_pod_model(args.pod if args.pod is not None else DEFAULT_POD)
+    except ValueError as exc:
+        raise ValueError(f"--pod: {exc}") from None
     speed = QUICK_SPEED if args.quick else 1.0
     if args.speed is not None:
         try:
@@ -283,7 +300,7 @@ class Demo:
         last: list[TelemetrySample] = []
 
         async def first() -> TelemetrySample:
-            stream = cast("AsyncGenerator[TelemetrySample, None]", self.gcu.telemetry())
+            stream = self.gcu.telemetry()
             next_trace = 0.0
             async with contextlib.aclosing(stream) as samples:
                 async for sample in samples:
@@ -388,8 +405,9 @@ class Demo:
         yaw0 = self.gcu.status.attitude.yaw
         await self.expect(
             "a 30 deg pan",
-            lambda s: s.status.mode == Mode.POINTING_LOCK
-            and _angle(s.status.attitude.yaw, yaw0) >= 30.0,
+            lambda s: (
+                s.status.mode == Mode.POINTING_LOCK and _angle(s.status.attitude.yaw, yaw0) >= 30.0
+            ),
             self._pose,
             trace=lambda s: f"{s.status.attitude.yaw:.0f}",
         )
@@ -590,7 +608,7 @@ async def _session(opts: DemoOptions, console: Console, report: Report) -> None:
 
 
 async def _first_info(gcu: GcuClient) -> None:
-    stream = cast("AsyncGenerator[TelemetrySample, None]", gcu.telemetry())
+    stream = gcu.telemetry()
     async with contextlib.aclosing(stream) as samples:
         async for sample in samples:
             if sample.info is not None:
@@ -602,12 +620,15 @@ def summary_lines(report: Report, interrupted: bool) -> list[str]:
     lines = ["", "summary"]
     demo = report.demo
     tally = demo.tally if demo is not None else Tally()
-    lines.append(
-        f"  steps:              {tally.steps_ok} ok, {tally.steps_failed} failed, "
-        f"{tally.steps_skipped} skipped, "
-        f"{tally.steps_total - tally.steps_ok - tally.steps_failed - tally.steps_skipped} "
-        f"not run (of {tally.steps_total})"
-    )
+    if demo is None:
+        lines.append("  steps:              none run (no session)")
+    else:
+        lines.append(
+            f"  steps:              {tally.steps_ok} ok, {tally.steps_failed} failed, "
+            f"{tally.steps_skipped} skipped, "
+            f"{tally.steps_total - tally.steps_ok - tally.steps_failed - tally.steps_skipped} "
+            f"not run (of {tally.steps_total})"
+        )
     lines.append(f"  commands:           {tally.commands_run} run, "
                  f"{tally.commands_failed} failed")  # fmt: skip
     if tally.latencies:
@@ -625,9 +646,7 @@ def summary_lines(report: Report, interrupted: bool) -> list[str]:
         lines.append(f"  link lost:          {link.lost_count} times")
     if report.sim is not None:
         executions = report.sim.model.executions
-        detail = ", ".join(
-            f"{opcode_name(op).lower()} {n}" for op, n in sorted(executions.items())
-        )
+        detail = ", ".join(f"{opcode_name(op).lower()} {n}" for op, n in sorted(executions.items()))
         lines.append(f"  sim executions:     {sum(executions.values())} ({detail or 'none'})")
     else:
         lines.append("  sim executions:     n/a (external GCU)")
@@ -665,6 +684,8 @@ async def _main(opts: DemoOptions) -> int:
     except asyncio.CancelledError:
         if not interrupted:
             raise
+    except BrokenPipeError:
+        raise
     except (LinkLost, GcuError, OSError) as exc:
         report.error = str(exc) or type(exc).__name__
         console.finish()
@@ -693,3 +714,7 @@ def run(args: argparse.Namespace) -> int:
         return asyncio.run(_main(opts))
     except KeyboardInterrupt:  # platforms without loop signal handlers
         return EXIT_INTERRUPTED
+    except BrokenPipeError:  # e.g. `gcu-async demo | head`: stop quietly
+        with contextlib.suppress(OSError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_FAILED

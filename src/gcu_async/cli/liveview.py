@@ -12,8 +12,7 @@ import asyncio
 import contextlib
 import shutil
 import time
-from collections.abc import AsyncGenerator
-from typing import TextIO, cast
+from typing import TextIO
 
 from gcu_async.client.client import GcuClient
 from gcu_async.client.health import LinkHealth
@@ -145,7 +144,7 @@ class LiveView:
         self.console.finish()
 
     async def _read(self) -> None:
-        stream = cast("AsyncGenerator[TelemetrySample, None]", self.gcu.telemetry())
+        stream = self.gcu.telemetry()
         async with contextlib.aclosing(stream) as samples:
             async for sample in samples:
                 self.latest = sample

@@ -67,6 +67,9 @@ class SchedulerStats:
     commands_timed_out: int = 0
     commands_cancelled: int = 0
     unmatched_feedback: int = 0
+    """Feedback for an opcode that is neither in flight nor just finished."""
+    late_feedback: int = 0
+    """Feedback for the command that just finished (replies to its repeats): expected."""
     null_waits: int = 0
 
 
@@ -80,6 +83,8 @@ class CommandScheduler:
         self._hold_until = -math.inf
         self._last_sent_at = -math.inf
         """When the in-flight command was last put in a packet."""
+        self._finished_opcode: int | None = None
+        """Opcode of the command that finished last (its repeats' replies may still come)."""
         self._separated: tuple[int, float] | None = None
         """(opcode, time) of the last null acknowledgement that cleared ``_last_opcode``."""
         self._queue: deque[Ticket] = deque()
@@ -154,7 +159,10 @@ class CommandScheduler:
             return None
         t = self._in_flight
         if t is None or opcode != t.opcode:
-            self.stats.unmatched_feedback += 1
+            if opcode == self._finished_opcode:
+                self.stats.late_feedback += 1
+            else:
+                self.stats.unmatched_feedback += 1
             return None
         if feedback.result is ExecutionStatus.IN_PROGRESS:
             t.progress.append(feedback)
@@ -241,6 +249,7 @@ class CommandScheduler:
         if ticket is self._in_flight:
             self._in_flight = None
             if ticket.sent:
+                self._finished_opcode = ticket.opcode
                 self._last_opcode = ticket.opcode
                 self._nulls_since_last = 0
                 self._separated = None
