@@ -43,8 +43,3 @@ class SimServer(abc.ABC):
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.url}>"
-
-
-def format_hostport(host: str, port: int) -> str:
-    """``host:port``, IPv6 literals in brackets."""
-    return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"

@@ -13,7 +13,8 @@ import logging
 from typing import TYPE_CHECKING
 
 from gcu_async.sim.exchange import Exchange
-from gcu_async.sim.server import SimServer, format_hostport
+from gcu_async.sim.server import SimServer
+from gcu_async.transport._common import format_hostport
 
 if TYPE_CHECKING:
     from gcu_async.sim.simulator import GcuSimulator

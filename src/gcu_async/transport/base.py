@@ -13,8 +13,10 @@ import enum
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import TracebackType
+from typing import TypeVar
 
 DataHandler = Callable[[bytes], None]
+_T = TypeVar("_T", bound="Transport")
 
 
 class LinkEventKind(enum.Enum):
@@ -91,7 +93,7 @@ class Transport(abc.ABC):
     async def close(self) -> None:
         """Close the link and release every socket / fd. Idempotent."""
 
-    async def __aenter__(self) -> Transport:
+    async def __aenter__(self: _T) -> _T:
         await self.open()
         return self
 

@@ -66,10 +66,6 @@ class SerialTransport(Transport):
         self.bytes_sent = 0
         self.bytes_received = 0
 
-    async def __aenter__(self) -> SerialTransport:
-        await self.open()
-        return self
-
     @property
     def url(self) -> str:
         quoted = quote(self._device, safe="/:")

@@ -135,10 +135,6 @@ class TcpTransport(Transport):
         self.reconnects = 0
         """Outages ended by a successful reconnection."""
 
-    async def __aenter__(self) -> TcpTransport:
-        await self.open()
-        return self
-
     @property
     def url(self) -> str:
         return f"tcp://{format_hostport(self._host, self._port)}"

@@ -119,10 +119,6 @@ class UdpTransport(Transport):
         self.last_error: Exception | None = None
         """The most recent of those errors."""
 
-    async def __aenter__(self) -> UdpTransport:
-        await self.open()
-        return self
-
     @property
     def url(self) -> str:
         return f"udp://{format_hostport(self._host, self._port)}"
