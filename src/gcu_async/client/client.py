@@ -518,6 +518,8 @@ class GcuClient(CommandMethods):
             and not scheduler.waiting_for_null_ack
         ):
             self._send_packet()  # the next command goes out at once, not at the next tick
+        if not self._subscriptions and not self._telemetry_callbacks:
+            return
         sample = TelemetrySample(main, self._info, feedback, now)
         for sub_queue in self._subscriptions:
             before = sub_queue.dropped

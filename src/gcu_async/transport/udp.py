@@ -43,6 +43,9 @@ GCU_UDP_PORT = 2337
 """Port the GCU listens on (NOTES §9)."""
 HOST_UDP_PORT = 2338
 """Port the host listens on; the GCU broadcasts to it (NOTES §9)."""
+MAX_DATAGRAM = 65536
+"""Receive buffer size: no UDP payload is larger. asyncio's default (256 KiB) is above
+glibc's mmap threshold, which costs an mmap/mremap/munmap per received datagram."""
 
 
 def is_broadcast_address(host: str) -> bool:
@@ -213,6 +216,8 @@ class UdpTransport(Transport):
         except BaseException:
             sock.close()
             raise
+        if getattr(dtransport, "max_size", 0) > MAX_DATAGRAM:  # selector loop's transport
+            dtransport.max_size = MAX_DATAGRAM  # type: ignore[attr-defined]
         bound = sock.getsockname()
         self._local = (str(bound[0]), int(bound[1]))
         self._remote = remote
