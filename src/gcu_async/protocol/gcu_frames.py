@@ -134,6 +134,20 @@ class GcuMainFrame(NamedTuple):
         return AxisAngles(self.rate_x_raw / 10, self.rate_y_raw / 10, self.rate_z_raw / 10)
 
     def validate(self) -> None:
+        """Raise :class:`FieldRangeError` for any raw field outside its wire range."""
+        # Fast path: plain ints inside the very ranges checked below (see HostMainFrame).
+        mo, ps, mx, my, rx, ry, rz, ro, pi, ya, wx, wy, wz = self
+        if (
+            int is type(mo) is type(ps) is type(mx) is type(my) is type(rx) is type(ry)
+            is type(rz) is type(ro) is type(pi) is type(ya) is type(wx) is type(wy)
+            is type(wz)
+            and 0 <= mo <= 255 and 0 <= ps <= 0xFFFF
+            and -1000 <= mx <= 1000 and -1000 <= my <= 1000
+            and -18000 <= rx <= 17999 and -18000 <= ry <= 17999 and -18000 <= rz <= 17999
+            and -18000 <= pi <= 17999 and -9000 <= ro <= 9000 and 0 <= ya <= 35999
+            and -32768 <= wx <= 32767 and -32768 <= wy <= 32767 and -32768 <= wz <= 32767
+        ):  # fmt: skip
+            return
         check_int("mode_raw", self.mode_raw, 0, 255)
         check_int("pod_status_raw", self.pod_status_raw, 0, 0xFFFF)
         check_int("miss_x", self.miss_x, -1000, 1000)
@@ -292,6 +306,20 @@ class GcuSubFrame(NamedTuple):
         return not self.camera_flags_raw & CameraFlags.AUTO_FLIP_OFF
 
     def validate(self) -> None:
+        """Raise :class:`FieldRangeError` for any raw field outside its wire range."""
+        # Fast path: plain ints inside the very ranges checked below (see HostMainFrame).
+        hw, fw, pod, fault, dist, lon, lat, alt, z1, z2, th, cam, tz = self
+        lo, hi = S32
+        if (
+            int is type(hw) is type(fw) is type(pod) is type(fault) is type(dist)
+            is type(lon) is type(lat) is type(alt) is type(z1) is type(z2) is type(th)
+            is type(cam) is type(tz)
+            and 0 <= hw <= 255 and 0 <= fw <= 255 and 0 <= pod <= 255 and 0 <= fault <= 0xFFFF
+            and lo <= dist <= hi and lo <= lon <= hi and lo <= lat <= hi and lo <= alt <= hi
+            and 0 <= z1 <= 0xFFFF and 0 <= z2 <= 0xFFFF and 0 <= th <= 0xFF
+            and 0 <= cam <= 0xFFFF and -128 <= tz <= 127
+        ):  # fmt: skip
+            return
         check_int("hardware_version_raw", self.hardware_version_raw, 0, 255)
         check_int("firmware_version_raw", self.firmware_version_raw, 0, 255)
         check_int("pod_code", self.pod_code, 0, 255)

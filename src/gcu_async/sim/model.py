@@ -166,17 +166,18 @@ class SimulatorModel:
             self.executions[opcode] += 1
             feedback = Feedback(opcode, status)
             self._last_feedback = feedback
-            log.info("executed %s %s -> status 0x%02X", opcode_name(opcode),
-                     packet.command.encode_params().hex(" ") or "-", status)  # fmt: skip
+            if log.isEnabledFor(logging.INFO):
+                log.info("executed %s %s -> status 0x%02X", opcode_name(opcode),
+                         packet.command.encode_params().hex(" ") or "-", status)  # fmt: skip
         self.last_opcode = opcode
         cam = self.state.camera
         self.state.gimbal.control_input(main.control, main.control_valid, cam.main_zoom)
         self.state.rangefinder.measure(self.state.attitude, self.state.aircraft, self.rng)
         self.stats.answered += 1
-        sub = sub_frame(self.state, self.profile)
+        standard = main.subframe_request == SubFrameRequest.STANDARD
         return GcuPacket(
             main_frame(self.state),
-            sub if main.subframe_request == SubFrameRequest.STANDARD else None,
+            sub_frame(self.state, self.profile) if standard else None,
             feedback,
             self.protocol_version,
         )
