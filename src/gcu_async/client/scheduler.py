@@ -174,19 +174,10 @@ class CommandScheduler:
 
     def expire(self, now: float) -> list[Ticket]:
         """Time out every ticket whose deadline has passed; return them."""
-        expired: list[Ticket] = []
-        t = self._in_flight
-        if t is not None and now >= t.deadline:
-            t.timed_out = True
-            self._finish(t)
-            expired.append(t)
-        for q in list(self._queue):
-            if now >= q.deadline:
-                q.timed_out = True
-                q.done = True
-                self._queue.remove(q)
-                expired.append(q)
-        self.stats.commands_timed_out += len(expired)
+        tickets = [] if self._in_flight is None else [self._in_flight]
+        expired = [t for t in [*tickets, *self._queue] if now >= t.deadline]
+        for t in expired:
+            self.time_out(t)
         return expired
 
     def time_out(self, ticket: Ticket) -> bool:
