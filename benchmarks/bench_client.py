@@ -54,6 +54,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from _machine import cpu_model
+
 from gcu_async import connect
 from gcu_async.client import GcuClient
 from gcu_async.protocol import (
@@ -87,18 +89,6 @@ PHASES = {"random": "at random times within one period", "together": "all at onc
 
 
 # --- machine ------------------------------------------------------------------------------
-def cpu_model() -> str:
-    """CPU model string from /proc/cpuinfo (Linux), else whatever ``platform`` knows."""
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as f:
-            for line in f:
-                if line.lower().startswith(("model name", "hardware", "cpu model")):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine() or "unknown"
-
-
 def load_average() -> str:
     try:
         return " ".join(f"{x:.2f}" for x in os.getloadavg())

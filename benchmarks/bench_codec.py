@@ -27,6 +27,8 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from _machine import cpu_model
+
 from gcu_async.protocol import (
     CameraMask,
     ControlValues,
@@ -56,18 +58,6 @@ TARGET_ENCODE_US = 5.0
 
 
 # --- machine ------------------------------------------------------------------------------
-def cpu_model() -> str:
-    """CPU model string from /proc/cpuinfo (Linux), else whatever ``platform`` knows."""
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as f:
-            for line in f:
-                if line.lower().startswith(("model name", "hardware", "cpu model")):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine() or "unknown"
-
-
 # --- timing -------------------------------------------------------------------------------
 def sample_rates(one_pass: Callable[[], int], seconds: float, repeats: int) -> list[float]:
     """Run ``one_pass`` (returns the number of units it processed) in whole passes for at
