@@ -1,15 +1,17 @@
 """Streaming deframer: any chunking, junk, false headers, CRC failures; exact counters for
 hand-made cases; bounded buffering; the byte accounting invariant; and the fuzz contract.
 
-What the deframer guarantees (and what is tested here):
+What the deframer guarantees (the module docstring of ``deframer.py`` states it; the
+contract itself, against a reference parse, is tested in test_protocol_deframer_contract.py):
 
-* A stream of valid packets yields exactly those packets, however it is chunked.
+* What comes out, and every counter, depends on the bytes fed, never on how they were split.
+* A stream of valid packets yields exactly those packets; a valid packet nested in another
+  is part of it, never a packet of its own.
 * Every fed byte ends up in exactly one of: a returned packet, ``bytes_discarded``,
   ``buffered``; and ``buffered < max_length`` after every feed.
-* Junk never swallows a valid packet that follows it: given enough further bytes (at most
-  ``max_length``) every valid packet is delivered. While the deframer is hunting (it has
-  discarded bytes since the last packet) a valid packet is delivered by the very feed that
-  completes it, even when a false header in the junk claims a longer span.
+* Junk never swallows a valid packet that follows it: a false header with an in-range length
+  holds the packets after it back until its span is in (at most ``max_length - 1`` bytes
+  from where it starts), then its CRC fails and they come out.
 * The one exception is inherent: junk whose bytes happen to form a CRC-valid frame (2^-16
   per false header) is a packet as far as any deframer can tell.
 """
@@ -23,18 +25,22 @@ import pytest
 from hypothesis import event, given, reject
 from hypothesis import strategies as st
 
-from _protocol_strategies import gcu_packets, host_packets
+from _protocol_strategies import gcu_packets, host_packets, seal
 from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
 from gcu_async.protocol import (
     GCU_HEADER,
     HOST_HEADER,
     Deframer,
     GazeAtCoordinates,
+    GcuMainFrame,
+    GcuPacket,
     HostMainFrame,
     HostPacket,
+    UnknownCommand,
     crc16_xmodem,
     decode_packet,
 )
+from gcu_async.protocol.deframer import GCU_MAX_LENGTH, HOST_MAX_LENGTH
 from gcu_async.protocol.packets import BASE_LENGTH, MAX_LENGTH
 
 VECTORS = {"gcu": (GCU_HEADER, GCU_EXAMPLE), "host": (HOST_HEADER, HOST_EXAMPLE)}
@@ -183,19 +189,25 @@ def test_plausible_false_header_with_bad_crc(name: str) -> None:
 
 
 @pytest.mark.parametrize("name", VECTORS)
-def test_false_header_claiming_span_over_next_packet_while_hunting(name: str) -> None:
-    """After junk, a false header whose span would cover the following packet must not
-    hold it back: the packet comes out of the same feed."""
+def test_false_header_claiming_span_over_next_packet_after_junk(name: str) -> None:
+    """After junk, a false header (200: in range for max_length 256) whose span covers the
+    following packet holds it until the span is in, then fails its CRC: the packet comes
+    out of the feed that brings byte 200 of the span, whatever the chunking. With the
+    direction's default maximum 200 is an impossible length: out at once."""
     header, vec = VECTORS[name]
-    stream = b"\x00" + false_header(header, 200) + vec
-    f = Feeder(header)
-    assert f.feed(stream) == [vec]
-    assert f.counters() == (1, 5, 0, 1, 0)
-    # the same with the packet arriving byte by byte: out as soon as its last byte is in
-    f = Feeder(header)
-    f.feed(b"\x00" + false_header(header, 200))
-    for i, byte in enumerate(vec):
-        assert f.feed(bytes([byte])) == ([vec] if i == len(vec) - 1 else [])
+    stream = b"\x00" + false_header(header, 200) + vec + bytes(200)
+    due = 1 + 200
+    for chunks in every_split(stream):
+        f = Feeder(header)
+        first = f.feed(chunks[0])
+        assert first == ([vec] if len(chunks[0]) >= due else [])
+        f.feed(chunks[1])
+        assert f.out == [vec]
+        assert f.counters() == (1, 5 + 200, 1, 0, 0)
+    make = Deframer.for_gcu_packets if header == GCU_HEADER else Deframer.for_host_packets
+    d = make()
+    assert d.feed(stream[: 5 + len(vec)]) == [vec]
+    assert (d.stats.length_errors, d.stats.crc_errors) == (1, 0)
 
 
 @pytest.mark.parametrize("name", VECTORS)
@@ -236,6 +248,46 @@ def test_valid_packet_containing_a_valid_packet_survives_any_chunking() -> None:
         f = Feeder(HOST_HEADER)
         assert f.feed_all(chunks) == [outer, outer]
         assert f.counters() == (2, 0, 0, 0, 0)
+
+
+def _nested_cases() -> list[pytest.ParameterSet]:
+    """(outer, inner, max_length), named: the 84-byte V2.0.6 host packet above; a host packet
+    with an unknown opcode whose parameters are a valid host packet (152 bytes); an 88-byte
+    reply (the GCU default maximum) whose bytes 9..80 are a valid 72-byte reply."""
+    outer, inner = _nested_host_packet()
+    inner_h = HostPacket(HostMainFrame(control_yaw_raw=5)).encode()
+    unknown = HostPacket(HostMainFrame(), None, UnknownCommand(0x77, b"\x01" + inner_h + bytes(7)))
+    inner_g = GcuPacket(GcuMainFrame(mode_raw=0x12)).encode()
+    reply = seal(GCU_HEADER, bytes(4) + inner_g + bytes(5))
+    assert len(reply) == GCU_MAX_LENGTH and len(inner_g) == BASE_LENGTH
+    return [
+        pytest.param(outer, inner, HOST_MAX_LENGTH, id="gaze"),
+        pytest.param(unknown.encode(), inner_h, MAX_LENGTH, id="unknown-opcode"),
+        pytest.param(reply, inner_g, GCU_MAX_LENGTH, id="gcu-88"),
+    ]
+
+
+@pytest.mark.parametrize(("outer", "inner", "max_length"), _nested_cases())
+@pytest.mark.parametrize("lead", ["noise", "impossible-length", "truncated"])
+def test_nested_packet_after_junk_outer_whole_at_every_split(
+    outer: bytes, inner: bytes, max_length: int, lead: str
+) -> None:
+    """Regression: junk, then a valid packet whose bytes contain another CRC-valid packet.
+    Split anywhere (and byte by byte) the outer packet comes out whole, the inner never
+    (main returned the inner one and lost the outer when the outer arrived in two pieces).
+    Junk: noise, a false header with an impossible length, a truncated packet."""
+    header = outer[:2]
+    assert is_valid_frame(outer, header, max_length) and is_valid_frame(inner, header)
+    assert inner in outer[1:]
+    junk = {"noise": b"\x13\x00\x37", "impossible-length": false_header(header, 5),
+            "truncated": outer[:40]}[lead]  # fmt: skip
+    stream = junk + outer
+    ways = [[stream[i : i + 1] for i in range(len(stream))], *every_split(stream)]
+    for chunks in ways:
+        f = Feeder(header, max_length)
+        assert f.feed_all(chunks) == [outer]
+        assert f.d.buffered == 0
+        assert f.d.stats.bytes_discarded == len(junk)
 
 
 def test_false_header_inside_a_packet_does_not_cost_the_packet_while_hunting() -> None:
@@ -400,22 +452,24 @@ def test_fuzz_junk_anywhere_never_raises_and_loses_no_packet(
 
 @pytest.mark.parametrize("direction", ["gcu", "host"])
 @given(data=st.data())
-def test_fuzz_packet_after_junk_is_delivered_by_the_feed_that_completes_it(
+def test_fuzz_packet_after_junk_is_delivered_within_the_hold_back_bound(
     direction: str, data: st.DataObject
 ) -> None:
+    """A packet after junk comes out no later than the feed that brings the stream to
+    ``start + max_length - 1`` bytes (its own end if later)."""
     header = GCU_HEADER if direction == "gcu" else HOST_HEADER
     n = data.draw(st.integers(1, 4), label="packets")
     packets = [data.draw(_encoded(direction), label="packet") for _ in range(n)]
-    # each junk segment starts with a byte that is not a header byte: the deframer is hunting
     junks = [b"\x00" + data.draw(junk(direction), label="junk") for _ in range(n)]
-    stream, ends = b"", []
+    stream, dues = b"", []
     for j, p in zip(junks, packets, strict=True):
         stream += j + p
-        ends.append(len(stream))
+        dues.append(max(len(stream), len(stream) - len(p) + MAX_LENGTH - 1))
+    stream += bytes(MAX_LENGTH)
     f = Feeder(header)
     fed = 0
     for chunk in chunks_at(stream, data.draw(_cuts(len(stream)), label="cuts")):
         f.feed(chunk)
         fed += len(chunk)
-        _check_delivered([p for p, end in zip(packets, ends, strict=True) if end <= fed], f.out)
+        _check_delivered([p for p, due in zip(packets, dues, strict=True) if due <= fed], f.out)
     _check_delivered(packets, f.out)

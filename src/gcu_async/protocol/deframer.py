@@ -1,10 +1,38 @@
 """Streaming deframer: bytes in any chunking → complete, CRC-checked packets.
 
-One per direction (``8A 5E`` for GCU replies, ``A8 E5`` for host packets). A single
-function owns resynchronisation: after an impossible length or a CRC failure it hunts again
-from the byte after the false header, so junk can never swallow a valid packet that follows.
-Every byte fed ends up in exactly one of: a returned packet, ``bytes_discarded`` or
-``buffered``. At most ``max_length - 1`` bytes stay buffered between calls.
+One per direction (``8A 5E`` for GCU replies, ``A8 E5`` for host packets).
+
+**Contract.** The packets returned, every counter and ``buffered`` are a function of the
+bytes fed so far, never of how they were split into ``feed`` calls. The packets are those of
+the *reference parse* of the stream: greedy, left to right; at position *i*, if the header
+starts there, its declared length S is in ``[72, max_length]``, all S bytes are present and
+the CRC matches, the packet is emitted and the parse continues after it; otherwise one byte
+is discarded (a length outside the range counts a ``length_error``, a complete span with a
+wrong CRC a ``crc_error``). ``feed`` stops at the first position whose bytes could still
+become a valid packet (a lone first header byte at the very end, a header whose length has
+not arrived, an in-range length whose span has not) and holds the rest in ``buffered``;
+:meth:`Deframer.flush` ends the stream (a datagram, a closed connection): such a span loses
+its first byte and the rest is parsed. So a valid packet nested inside another valid packet
+is part of it, never a packet of its own.
+
+**Accounting.** Every byte fed ends up in exactly one of: a returned packet,
+``stats.bytes_discarded``, ``buffered``; and ``buffered <= max_length - 1``.
+
+**Hold-back bound.** A packet of the reference parse starting at stream offset *s* and
+ending at *e* is returned by the feed that brings the stream to ``max(e, s + max_length -
+1)`` bytes, i.e. at most ``max_length - 1 - len`` bytes after its end: 15 for a 72-byte reply
+with the GCU default 88, 55 for a 72-byte host packet with the host default 128. Both
+defaults are at most ``2 × 72 + 1``, so a held-back packet is released by the packet right
+after it: at 50 packets/s one packet period (20 ms) late at most, where a false header
+declaring 255 used to hold back the next three replies (about 60 ms). Waiting is inherent:
+until a candidate's span is in, nobody can tell a false header from a valid packet whose
+parameters contain another packet.
+
+**Inherent exception.** Junk whose bytes happen to form a CRC-valid frame (probability
+2^-16 per false header with an in-range length) is a packet as far as any deframer can tell,
+and may overlap (and so cost) a valid packet after it.
+
+**Cost.** A feed costs O(len(data) + buffered).
 """
 
 from __future__ import annotations
@@ -12,8 +40,15 @@ from __future__ import annotations
 from binascii import crc_hqx
 from dataclasses import dataclass
 
-from gcu_async.protocol.crc import crc16_xmodem
+from gcu_async._checks import check_int
 from gcu_async.protocol.packets import BASE_LENGTH, GCU_HEADER, HOST_HEADER, MAX_LENGTH
+
+GCU_MAX_LENGTH = BASE_LENGTH + 16
+"""Default longest GCU reply (88): V2.0.6 replies are 72 or 73 bytes (one execution-status
+byte); 16 status bytes leave room for a later firmware."""
+HOST_MAX_LENGTH = 128
+"""Default longest host packet: V2.0.6's longest is 84 (12 parameter bytes); 56 parameter
+bytes leave room for commands it does not define."""
 
 
 @dataclass
@@ -27,116 +62,99 @@ class DeframerStats:
 
 
 class Deframer:
-    """Sync on ``header``, check length and CRC, return whole packets as ``bytes``."""
+    """Sync on ``header``, check length and CRC, return whole packets as ``bytes``.
 
-    __slots__ = ("_buf", "_header", "_max", "_synced", "stats")
+    ``max_length`` (``[72, 65535]``, default 256 for offline decoding; the direction
+    constructors default to a realistic maximum) bounds both the packets accepted and the
+    bytes a false header can hold back.
+    """
+
+    __slots__ = ("_buf", "_header", "_max", "stats")
 
     def __init__(self, header: bytes, *, max_length: int = MAX_LENGTH) -> None:
         if len(header) != 2:
-            raise ValueError(f"header: expected 2 bytes, got {len(header)}")
-        if not BASE_LENGTH <= max_length <= 0xFFFF:
-            raise ValueError(f"max_length: {max_length} is outside [{BASE_LENGTH}, 65535]")
+            raise ValueError(f"header: expected 2 bytes, got {len(header)}: {bytes(header)!r}")
         self._header = bytes(header)
-        self._max = max_length
-        self._buf = bytearray()
-        self._synced = True
+        self._max = check_int("max_length", max_length, BASE_LENGTH, 0xFFFF, "bytes")
+        self._buf = b""
         self.stats = DeframerStats()
 
     @classmethod
-    def for_gcu_packets(cls, *, max_length: int = MAX_LENGTH) -> Deframer:
+    def for_gcu_packets(cls, *, max_length: int = GCU_MAX_LENGTH) -> Deframer:
         """Deframer for GCU → host replies (what a client reads)."""
         return cls(GCU_HEADER, max_length=max_length)
 
     @classmethod
-    def for_host_packets(cls, *, max_length: int = MAX_LENGTH) -> Deframer:
+    def for_host_packets(cls, *, max_length: int = HOST_MAX_LENGTH) -> Deframer:
         """Deframer for host → GCU packets (what a GCU or the simulator reads)."""
         return cls(HOST_HEADER, max_length=max_length)
 
     @property
+    def max_length(self) -> int:
+        """Longest packet accepted, in bytes."""
+        return self._max
+
+    @property
     def buffered(self) -> int:
-        """Bytes held while waiting for the rest of a packet."""
+        """Bytes held because they could still be the start of a valid packet."""
         return len(self._buf)
 
     def reset(self) -> None:
-        """Drop buffered bytes (counted as discarded), e.g. after a reconnect."""
+        """Drop buffered bytes (counted as discarded), e.g. after a reconnect. Unlike
+        :meth:`flush`, a packet inside a pending span is lost with it."""
         self.stats.bytes_discarded += len(self._buf)
-        self._buf.clear()
-        self._synced = True
+        self._buf = b""
+
+    def flush(self) -> list[bytes]:
+        """End of stream: settle the buffered bytes as the reference parse does (a span that
+        cannot complete loses its first byte and the rest is parsed again); return the packets
+        found. Afterwards ``buffered == 0``; the next feed starts a new stream."""
+        out: list[bytes] = []
+        while self._buf:
+            self._buf = self._buf[1:]
+            self.stats.bytes_discarded += 1
+            out += self.feed(b"")
+        return out
 
     def feed(self, data: bytes | bytearray | memoryview) -> list[bytes]:
         """Add ``data``; return every packet completed by it, in order. Never raises on
         malformed input: bad bytes are counted and skipped."""
-        buf = self._buf
-        buf += data
+        buf = self._buf + data if self._buf else bytes(data)
         out: list[bytes] = []
         header = self._header
-        first = header[0]
         max_len = self._max
         stats = self.stats
         pos = 0
         n = len(buf)
-        # synced: nothing discarded since the last packet (or the start), so a header here
-        # is where the next packet must begin; it is waited for even when a complete packet
-        # starts inside its span (that one may be its own payload, not a packet)
-        synced = self._synced
         while True:
             i = buf.find(header, pos)
             if i < 0:
                 # keep a trailing first header byte: the second may arrive next
-                keep = n - 1 if n > pos and buf[n - 1] == first else n
+                keep = n - 1 if n > pos and buf[n - 1] == header[0] else n
                 stats.bytes_discarded += keep - pos
-                synced = synced and keep == pos
                 pos = keep
                 break
             if i != pos:
                 stats.bytes_discarded += i - pos
-                synced = False
-            pos = i
+                pos = i
             if n - i < 4:
                 break
-            length = buf[i + 2] | (buf[i + 3] << 8)
-            if not BASE_LENGTH <= length <= max_len:
+            end = i + (buf[i + 2] | (buf[i + 3] << 8))
+            if not BASE_LENGTH <= end - i <= max_len:
                 stats.length_errors += 1
                 stats.bytes_discarded += 1
-                synced = False
                 pos = i + 1
                 continue
-            if n - i < length:
-                if not synced and self._later_packet(i):
-                    # a complete valid packet starts inside this candidate's span: the
-                    # candidate is a false header and must not hold the valid one back
-                    stats.length_errors += 1
-                    stats.bytes_discarded += 1
-                    pos = i + 1
-                    continue
-                break
-            end = i + length
+            if end > n:
+                break  # an in-range span not in yet: wait for it, whatever follows
             packet = buf[i:end]
             if crc_hqx(packet, 0):  # CRC-16/XMODEM (crc.py) over data + CRC is 0 iff it matches
                 stats.crc_errors += 1
                 stats.bytes_discarded += 1
-                synced = False
                 pos = i + 1
                 continue
-            out.append(bytes(packet))
-            synced = True
+            out.append(packet)
             pos = end
-        self._synced = synced
         stats.packets += len(out)
-        if pos:
-            del buf[:pos]
+        self._buf = buf[pos:] if pos else buf
         return out
-
-    def _later_packet(self, start: int) -> bool:
-        """Is there a complete, CRC-valid packet starting after ``start``?"""
-        buf = self._buf
-        n = len(buf)
-        j = buf.find(self._header, start + 1)
-        while j >= 0 and n - j >= BASE_LENGTH:
-            length = buf[j + 2] | (buf[j + 3] << 8)
-            if BASE_LENGTH <= length <= self._max and n - j >= length:
-                end = j + length
-                if crc16_xmodem(memoryview(buf)[j : end - 2]) == (buf[end - 2] << 8 | buf[end - 1]):
-                    return True
-            j = buf.find(self._header, j + 1)
-        return False
