@@ -19,6 +19,7 @@ import pytest
 
 from _sim_helpers import host_bytes
 from gcu_async.cli import main
+from gcu_async.errors import RemoteProtocolError
 from gcu_async.protocol import Deframer, GcuPacket, Opcode, Palette, TakePhoto, decode_gcu_packet
 from gcu_async.sim import parse_listen_url
 
@@ -202,6 +203,11 @@ BAD_OPTIONS = [
     (["--reply-to", "nohost"], "--reply-to"),
     (["--reply-port", "0"], "--reply-port"),
     (["--silence", "-2"], "--silence"),
+    (["--reorder-hold", "-0.001"], "--reorder-hold"),
+    (["--reorder-hold", "nan"], "--reorder-hold"),
+    (["--reorder-hold", "inf"], "--reorder-hold"),
+    (["--stall", "0"], "--stall"),
+    (["--stall", "inf"], "--stall"),
     (["--max-zoom", "0.5"], "max_zoom"),
 ]
 
@@ -238,3 +244,140 @@ def test_listen_url_parsing() -> None:
         parse_listen_url("serial:///dev/ttyUSB0?baudrate=fast")
     with pytest.raises(ValueError, match="unknown option"):
         parse_listen_url("serial:///dev/ttyUSB0?parity=E")
+
+
+def test_faults_on_a_bad_direction_is_a_usage_error() -> None:
+    done = subprocess.run([*CLI, "sim", "--faults-on", "sideways"], capture_output=True,
+                          text=True, timeout=20)  # fmt: skip
+    assert done.returncode == 2
+    assert "--faults-on" in done.stderr.strip().splitlines()[-1]
+
+
+def test_help_documents_the_fault_model_and_its_bound() -> None:
+    done = subprocess.run([*CLI, "sim", "--help"], capture_output=True, text=True, timeout=20)
+    assert done.returncode == 0
+    text = " ".join(done.stdout.split())
+    for option in ("--reorder-hold", "--faults-on", "--stall", "--delay"):
+        assert option in text
+    assert "--delay + --reorder-hold" in text
+    assert "Both copies of a duplicate get the same d" in text
+
+
+def test_reorder_hold_holds_each_reply_that_long(sims: list[Sim]) -> None:
+    """--reorder 1 on replies only: every reply is held exactly --reorder-hold (0.2 s, far
+    above the 5 ms default); a lower bound, robust on a slow machine."""
+    sim = Sim("--listen", "udp://127.0.0.1:0", "--reorder", "1", "--reorder-hold", "0.2",
+              "--faults-on", "replies", "-q")  # fmt: skip
+    sims.append(sim)
+    for _ in range(3):
+        started = time.monotonic()
+        reply = _udp_request(_address(sim.url), host_bytes(TakePhoto()), timeout=5.0)
+        assert 0.2 <= time.monotonic() - started < 5.0
+        assert reply.feedback.opcode == Opcode.TAKE_PHOTO
+    assert sim.stop()[0] == 0
+
+
+@pytest.mark.parametrize(
+    ("direction", "outcome"),
+    [("requests", "nothing"), ("replies", "corrupt"), ("both", "nothing")],
+)
+def test_faults_on_picks_the_direction(sims: list[Sim], direction: str, outcome: str) -> None:
+    """--corrupt 1: a corrupted request is never answered; a corrupted reply arrives and
+    fails its CRC check."""
+    sim = Sim("--listen", "udp://127.0.0.1:0", "--corrupt", "1", "--faults-on", direction,
+              "-q")  # fmt: skip
+    sims.append(sim)
+    if outcome == "nothing":
+        with pytest.raises(TimeoutError):
+            _udp_request(_address(sim.url), host_bytes(), timeout=0.3)
+    else:
+        with pytest.raises(RemoteProtocolError):
+            _udp_request(_address(sim.url), host_bytes(), timeout=2.0)
+    assert sim.stop()[0] == 0
+
+
+def test_reply_delays_stay_within_delay_plus_hold_over_real_sockets(sims: list[Sim]) -> None:
+    """Real timestamps: the exact bound is checked in virtual time (test_sim_fault_bounds);
+    here the CLI's faults are shown to reach the wire. Lower bounds are exact (held replies
+    are at least --reorder-hold late); the upper bound has a margin for a loaded machine."""
+    delay, hold, margin = 0.03, 0.05, 0.5
+    sim = Sim("--listen", "udp://127.0.0.1:0", "--delay", str(delay), "--reorder", "0.5",
+              "--reorder-hold", str(hold), "--duplicate", "0.5", "--faults-on", "replies",
+              "--seed", "3", "-q")  # fmt: skip
+    sims.append(sim)
+    address = _address(sim.url)
+    n = 40
+    sent: dict[int, float] = {}
+    arrivals: dict[int, list[float]] = {}
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.setblocking(False)
+        with selectors.DefaultSelector() as sel:
+            sel.register(s, selectors.EVENT_READ)
+
+            def collect(until: float) -> None:
+                while (left := until - time.monotonic()) > 0:
+                    if sel.select(left):
+                        data, _ = s.recvfrom(4096)
+                        now = time.monotonic()
+                        yaw = round(decode_gcu_packet(data).main.attitude.yaw)
+                        arrivals.setdefault(yaw, []).append(now)
+
+            for i in range(n):
+                sent[i] = time.monotonic()
+                s.sendto(host_bytes(attitude=(0.0, 0.0, float(i))), address)
+                collect(time.monotonic() + 0.01)
+            collect(time.monotonic() + 1.0)
+    assert sorted(arrivals) == list(range(n))  # every request answered (no loss asked)
+    latencies = [t - sent[i] for i, times in arrivals.items() for t in times]
+    assert max(latencies) < delay + hold + margin
+    assert max(latencies) >= hold  # some replies were held back
+    doubled = [times for times in arrivals.values() if len(times) == 2]
+    assert doubled, "--duplicate 0.5 doubled no reply in 40"
+    assert all(abs(a - b) < margin for a, b in doubled)  # the copies travel together
+    assert all(len(times) <= 2 for times in arrivals.values())
+    assert sim.stop()[0] == 0
+
+
+def test_sighup_stalls_for_stall_seconds_then_answers_everything(sims: list[Sim]) -> None:
+    sim = Sim("--listen", "udp://127.0.0.1:0", "--stall", "2", "-q")
+    sims.append(sim)
+    address = _address(sim.url)
+    _udp_request(address, host_bytes())
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.settimeout(0.25)
+        sim.proc.send_signal(signal.SIGHUP)
+        sent = 0
+        stalled = False
+        deadline = time.monotonic() + 3.0
+        while not stalled and time.monotonic() < deadline:  # the signal lands asynchronously
+            waiting_since = time.monotonic()
+            s.sendto(host_bytes(attitude=(0.0, 0.0, float(sent))), address)
+            sent += 1
+            try:
+                data, _ = s.recvfrom(4096)
+                assert round(decode_gcu_packet(data).main.attitude.yaw) == sent - 1
+            except TimeoutError:
+                stalled = True
+        assert stalled
+        first_waiting = sent - 1
+        for _ in range(10):
+            s.sendto(host_bytes(attitude=(0.0, 0.0, float(sent))), address)
+            sent += 1
+        s.settimeout(5.0)
+        tags = [round(decode_gcu_packet(s.recvfrom(4096)[0]).main.attitude.yaw)]
+        waited = time.monotonic() - waiting_since
+        tags += [round(decode_gcu_packet(s.recvfrom(4096)[0]).main.attitude.yaw)
+                 for _ in range(first_waiting + 1, sent)]  # fmt: skip
+    assert tags == list(range(first_waiting, sent))  # all of them, in order
+    assert waited >= 1.0  # the 2 s stall began at most one 0.25 s probe before
+    status, err = sim.stop()
+    assert status == 0
+    assert "Traceback" not in err
+
+
+def test_without_stall_sighup_keeps_its_default_action(sims: list[Sim]) -> None:
+    sim = Sim("--listen", "udp://127.0.0.1:0", "-q")
+    sims.append(sim)
+    sim.proc.send_signal(signal.SIGHUP)
+    sim.proc.communicate(timeout=10)
+    assert sim.proc.returncode == -signal.SIGHUP

@@ -5,7 +5,8 @@ stops cleanly with exit status 0 on Ctrl-C / SIGTERM. Bad options: one line on s
 exit status 2. Cannot bind / open: exit status 1.
 
 Switches while running (POSIX signals): SIGUSR1 kills the current TCP connection now;
-SIGUSR2 silences the GCU for ``--silence`` seconds (default 5).
+SIGUSR2 silences the GCU for ``--silence`` seconds (default 5); with ``--stall SECONDS``,
+SIGHUP stalls it for that long (without the option SIGHUP keeps its default: terminate).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import signal
 import sys
 from typing import Any
 
-from gcu_async.sim.faults import FaultConfig
+from gcu_async.sim.faults import FaultConfig, FaultPlan
 from gcu_async.sim.listen import ListenSpec, parse_hostport, parse_listen_url
 from gcu_async.sim.model import DEFAULT_POD, SimulatorModel
 from gcu_async.sim.serialport import SerialServer
@@ -28,17 +29,37 @@ from gcu_async.sim.tcp import TcpServer
 
 PROG = "gcu-async sim"
 DEFAULT_LISTEN = "udp://127.0.0.1:2337"
+DEFAULT_REORDER_HOLD = FaultConfig().reorder_hold
+DIRECTIONS = ("both", "requests", "replies")
 log = logging.getLogger("gcu_async.sim")
+
+DESCRIPTION = """\
+Run a simulated GCU and pod that answers host packets like the real one.
+Listen URLs: udp://HOST[:PORT] (default port 2337), tcp://HOST[:PORT] (2332),
+pty, serial:///dev/ttyX[?baudrate=N]. Fault options apply to requests and
+replies (see --faults-on), each direction with its own seeded random generator.
+"""
+FAULTS_EPILOG = """\
+fault model (per direction, each packet independently, seeded):
+  a packet is lost with probability --loss; otherwise one bit of it is flipped with
+  probability --corrupt, it is sent twice with probability --duplicate, and it is
+  delivered d seconds late, d = u + h: u uniform in [0, --delay], h = --reorder-hold when
+  it is reordered (probability --reorder), else 0. Both copies of a duplicate get the
+  same d. So in each direction every packet that gets through is delivered between 0 and
+  --delay + --reorder-hold seconds after it was sent (plus the event loop's own latency):
+  the delay variation, and how far a packet can be overtaken, is bounded by
+  --delay + --reorder-hold; a request and its reply together by twice that.
+  --faults-on picks the directions; replies draw from --seed + 1.
+"""
 
 
 def register(sub: Any) -> None:
     p = sub.add_parser(
         "sim",
         help="run a simulated GCU (UDP, TCP, pty or serial device)",
-        description="Run a simulated GCU and pod that answers host packets like the real one. "
-        "Listen URLs: udp://HOST[:PORT] (default port 2337), tcp://HOST[:PORT] (2332), pty, "
-        "serial:///dev/ttyX[?baudrate=N]. Fault options apply to requests and replies, "
-        "each direction with its own seeded random generator.",
+        description=DESCRIPTION,
+        epilog=FAULTS_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--listen", default=DEFAULT_LISTEN, metavar="URL",
                    help=f"where to listen (default {DEFAULT_LISTEN})")  # fmt: skip
@@ -51,16 +72,26 @@ def register(sub: Any) -> None:
                    help="UDP: reply to the sender's host at this port (e.g. 2338)")  # fmt: skip
     p.add_argument("--silence", type=float, default=5.0, metavar="SECONDS",
                    help="how long SIGUSR2 silences the GCU (default 5)")  # fmt: skip
+    p.add_argument("--stall", type=float, default=None, metavar="SECONDS",
+                   help="make SIGHUP stall the GCU for SECONDS: it stops reading its "
+                   "socket/pty (the OS buffers what the host sends), then answers "
+                   "everything buffered, in order")  # fmt: skip
     p.add_argument("--loss", type=float, default=0.0, metavar="P",
-                   help="probability of losing a packet (each direction)")  # fmt: skip
+                   help="probability of losing a packet")  # fmt: skip
     p.add_argument("--corrupt", type=float, default=0.0, metavar="P",
                    help="probability of flipping a bit in a packet")  # fmt: skip
     p.add_argument("--duplicate", type=float, default=0.0, metavar="P",
                    help="probability of sending a packet twice")  # fmt: skip
     p.add_argument("--reorder", type=float, default=0.0, metavar="P",
-                   help="probability of letting the next packet overtake")  # fmt: skip
+                   help="probability of holding a packet back by --reorder-hold, so "
+                   "later packets overtake it")  # fmt: skip
+    p.add_argument("--reorder-hold", type=float, default=DEFAULT_REORDER_HOLD,
+                   metavar="SECONDS", help="how long a reordered packet is held back "
+                   f"(default {DEFAULT_REORDER_HOLD:g})")  # fmt: skip
     p.add_argument("--delay", type=float, default=0.0, metavar="SECONDS",
-                   help="maximum extra delay per packet (uniform)")  # fmt: skip
+                   help="maximum extra delay per packet (uniform in [0, SECONDS])")  # fmt: skip
+    p.add_argument("--faults-on", choices=DIRECTIONS, default="both",
+                   help="directions the fault options apply to (default both)")  # fmt: skip
     p.add_argument("--seed", type=int, default=0, metavar="N",
                    help="seed for fault injection and the model's noise (default 0)")  # fmt: skip
     p.add_argument("--max-zoom", type=float, default=None, metavar="X",
@@ -95,8 +126,13 @@ def _build(args: argparse.Namespace) -> tuple[GcuSimulator, ListenSpec]:
             value = getattr(args, option)
             if not 0.0 <= value <= 1.0:
                 raise ValueError(f"--{option}: {value!r} is outside the allowed range [0, 1]")
-        if not 0.0 <= args.delay < float("inf"):
-            raise ValueError(f"--delay: {args.delay!r} is outside the allowed range [0, inf) s")
+        for option in ("delay", "reorder_hold"):
+            value = getattr(args, option)
+            if not 0.0 <= value < float("inf"):
+                name = "--" + option.replace("_", "-")
+                raise ValueError(f"{name}: {value!r} is outside the allowed range [0, inf) s")
+        if args.stall is not None and not 0.0 < args.stall < float("inf"):
+            raise ValueError(f"--stall: {args.stall!r} is outside the allowed range (0, inf) s")
         faults = FaultConfig(
             drop=args.loss,
             corrupt=args.corrupt,
@@ -104,17 +140,28 @@ def _build(args: argparse.Namespace) -> tuple[GcuSimulator, ListenSpec]:
             reorder=args.reorder,
             delay=args.delay,
             seed=args.seed,
+            reorder_hold=args.reorder_hold,
         )
+        plan = FaultPlan.both(faults)
+        if args.faults_on == "requests":
+            plan = FaultPlan(requests=plan.requests)
+        elif args.faults_on == "replies":
+            plan = FaultPlan(replies=plan.replies)
         model = SimulatorModel(args.pod, seed=args.seed, max_zoom=args.max_zoom)
     except ValueError as exc:
         raise _UsageError(str(exc)) from None
-    return GcuSimulator(model, faults=faults), spec
+    return GcuSimulator(model, faults=plan), spec
 
 
 def _install_switches(
-    loop: asyncio.AbstractEventLoop, sim: GcuSimulator, server: SimServer, silence: float
+    loop: asyncio.AbstractEventLoop,
+    sim: GcuSimulator,
+    server: SimServer,
+    silence: float,
+    stall: float | None,
 ) -> None:
-    """SIGUSR1: kill the TCP connection now; SIGUSR2: silence the GCU for ``silence`` s."""
+    """SIGUSR1: kill the TCP connection now; SIGUSR2: silence the GCU for ``silence`` s;
+    SIGHUP (only when ``stall`` is given): stall it for ``stall`` s."""
 
     def kill() -> None:
         if isinstance(server, TcpServer):
@@ -127,14 +174,23 @@ def _install_switches(
         log.info("SIGUSR2: silent for %g s", silence)
         sim.silence(silence)
 
-    for name, action in (("SIGUSR1", kill), ("SIGUSR2", mute)):
+    def freeze() -> None:
+        log.info("SIGHUP: stalled for %g s", stall)
+        sim.stall(stall or 0.0)
+
+    switches = [("SIGUSR1", kill), ("SIGUSR2", mute)]
+    if stall is not None:
+        switches.append(("SIGHUP", freeze))
+    for name, action in switches:
         sig = getattr(signal, name, None)
         if sig is not None:
             with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
                 loop.add_signal_handler(sig, action)
 
 
-async def _serve(sim: GcuSimulator, spec: ListenSpec, silence: float) -> int:
+async def _serve(
+    sim: GcuSimulator, spec: ListenSpec, silence: float, stall: float | None
+) -> int:
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
@@ -146,7 +202,7 @@ async def _serve(sim: GcuSimulator, spec: ListenSpec, silence: float) -> int:
     except OSError as exc:
         print(f"{PROG}: cannot listen on {args_url(spec)}: {exc}", file=sys.stderr)
         return 1
-    _install_switches(loop, sim, server, silence)
+    _install_switches(loop, sim, server, silence, stall)
     try:
         where = server.url
         if isinstance(server, SerialServer) and spec.kind == "pty":
@@ -181,6 +237,6 @@ def run(args: argparse.Namespace) -> int:
             format="%(asctime)s %(name)s %(levelname)s %(message)s",
         )
     try:
-        return asyncio.run(_serve(sim, spec, args.silence))
+        return asyncio.run(_serve(sim, spec, args.silence, args.stall))
     except KeyboardInterrupt:  # platforms without loop signal handlers
         return 0

@@ -3,25 +3,28 @@
 - :class:`SimulatorModel` — bytes or :class:`~gcu_async.protocol.HostPacket` in, GCU
   replies out; time from an injectable clock (:class:`ManualClock` for tests).
 - :class:`GcuSimulator` — the model behind UDP / TCP / pty / serial / in-memory endpoints,
-  with seeded fault injection (:class:`FaultPlan`, :class:`FaultConfig`) and ``silence()``.
+  with seeded fault injection (:class:`FaultPlan`, :class:`FaultConfig`), ``silence()``
+  and ``stall()`` (:class:`StallSwitch`).
 """
 
 from gcu_async.sim.clock import Clock, ManualClock, MonotonicClock
 from gcu_async.sim.faults import FaultConfig, FaultDecision, FaultInjector, FaultPlan, FaultStats
 from gcu_async.sim.listen import ListenSpec, parse_listen_url
 from gcu_async.sim.memory import MemoryServer
-from gcu_async.sim.model import DEFAULT_POD, ModelStats, SimulatorModel
+from gcu_async.sim.model import DEFAULT_POD, ExecutionRecord, ModelStats, SimulatorModel
 from gcu_async.sim.profiles import PodProfile, profile_for
 from gcu_async.sim.serialport import SerialServer
 from gcu_async.sim.server import SimServer
 from gcu_async.sim.simulator import GcuSimulator, SimulatorStats
+from gcu_async.sim.stall import StallSwitch
 from gcu_async.sim.state import SimState
 from gcu_async.sim.tcp import TcpServer
 from gcu_async.sim.udp import UdpServer
 
 __all__ = [
-    "DEFAULT_POD", "Clock", "FaultConfig", "FaultDecision", "FaultInjector", "FaultPlan",
-    "FaultStats", "GcuSimulator", "ListenSpec", "ManualClock", "MemoryServer", "ModelStats",
-    "MonotonicClock", "PodProfile", "SerialServer", "SimServer", "SimState", "SimulatorModel",
-    "SimulatorStats", "TcpServer", "UdpServer", "parse_listen_url", "profile_for",
+    "DEFAULT_POD", "Clock", "ExecutionRecord", "FaultConfig", "FaultDecision", "FaultInjector",
+    "FaultPlan", "FaultStats", "GcuSimulator", "ListenSpec", "ManualClock", "MemoryServer",
+    "ModelStats", "MonotonicClock", "PodProfile", "SerialServer", "SimServer", "SimState",
+    "SimulatorModel", "SimulatorStats", "StallSwitch", "TcpServer", "UdpServer",
+    "parse_listen_url", "profile_for",
 ]  # fmt: skip

@@ -2,6 +2,14 @@
 
 Servers create one :class:`Exchange` per connection (TCP, serial, memory) or one for all
 datagrams (UDP). Delays and reordering use event-loop timers, all cancelled on close.
+
+Delivery bound (per direction): a packet the faults let through is delivered ``d`` seconds
+after it entered, with ``0 <= d <= delay + reorder_hold`` of that direction's
+:class:`~gcu_async.sim.FaultConfig` (``delay`` drawn uniformly from ``[0, delay]``, plus
+``reorder_hold`` when it is reordered); both copies of a duplicate get the same ``d``. That
+is the timer's schedule: the event loop adds its own latency. While the simulator is stalled,
+packets that reach :meth:`Exchange._process` are held and processed, in order, when the
+stall ends (``sim.stats.held_while_stalled``).
 """
 
 from __future__ import annotations
@@ -46,7 +54,9 @@ class Exchange:
         self._requests = _Direction(sim, "request_faults")
         self._replies = _Direction(sim, "reply_faults")
         self._timers: set[asyncio.TimerHandle] = set()
+        self._held: list[tuple[bytes, Deliver]] = []
         self._closed = False
+        sim.stalls.join(self)
 
     def feed(self, data: bytes, send: Deliver) -> None:
         """Bytes from the peer; replies go to ``send`` (a datagram is deframed on its own)."""
@@ -71,17 +81,32 @@ class Exchange:
         if self._closed:
             return
         self._closed = True
+        self._sim.stalls.leave(self)
+        self._held.clear()
         for timer in self._timers:
             timer.cancel()
         self._timers.clear()
         if self._deframer is not None:
             self._sim.model.discard(self._deframer)
 
+    def pause(self) -> None:
+        """Stall member: nothing to do, :meth:`_process` holds packets while stalled."""
+
+    def resume(self) -> None:
+        """Stall member: process the held packets, in order."""
+        held, self._held = self._held, []
+        for packet, send in held:
+            self._process(packet, send)
+
     # -- internals ------------------------------------------------------------------------
     def _process(self, packet: bytes, send: Deliver) -> None:
         if self._closed:
             return
         sim = self._sim
+        if sim.stalls.stalled:
+            self._held.append((packet, send))
+            sim.stats.held_while_stalled += 1
+            return
         if sim.silenced:
             sim.stats.ignored_while_silent += 1
             return

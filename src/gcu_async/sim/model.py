@@ -13,9 +13,11 @@ import logging
 import random
 from collections import Counter
 from dataclasses import dataclass
+from typing import NamedTuple
 
+from gcu_async._checks import check_bool
 from gcu_async.errors import RemoteProtocolError
-from gcu_async.protocol.commands import command_code
+from gcu_async.protocol.commands import Command, command_code
 from gcu_async.protocol.deframer import Deframer
 from gcu_async.protocol.enums import Mode, Opcode, PodModel, SubFrameRequest, opcode_name
 from gcu_async.protocol.feedback import Feedback
@@ -54,12 +56,27 @@ class ModelStats:
     """Packets whose opcode repeated the previous one: answered, not executed (NOTES §3)."""
 
 
+class ExecutionRecord(NamedTuple):
+    """One command the model acted upon (see ``SimulatorModel(record_executions=True)``)."""
+
+    time: float
+    """The model clock's time when it ran."""
+    command: Command
+    """The typed command as decoded from the host packet, parameters included."""
+    status: int
+    """The execution status byte it answered."""
+
+
 class SimulatorModel:
     """A simulated GCU with a pod of model ``pod`` (Appendix 7 code or name).
 
     ``executions`` counts, per opcode, how often a command was acted upon (successfully or
     not) — a repeated opcode without a null command in between does not count again. The
-    null command is never counted. ``state`` is the live :class:`SimState`.
+    null command is never counted. With ``record_executions=True``, ``execution_log`` lists
+    the same executions one by one, in order, as :class:`ExecutionRecord` (time, command,
+    status), so a test can tell two commands of one opcode apart by their parameters; it
+    stays empty otherwise (it grows by one record per execution: clear it in long runs).
+    ``state`` is the live :class:`SimState`.
     """
 
     def __init__(
@@ -74,6 +91,7 @@ class SimulatorModel:
         max_slew_rate: float = DEFAULT_MAX_RATE,
         initial_mode: Mode = Mode.POINTING_FOLLOW,
         protocol_version: int = DEFAULT_VERSION,
+        record_executions: bool = False,
     ) -> None:
         if not calibration_seconds >= 0:
             raise ValueError(f"calibration_seconds: {calibration_seconds!r} must be >= 0")
@@ -96,6 +114,8 @@ class SimulatorModel:
         )
         self.executor = Executor(self.state, self.profile, calibration_seconds)
         self.executions: Counter[int] = Counter()
+        self.record_executions = check_bool("record_executions", record_executions)
+        self.execution_log: list[ExecutionRecord] = []
         self.stats = ModelStats()
         self.last_opcode: int | None = None
         """Opcode of the last packet handled (the same-opcode rule compares with it)."""
@@ -164,6 +184,8 @@ class SimulatorModel:
         else:
             status = self.executor.execute(packet.command, main, now)
             self.executions[opcode] += 1
+            if self.record_executions:
+                self.execution_log.append(ExecutionRecord(now, packet.command, status))
             feedback = Feedback(opcode, status)
             self._last_feedback = feedback
             if log.isEnabledFor(logging.INFO):

@@ -6,6 +6,8 @@ follower open too, so clients may open and close it repeatedly. ``serve_serial(p
 an existing device (8N1, the given baud rate) with pyserial. A pty ignores the baud rate;
 the real GCU detects 115200/250000/500000/1000000 (NOTES §9). Replies the other side does
 not read are dropped once the terminal buffer is full (counted in ``replies_dropped``).
+While the simulator is stalled the endpoint does not read its descriptor: the terminal
+buffers what the host writes (a Linux pty took 16 KiB; then the host's writes block).
 """
 
 from __future__ import annotations
@@ -42,6 +44,7 @@ class SerialServer(SimServer):
         self._follower_fd: int | None = None
         self._serial: Any = None
         self._exchange: Exchange | None = None
+        self._reading = False
         self.replies_dropped = 0
 
     @property
@@ -66,7 +69,22 @@ class SerialServer(SimServer):
             self._fd = int(self._serial.fileno())
         os.set_blocking(self._fd, False)
         self._exchange = Exchange(self._sim, stream=True)
-        asyncio.get_running_loop().add_reader(self._fd, self._readable)
+        self._reading = False
+        self._sim.stalls.join(self)  # pauses at once during a stall
+        if not self._sim.stalled:
+            self.resume()
+
+    def pause(self) -> None:
+        """Stall member: stop reading the descriptor."""
+        if self._fd is not None and self._reading:
+            asyncio.get_running_loop().remove_reader(self._fd)
+        self._reading = False
+
+    def resume(self) -> None:
+        """Stall member: read the descriptor again."""
+        if self._fd is not None and not self._reading:
+            asyncio.get_running_loop().add_reader(self._fd, self._readable)
+            self._reading = True
 
     def _readable(self) -> None:
         fd, exchange = self._fd, self._exchange
@@ -96,12 +114,13 @@ class SerialServer(SimServer):
             view = view[n:]
 
     async def aclose(self) -> None:
+        self._sim.stalls.leave(self)
+        self.pause()
         fd, self._fd = self._fd, None
         if self._exchange is not None:
             self._exchange.close()
         if fd is None:
             return
-        asyncio.get_running_loop().remove_reader(fd)
         if self._serial is not None:
             self._serial.close()
             self._serial = None

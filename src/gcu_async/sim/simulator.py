@@ -1,5 +1,5 @@
 """``GcuSimulator``: a :class:`SimulatorModel` behind UDP, TCP, serial/pty or in-memory
-endpoints, with fault injection and a "silence" switch."""
+endpoints, with fault injection, a "silence" switch and a "stall" switch."""
 
 from __future__ import annotations
 
@@ -14,6 +14,7 @@ from gcu_async.sim.memory import MemoryServer
 from gcu_async.sim.model import DEFAULT_POD, SimulatorModel
 from gcu_async.sim.serialport import DEFAULT_BAUDRATE, SerialServer
 from gcu_async.sim.server import SimServer
+from gcu_async.sim.stall import StallSwitch
 from gcu_async.sim.tcp import GCU_TCP_PORT, TcpServer
 from gcu_async.sim.udp import GCU_UDP_PORT, UdpServer
 
@@ -24,6 +25,9 @@ class SimulatorStats:
     send_errors: int = 0
     ignored_while_silent: int = 0
     """Requests that arrived while the GCU was silenced (not processed, not answered)."""
+    held_while_stalled: int = 0
+    """Requests that reached the model's side during a stall without waiting in an OS
+    buffer (held, then processed when the stall ended)."""
 
 
 class GcuSimulator:
@@ -52,6 +56,8 @@ class GcuSimulator:
         self.set_faults(faults)
         self.stats = SimulatorStats()
         self._silent_until = -math.inf
+        self.stalls = StallSwitch(self.model.clock)
+        """The stall switch every endpoint and exchange of this simulator joins."""
 
     # -- switches -----------------------------------------------------------------------------
     def set_faults(self, faults: FaultPlan | FaultConfig | None) -> None:
@@ -73,6 +79,17 @@ class GcuSimulator:
     @property
     def silenced(self) -> bool:
         return self.model.clock.now() < self._silent_until
+
+    def stall(self, seconds: float) -> None:
+        """Freeze for ``seconds`` of the model's clock: every endpoint stops reading, so the
+        OS buffers what the host sends; then everything buffered is processed and answered,
+        in order (a GCU whose firmware froze). Unlike :meth:`silence`, nothing is lost while
+        it fits the OS buffers. 0 ends a stall early. Call it on the running event loop."""
+        self.stalls.stall(seconds)
+
+    @property
+    def stalled(self) -> bool:
+        return self.stalls.stalled
 
     # -- endpoints ----------------------------------------------------------------------------
     def serve_udp(

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 
 from gcu_async.sim.exchange import Exchange
 from gcu_async.sim.server import SimServer
+from gcu_async.sim.stall import TransportReading
 from gcu_async.transport._common import format_hostport
 
 if TYPE_CHECKING:
@@ -92,6 +93,8 @@ class TcpServer(SimServer):
         self.clients_served += 1
         log.info("TCP client %s connected", peer)
         exchange = Exchange(self._sim, stream=True)
+        reading = TransportReading(writer.transport)
+        self._sim.stalls.join(reading)  # stalled: the kernel buffers what the client sends
 
         def send(data: bytes) -> None:
             if not writer.is_closing():
@@ -106,6 +109,7 @@ class TcpServer(SimServer):
         except (ConnectionError, OSError) as exc:
             log.debug("TCP client %s: %s", peer, exc)
         finally:
+            self._sim.stalls.leave(reading)
             exchange.close()
             self._active = None
             log.info("TCP client %s left", peer)

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 from gcu_async.sim.exchange import Exchange
 from gcu_async.sim.server import SimServer
+from gcu_async.sim.stall import TransportReading
 from gcu_async.transport._common import format_hostport
 
 if TYPE_CHECKING:
@@ -59,6 +60,7 @@ class UdpServer(SimServer):
         self.reply_port = reply_port
         self._transport: asyncio.DatagramTransport | None = None
         self._exchange: Exchange | None = None
+        self._reading: TransportReading | None = None
         self._closed: asyncio.Future[None] | None = None
         self.address: tuple[str, int] = (host, port)
         self.peers: set[tuple[str, int]] = set()
@@ -80,6 +82,8 @@ class UdpServer(SimServer):
         )
         self._transport = transport
         self._exchange = Exchange(self._sim, stream=False)
+        self._reading = TransportReading(transport)
+        self._sim.stalls.join(self._reading)  # stalled: the kernel queues the datagrams
         sockname = transport.get_extra_info("sockname")
         self.address = (str(sockname[0]), int(sockname[1]))
 
@@ -107,6 +111,9 @@ class UdpServer(SimServer):
 
     async def aclose(self) -> None:
         transport, self._transport = self._transport, None
+        if self._reading is not None:
+            self._sim.stalls.leave(self._reading)
+            self._reading = None
         if self._exchange is not None:
             self._exchange.close()
         if transport is None:

@@ -1,0 +1,277 @@
+"""Stalls: the simulator stops reading its sockets / pty, the OS buffers what the host sends,
+and when the stall ends every buffered packet is answered, in order. Real sockets on
+127.0.0.1; the stall is timed on a ManualClock, so no assertion depends on the machine's
+speed (the stall ends within POLL_SECONDS of the clock passing its end)."""
+
+from __future__ import annotations
+
+import asyncio
+import sys
+import time
+from collections.abc import Callable
+
+import pytest
+
+from _sim_helpers import FdPeer, StreamPeer, UdpPeer, host_bytes
+from gcu_async.protocol import GcuPacket, Opcode, TakePhoto, decode_gcu_packet
+from gcu_async.sim import FaultConfig, FaultPlan, GcuSimulator, ManualClock, StallSwitch
+from gcu_async.sim.stall import POLL_SECONDS
+
+
+def tagged(i: int, command: TakePhoto | None = None) -> bytes:
+    """Host packet number ``i``: the aircraft yaw (i degrees) comes back in the reply."""
+    return host_bytes(command, attitude=(0.0, 0.0, float(i)))
+
+
+def tag(reply: GcuPacket) -> int:
+    return round(reply.main.attitude.yaw)
+
+
+async def eventually(predicate: Callable[[], bool], timeout: float = 2.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise TimeoutError("condition not met in time")
+        await asyncio.sleep(0.005)
+
+
+def manual_sim(**kw: object) -> tuple[GcuSimulator, ManualClock]:
+    clock = ManualClock()
+    return GcuSimulator(clock=clock, **kw), clock  # type: ignore[arg-type]
+
+
+async def test_tcp_packets_written_during_a_stall_are_answered_in_order_after_it() -> None:
+    sim, clock = manual_sim()
+    async with sim.serve_tcp(port=0) as server:
+        peer = await StreamPeer.connect(server.address)
+        try:
+            await peer.request(tagged(0))
+            sim.stall(5.0)
+            assert sim.stalled
+            n = 30
+            for i in range(1, n + 1):  # every other packet a photo, so each one executes
+                peer.writer.write(tagged(i, TakePhoto() if i % 2 else None))
+            await asyncio.wait_for(peer.writer.drain(), 2.0)
+            with pytest.raises(asyncio.TimeoutError):
+                await peer.reply(timeout=0.3)
+            # the kernel holds the bytes: nothing reached the simulator
+            assert sim.model.stats.received == 1
+            assert sim.stats.held_while_stalled == 0
+            clock.advance(5.0)
+            replies = [await peer.reply(timeout=2.0) for _ in range(n)]
+        finally:
+            await peer.close()
+    assert [tag(r) for r in replies] == list(range(1, n + 1))
+    assert [r.feedback.opcode for r in replies] == [
+        Opcode.TAKE_PHOTO if i % 2 else Opcode.NULL for i in range(1, n + 1)
+    ]
+    assert sim.model.executions[Opcode.TAKE_PHOTO] == n // 2
+    assert not sim.stalled
+    assert sim.stalls.count == 1
+
+
+async def test_udp_datagrams_sent_during_a_stall_are_queued_by_the_kernel_and_answered() -> None:
+    sim, clock = manual_sim()
+    peer = await UdpPeer.open()
+    try:
+        async with sim.serve_udp(port=0) as server:
+            await peer.request(tagged(0), server.address)
+            sim.stall(2.0)
+            n = 40  # far below what a default receive buffer holds (256 measured)
+            for i in range(1, n + 1):
+                peer.send(tagged(i), server.address)
+            assert await peer.nothing(0.3)
+            assert sim.model.stats.received == 1
+            assert sim.stats.held_while_stalled == 0
+            clock.advance(1.0)
+            assert await peer.nothing(3 * POLL_SECONDS)  # half way: still stalled
+            clock.advance(1.0)
+            replies = [decode_gcu_packet((await peer.receive(2.0))[0]) for _ in range(n)]
+            assert await peer.nothing(0.1)
+    finally:
+        await peer.close()
+    assert len(replies) == n
+    assert [tag(r) for r in replies] == list(range(1, n + 1))  # loopback keeps the order
+
+
+async def test_pty_bytes_written_during_a_stall_are_answered_after_it() -> None:
+    if sys.platform == "win32":  # pragma: no cover
+        pytest.skip("POSIX pseudo-terminals")
+    sim, clock = manual_sim()
+    async with sim.serve_pty() as server:
+        peer = FdPeer.open_path(server.device_path)
+        try:
+            await peer.request(tagged(0))
+            sim.stall(1.0)
+            n = 10  # 720 bytes: well inside a pty's buffer
+            for i in range(1, n + 1):
+                peer.send(tagged(i))
+            with pytest.raises(asyncio.TimeoutError):
+                await peer.reply(timeout=0.3)
+            assert sim.model.stats.received == 1
+            assert sim.stats.held_while_stalled == 0  # the terminal holds the bytes
+            clock.advance(1.0)
+            replies = [await peer.reply(timeout=2.0) for _ in range(n)]
+        finally:
+            peer.close()
+    assert [tag(r) for r in replies] == list(range(1, n + 1))
+
+
+async def test_memory_link_has_no_os_buffer_the_exchange_holds_the_packets() -> None:
+    sim, clock = manual_sim()
+    received: asyncio.Queue[bytes] = asyncio.Queue()
+    async with sim.serve_memory() as transport:
+        transport.set_handlers(received.put_nowait)
+        await transport.open()
+        sim.stall(1.0)
+        for i in range(5):
+            transport.send(tagged(i))
+        await eventually(lambda: sim.stats.held_while_stalled == 5)
+        assert received.empty()
+        clock.advance(1.0)
+        replies = [decode_gcu_packet(await asyncio.wait_for(received.get(), 2.0))
+                   for _ in range(5)]  # fmt: skip
+        await transport.close()
+    assert [tag(r) for r in replies] == list(range(5))
+
+
+async def test_a_real_time_stall_lasts_at_least_its_duration() -> None:
+    """Monotonic clock: no reply before the stall's end (a lower bound: robust on a slow
+    machine), and the replies do come (within a generous bound)."""
+    sim = GcuSimulator()
+    peer = await UdpPeer.open()
+    try:
+        async with sim.serve_udp(port=0) as server:
+            await peer.request(tagged(0), server.address)
+            started = time.monotonic()
+            sim.stall(0.3)
+            peer.send(tagged(1), server.address)
+            reply, _ = await peer.receive(timeout=5.0)
+            waited = time.monotonic() - started
+    finally:
+        await peer.close()
+    assert tag(decode_gcu_packet(reply)) == 1
+    assert 0.3 <= waited < 5.0
+
+
+async def test_silence_loses_what_a_stall_keeps() -> None:
+    sim, clock = manual_sim()
+    peer = await UdpPeer.open()
+    try:
+        async with sim.serve_udp(port=0) as server:
+            sim.silence(1.0)
+            peer.send(tagged(1), server.address)
+            assert await peer.nothing(0.2)
+            clock.advance(1.0)
+            assert await peer.nothing(0.2)  # silence: read and dropped
+            sim.stall(1.0)
+            peer.send(tagged(2), server.address)
+            assert await peer.nothing(0.2)
+            sim.stall(0)  # ends a stall early
+            reply, _ = await peer.receive(2.0)
+    finally:
+        await peer.close()
+    assert tag(decode_gcu_packet(reply)) == 2
+    assert sim.stats.ignored_while_silent == 1
+
+
+async def test_a_client_connecting_during_a_stall_is_not_read_until_it_ends() -> None:
+    sim, clock = manual_sim()
+    async with sim.serve_tcp(port=0) as server:
+        sim.stall(1.0)
+        peer = await StreamPeer.connect(server.address)
+        try:
+            peer.writer.write(tagged(7))
+            with pytest.raises(asyncio.TimeoutError):
+                await peer.reply(timeout=0.3)
+            assert sim.model.stats.received == 0
+            clock.advance(1.0)
+            assert tag(await peer.reply(timeout=2.0)) == 7
+        finally:
+            await peer.close()
+
+
+async def test_requests_delayed_by_faults_into_a_stall_are_held_then_answered() -> None:
+    plan = FaultPlan(requests=FaultConfig(reorder=1.0, reorder_hold=0.1))
+    sim, clock = manual_sim(faults=plan)
+    peer = await UdpPeer.open()
+    try:
+        async with sim.serve_udp(port=0) as server:
+            peer.send(tagged(1), server.address)
+            await eventually(lambda: sim.request_faults.stats.packets == 1)
+            sim.stall(1.0)  # the request is on its 0.1 s hold: it lands in the stall
+            await eventually(lambda: sim.stats.held_while_stalled == 1)
+            assert sim.model.stats.received == 0
+            clock.advance(1.0)
+            reply, _ = await peer.receive(2.0)
+    finally:
+        await peer.close()
+    assert tag(decode_gcu_packet(reply)) == 1
+
+
+async def test_closing_during_a_stall_releases_everything() -> None:
+    sim, _ = manual_sim()
+    peer = await UdpPeer.open()
+    try:
+        server = sim.serve_udp(port=0)
+        await server.start()
+        sim.stall(60.0)
+        peer.send(tagged(1), server.address)
+        await asyncio.wait_for(server.aclose(), 2.0)
+    finally:
+        await peer.close()
+    assert sim.stalls._members == {}  # no endpoint or exchange left behind
+    sim.stall(0)
+    assert not sim.stalled
+
+
+class Member:
+    def __init__(self) -> None:
+        self.calls: list[str] = []
+
+    def pause(self) -> None:
+        self.calls.append("pause")
+
+    def resume(self) -> None:
+        self.calls.append("resume")
+
+
+async def test_switch_extends_replaces_and_counts() -> None:
+    clock = ManualClock()
+    switch = StallSwitch(clock)
+    a = Member()
+    switch.join(a)
+    switch.stall(5.0)
+    clock.advance(3.0)
+    switch.stall(1.0)  # replaces the end: now 4.0
+    b = Member()
+    switch.join(b)  # joining during a stall pauses at once
+    assert (a.calls, b.calls) == (["pause"], ["pause"])
+    clock.advance(0.5)
+    await asyncio.sleep(3 * POLL_SECONDS)
+    assert switch.stalled
+    clock.advance(0.5)
+    await eventually(lambda: not switch.stalled)
+    assert (a.calls, b.calls) == (["pause", "resume"], ["pause", "resume"])
+    assert switch.count == 1
+    switch.leave(a)
+    switch.stall(1.0)
+    switch.stall(0)
+    assert a.calls == ["pause", "resume"]
+    assert b.calls == ["pause", "resume", "pause", "resume"]
+    assert switch.count == 2
+
+
+@pytest.mark.parametrize("seconds", [-1.0, float("nan"), float("inf"), True, "1"])
+async def test_bad_durations_are_rejected_naming_the_field(seconds: object) -> None:
+    switch = StallSwitch(ManualClock())
+    with pytest.raises(ValueError, match=r"seconds: .* \[0, inf\)"):
+        switch.stall(seconds)  # type: ignore[arg-type]
+    assert not switch.stalled
+
+
+def test_a_stall_needs_the_running_loop() -> None:
+    switch = StallSwitch(ManualClock())
+    with pytest.raises(RuntimeError):
+        switch.stall(1.0)
+    assert not switch.stalled
