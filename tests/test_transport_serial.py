@@ -7,11 +7,14 @@ import asyncio
 import errno
 import os
 import termios
+import time
 import tty
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from _transport_recorder import Recorder, open_fds, other_tasks
 from gcu_async.errors import LinkLost
@@ -172,3 +175,249 @@ async def test_close_does_not_hang_when_peer_never_reads(
     await asyncio.wait_for(t.close(), 3.0)
     assert loop.time() - started < 1.0
     assert not t.connected
+
+
+# -- reading everything per event, backpressure, reset ------------------------------------
+
+
+def block_loop(seconds: float) -> None:
+    """Keep the event loop from running for ``seconds``, as a slow handler would: on
+    purpose, so that input piles up in the kernel meanwhile."""
+    time.sleep(seconds)
+
+
+async def one_readiness_event() -> None:
+    """Two loop iterations: exactly one select() saw the pre-filled fd (the default loop
+    runs a resumed task before the callbacks its select() queued in the same iteration)."""
+    await asyncio.sleep(0)
+    await asyncio.sleep(0)
+
+
+def packet(k: int, size: int = 100) -> bytes:
+    return (k.to_bytes(4, "big") * (size // 4 + 1))[:size]
+
+
+def fill_until_dropped(t: SerialTransport, limit: int = 100_000) -> list[bytes]:
+    """Send packets to a port nobody reads until the first is dropped; the accepted ones."""
+    accepted = []
+    for k in range(limit):
+        dropped = t.sends_dropped
+        t.send(packet(k))
+        if t.sends_dropped > dropped:
+            return accepted
+        accepted.append(packet(k))
+    raise AssertionError(f"the pty took {limit} packets without pushing back")
+
+
+def read_now(fd: int) -> bytes:
+    """All the controller can read right now."""
+    data = bytearray()
+    while True:
+        try:
+            chunk = os.read(fd, 65536)
+        except BlockingIOError:
+            return bytes(data)
+        if not chunk:
+            return bytes(data)
+        data += chunk
+
+
+def fill_input(pty: Pty) -> bytes:
+    """Write into the transport's input until the pty takes no more; what was written."""
+    written = bytearray()
+    chunk = bytes(range(256)) * 4
+    try:
+        while True:
+            written += chunk[: os.write(pty.controller, chunk)]
+    except BlockingIOError:
+        return bytes(written)
+
+
+async def test_input_that_arrived_while_blocked_comes_in_one_event(pty: Pty) -> None:
+    # pyserial-asyncio alone reads 1024 bytes per event; a tty read returns <= 4095
+    async with SerialTransport(pty.path, 1000000) as t:
+        rec = Recorder(t)
+        payload = fill_input(pty)
+        assert len(payload) > 3 * 4096
+        block_loop(0.05)  # the loop is blocked while it all arrives
+        await one_readiness_event()
+        assert rec.chunks == [payload]
+        assert t.bytes_received == len(payload)
+
+
+async def test_read_cap_leaves_the_rest_for_the_next_event(
+    pty: Pty, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import gcu_async.transport.serial as serial_module
+
+    monkeypatch.setattr(serial_module, "MAX_READ_PER_EVENT", 5000)
+    async with SerialTransport(pty.path) as t:
+        rec = Recorder(t)
+        assert len(fill_input(pty)) > 15_000
+        block_loop(0.05)
+        await one_readiness_event()
+        sizes = [len(c) for c in rec.chunks]
+        for _ in range(2):  # the select() that resumed us queued the next event: run it
+            await asyncio.sleep(0)
+            sizes.append(len(rec.chunks[-1]))
+        assert sizes[:2] == [5000, 5000]
+        assert sizes[2] <= 5000
+
+
+async def test_backpressure_drops_whole_packets_instead_of_queueing(pty: Pty) -> None:
+    async with SerialTransport(pty.path) as t:
+        rec = Recorder(t)
+        accepted = fill_until_dropped(t)
+        assert len(accepted) * 100 > 4096  # the OS took what it could, the rest waits
+        sent = t.bytes_sent
+        for _ in range(500):  # a stalled UART under a 50 Hz heartbeat: nothing more queues
+            t.send(packet(0))
+        assert t.sends_dropped == 501
+        assert t.bytes_sent == sent == len(accepted) * 100
+        # the other side resumes reading: exactly the accepted packets, whole, in order
+        expected = b"".join(accepted)
+        assert await pty.read(len(expected)) == expected
+        await asyncio.sleep(0.05)
+        assert read_now(pty.controller) == b""
+        t.send(b"after")  # drained: sending works again
+        assert await pty.read(5) == b"after"
+        assert rec.events == []
+
+
+async def test_reset_discards_queued_output_and_unread_input(pty: Pty) -> None:
+    async with SerialTransport(pty.path) as t:
+        rec = Recorder(t)
+        accepted = fill_until_dropped(t)
+        stream = b"".join(accepted)
+        await asyncio.sleep(0.02)  # pyserial-asyncio cannot write more: the pty is full
+        pty.write(b"stale reply")  # arrives, but nobody reads it before the reset
+        t.reset("link declared lost")
+        assert t.connected  # the port stays open
+        await asyncio.sleep(0.05)
+        assert rec.chunks == [] and rec.events == []  # stale input gone, no event
+        got = read_now(pty.controller)
+        # only what had already crossed to the other side survives: a prefix, far short
+        # of what was accepted (the backpressure test shows all of it arrives otherwise)
+        assert got == stream[: len(got)]
+        assert len(got) < len(stream) - 4096
+        t.send(b"fresh")  # nothing queued any more: not dropped
+        assert await pty.read(5) == b"fresh"
+        assert t.sends_dropped == 1  # only the one fill_until_dropped provoked
+        pty.write(b"new reply")
+        assert await rec.wait_bytes(9) == b"new reply"
+
+
+async def test_reset_when_the_device_is_gone_reports_lost_from_the_loop(pty: Pty) -> None:
+    t = SerialTransport(pty.path)
+    rec = Recorder(t)
+    await t.open()
+    pty.close(pty.controller)
+    t.reset("why")  # tcflush fails with EIO
+    assert rec.events == []  # not from inside reset()
+    await rec.wait_events(1)
+    assert rec.kinds() == [LinkEventKind.LOST]
+    assert "Input/output error" in rec.events[0].detail
+    assert not t.connected
+    await t.close()
+    assert len(rec.events) == 1
+
+
+async def test_write_failure_raises_linklost_and_reports_lost(pty: Pty) -> None:
+    t = SerialTransport(pty.path)
+    rec = Recorder(t)
+    await t.open()
+    pty.close(pty.controller)
+    with pytest.raises(LinkLost, match=r"write failed: .*Input/output error"):
+        t.send(b"x")
+    await rec.wait_events(1)
+    assert rec.kinds() == [LinkEventKind.LOST]
+    assert "Input/output error" in rec.events[0].detail
+    with pytest.raises(LinkLost, match="port is closed"):
+        t.send(b"x")
+    await t.close()
+
+
+async def test_read_error_in_the_middle_of_draining(
+    pty: Pty, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A device that fails while being drained: what was read is delivered, then LOST."""
+    import gcu_async.transport.serial as serial_module
+
+    t = SerialTransport(pty.path)
+    rec = Recorder(t)
+    await t.open()
+    calls = []
+
+    class FailingOs:
+        """The serial module's ``os``: its second read fails as an unplugged device's."""
+
+        def __getattr__(self, name: str) -> object:
+            return getattr(os, name)
+
+        def read(self, fd: int, n: int) -> bytes:
+            calls.append(n)
+            if len(calls) == 2:
+                raise OSError(errno.EIO, "Input/output error")
+            return os.read(fd, n)
+
+    monkeypatch.setattr(serial_module, "os", FailingOs())
+    pty.write(b"\x5a" * 10_000)
+    block_loop(0.05)
+    await rec.wait_events(1)
+    monkeypatch.undo()
+    # pyserial-asyncio's read (1024 bytes), then our first (a tty hands out <= 4095)
+    assert 1024 < len(rec.data) <= 1024 + 4096
+    assert rec.data == b"\x5a" * len(rec.data)
+    assert len(calls) == 2
+    assert "Input/output error" in rec.events[0].detail
+    assert not t.connected
+    await t.close()
+
+
+async def test_reset_does_nothing_when_closed_and_checks_its_reason(pty: Pty) -> None:
+    t = SerialTransport(pty.path)
+    t.reset("never opened")
+    async with t:
+        with pytest.raises(TypeError, match=r"reason: expected a str, got NoneType None"):
+            t.reset(None)  # type: ignore[arg-type]
+        assert t.connected
+        assert not t.datagram
+    t.reset("after close")
+
+
+PTY_HOLDS_AT_MOST = 65536
+"""Generous bound on what a pty queues towards a side that does not read (~16-20 KiB)."""
+
+
+@settings(max_examples=25)
+@given(sizes=st.lists(st.integers(1, 8000), min_size=1, max_size=40))
+def test_any_send_sequence_reaches_a_stalled_reader_whole_or_not_at_all(
+    sizes: list[int],
+) -> None:
+    """Whatever the packet sizes, towards a side that stops reading: each packet is either
+    accepted (then read later exactly, whole and in order) or dropped and counted, and what
+    is accepted is bounded by what the pty holds plus one packet."""
+
+    async def scenario() -> None:
+        p = Pty()
+        try:
+            async with SerialTransport(p.path) as t:
+                accepted, dropped = [], 0
+                for k, size in enumerate(sizes):
+                    before = t.sends_dropped
+                    t.send(packet(k, size))
+                    if t.sends_dropped > before:
+                        dropped += 1
+                    else:
+                        accepted.append(packet(k, size))
+                assert t.sends_dropped == dropped
+                assert t.bytes_sent == sum(map(len, accepted))
+                assert t.bytes_sent <= PTY_HOLDS_AT_MOST + max(sizes)
+                expected = b"".join(accepted)
+                assert await p.read(len(expected), timeout=5.0) == expected
+                await asyncio.sleep(0.01)
+                assert read_now(p.controller) == b""
+        finally:
+            p.close_all()
+
+    asyncio.run(scenario())

@@ -54,8 +54,22 @@ class Peer(asyncio.DatagramProtocol):
         await asyncio.wait_for(loop(), timeout)
 
 
+@pytest.fixture(params=["draining", "fallback"])
+async def reader_path(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> str:
+    """Run a test on both receive paths: the draining reader, and asyncio's own datagram
+    transport, which UdpTransport falls back to on loops without add_reader (Windows'
+    proactor loop; simulated here by refusing add_reader on the running loop)."""
+    if request.param == "fallback":
+
+        def refuse(*args: object) -> None:
+            raise NotImplementedError("add_reader is refused by this test")
+
+        monkeypatch.setattr(asyncio.get_running_loop(), "add_reader", refuse)
+    return str(request.param)
+
+
 @pytest.fixture
-async def make_peer() -> AsyncIterator[Any]:
+async def make_peer(reader_path: str) -> AsyncIterator[Any]:
     made: list[asyncio.DatagramTransport] = []
 
     async def make(host: str = LOOP) -> Peer:
@@ -76,12 +90,14 @@ def udp_to(peer: Peer, **kw: Any) -> UdpTransport:
     return UdpTransport(peer.address[0], peer.address[1], **kw)
 
 
-async def test_bytes_both_directions_in_order(make_peer: Any) -> None:
+async def test_bytes_both_directions_in_order(make_peer: Any, reader_path: str) -> None:
     gcu = await make_peer()
     async with udp_to(gcu) as t:
         assert isinstance(t, UdpTransport)
         rec = Recorder(t)
         assert t.connected
+        assert t.draining is (reader_path == "draining")
+        assert t.datagram
         assert t.peer == gcu.address
         t.send(b"\xa5\x5a host packet")
         await gcu.wait_count(1)
@@ -197,7 +213,7 @@ def test_broadcast_address_detection() -> None:
     assert not is_broadcast_address("localhost")
 
 
-async def test_broadcast_remote_sets_flag_and_sends() -> None:
+async def test_broadcast_remote_sets_flag_and_sends(reader_path: str) -> None:
     # 127.255.255.255 is the loopback network's broadcast address: the kernel refuses to
     # send there (EACCES) unless SO_BROADCAST is set.
     auto = UdpTransport("127.255.255.255", 9, local_host=LOOP, local_port=0)
@@ -305,3 +321,21 @@ def test_constructor_validates_ports() -> None:
         UdpTransport(LOOP, 2337, local_port=70000)
     assert UdpTransport(LOOP).url == "udp://127.0.0.1:2337"
     assert UdpTransport(LOOP).local_port == 2338
+
+
+async def test_reset_is_a_no_op(make_peer: Any) -> None:
+    gcu = await make_peer()
+    async with udp_to(gcu) as t:
+        rec = Recorder(t)
+        t.send(b"one")
+        t.reset("declared lost")  # no datagram is ever queued: nothing to discard
+        t.send(b"two")
+        await gcu.wait_count(2)
+        assert [d for d, _ in gcu.received] == [b"one", b"two"]
+        gcu.send(b"reply", t.local_address)
+        await rec.wait_bytes(5)
+        assert rec.events == []
+        assert t.connected
+        assert t.sends_dropped == 0
+        with pytest.raises(TypeError, match="reason"):
+            t.reset(42)  # type: ignore[arg-type]

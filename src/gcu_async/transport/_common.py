@@ -7,6 +7,8 @@ import ipaddress
 from collections.abc import Callable
 from typing import TypeVar
 
+from gcu_async._checks import type_error
+
 T = TypeVar("T")
 
 
@@ -27,6 +29,14 @@ def check_positive(field: str, value: object, *, allow_zero: bool = False) -> fl
         bound = ">= 0" if allow_zero else "> 0"
         raise ValueError(f"{field}: {value!r} is out of range (allowed: finite, {bound})")
     return float(value)
+
+
+def check_reason(value: object) -> str:
+    """Return ``value`` if it is a ``str`` (the reason given to ``Transport.reset``), else
+    raise TypeError naming the field."""
+    if not isinstance(value, str):
+        raise type_error("reason", "a str", value)
+    return value
 
 
 def format_hostport(host: str, port: int) -> str:

@@ -1,9 +1,12 @@
 """The one small interface every transport implements: bytes in, bytes out.
 
 Transports know nothing of the protocol. Received bytes go to the ``on_data`` handler in
-arrival order (stream transports may split or merge packets; the session's deframer copes);
-link changes go to ``on_event``. ``send`` never blocks: it hands bytes to the OS (or the
-peer) and raises :class:`~gcu_async.errors.LinkLost` when the link is down.
+arrival order (stream transports may split or merge packets; the session's deframer copes;
+datagram transports deliver one datagram per call, see :attr:`Transport.datagram`); link
+changes go to ``on_event``. ``send`` never blocks: it hands bytes to the OS (or the peer),
+may drop them when the OS cannot take more (stream transports, counted in
+``sends_dropped``), and raises :class:`~gcu_async.errors.LinkLost` when the link is down.
+:meth:`Transport.reset` discards whatever is still queued towards the peer.
 """
 
 from __future__ import annotations
@@ -14,6 +17,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from types import TracebackType
 from typing import TypeVar
+
+from gcu_async.transport._common import check_reason
 
 DataHandler = Callable[[bytes], None]
 _T = TypeVar("_T", bound="Transport")
@@ -58,6 +63,9 @@ class Transport(abc.ABC):
     def __init__(self) -> None:
         self._on_data: DataHandler = _drop
         self._on_event: EventHandler = _ignore
+        self.sends_dropped = 0
+        """Sends dropped because the OS could not take more bytes (backpressure on stream
+        transports: see their :meth:`send`). Always 0 on transports that never drop."""
 
     def set_handlers(self, on_data: DataHandler, on_event: EventHandler | None = None) -> None:
         """Route received bytes to ``on_data`` and link events to ``on_event``."""
@@ -80,6 +88,22 @@ class Transport(abc.ABC):
         transports (UDP) may reorder; the client then guards commands against it."""
         return True
 
+    @property
+    def datagram(self) -> bool:
+        """True when every ``on_data`` call carries exactly one received datagram (UDP), so
+        the receiver may deframe each call on its own. False for byte streams."""
+        return False
+
+    def reset(self, reason: str) -> None:
+        """Discard what is queued towards the peer and start the link over, so that nothing
+        queued on the way can reach the peer later. Synchronous, callable from any event-loop
+        callback; events it causes are delivered later via ``loop.call_soon``, never from
+        inside this call. ``reason`` (text) goes into the detail of such events.
+
+        The default does nothing: transports that queue nothing (UDP, in-memory) keep it.
+        Raises TypeError if ``reason`` is not a ``str``."""
+        check_reason(reason)
+
     @abc.abstractmethod
     async def open(self) -> None:
         """Open the link. Raises :class:`~gcu_async.errors.LinkLost` if it cannot."""
@@ -87,7 +111,8 @@ class Transport(abc.ABC):
     @abc.abstractmethod
     def send(self, data: bytes) -> None:
         """Send ``data`` without blocking. Raises :class:`~gcu_async.errors.LinkLost` if
-        the link is down."""
+        the link is down. May drop ``data`` (counted in :attr:`sends_dropped`) rather than
+        queue it behind bytes the OS has not taken yet."""
 
     @abc.abstractmethod
     async def close(self) -> None:

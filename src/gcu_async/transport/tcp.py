@@ -8,17 +8,41 @@ backoff and full jitter (:class:`Backoff`): before attempt *n* (0-based) it slee
 loss (``max_total``) run out it stops, stays down and emits a final ``LOST`` whose detail
 starts with ``"giving up"``. :meth:`TcpTransport.open` may be called again after that.
 While down, :meth:`TcpTransport.send` raises :class:`LinkLost`.
+
+Backpressure
+    :meth:`TcpTransport.send` never queues behind bytes the kernel has not taken: when
+    asyncio's write buffer is not empty (the kernel's send queue is full because the peer
+    does not read), the new data is dropped whole and counted in ``sends_dropped``. A packet
+    is never split or interleaved: the rest of a packet the kernel took in part stays queued
+    and goes first. (The kernel's own queues are not bounded by this: see docs/transports.md.)
+
+Reset
+    :meth:`TcpTransport.reset` aborts the connection with an RST (``SO_LINGER`` on, 0 s):
+    asyncio's write buffer and the kernel's send queue are discarded, so none of those
+    bytes can reach the peer later. Bytes that already reached the peer's kernel receive
+    buffer are *not* recalled: the peer can still read them (then gets ``ECONNRESET``).
+    A ``LOST`` event whose detail starts with ``"reset: <reason>"`` follows via
+    ``loop.call_soon``, then reconnection exactly as after any loss.
 """
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import random
+import socket
+import struct
 from dataclasses import dataclass
 from typing import Any
 
 from gcu_async.errors import LinkLost
-from gcu_async.transport._common import call_guarded, check_port, check_positive, format_hostport
+from gcu_async.transport._common import (
+    call_guarded,
+    check_port,
+    check_positive,
+    check_reason,
+    format_hostport,
+)
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 GCU_TCP_PORT = 2332
@@ -26,6 +50,8 @@ GCU_TCP_PORT = 2332
 
 _CLOSE_GRACE = 1.0
 """Seconds :meth:`TcpTransport.close` lets unsent bytes flush before aborting."""
+_LINGER_ABORT = struct.pack("ii", 1, 0)
+"""``struct linger {l_onoff=1, l_linger=0}``: close() sends an RST and drops the send queue."""
 
 
 @dataclass(frozen=True)
@@ -129,6 +155,7 @@ class TcpTransport(Transport):
         self._task: asyncio.Task[None] | None = None
         self._closing = False
         self.bytes_sent = 0
+        """Bytes accepted by :meth:`send` (dropped sends excluded)."""
         self.bytes_received = 0
         self.reconnect_attempts = 0
         """Connection attempts made during the current (or last) outage."""
@@ -179,13 +206,39 @@ class TcpTransport(Transport):
         await self._connect(self._connect_timeout)
 
     def send(self, data: bytes) -> None:
-        """Queue ``data`` on the socket. Raises :class:`LinkLost` while the link is down."""
+        """Hand ``data`` to the socket, or drop it whole (counted in ``sends_dropped``) when
+        asyncio's write buffer still holds bytes the kernel did not take. Raises
+        :class:`LinkLost` while the link is down."""
         proto = self._proto
         if proto is None or proto.transport is None or proto.transport.is_closing():
             state = " (reconnecting)" if self.reconnecting else ""
             raise LinkLost(f"{self.url}: link is down{state}")
+        if proto.transport.get_write_buffer_size():
+            self.sends_dropped += 1
+            return
         self.bytes_sent += len(data)
         proto.transport.write(bytes(data))
+
+    def reset(self, reason: str) -> None:
+        """Abort the connection with an RST, discarding asyncio's write buffer and the
+        kernel's send queue; then (via ``loop.call_soon``) emit ``LOST`` with detail
+        ``"reset: <reason> (<url>)"`` and, with ``reconnect=True``, reconnect as after any
+        loss. :meth:`send` raises :class:`LinkLost` from this call on until reconnected.
+        Bytes already in the peer's receive buffer stay readable by the peer. Does nothing
+        while the link is down. Raises TypeError if ``reason`` is not a ``str``."""
+        check_reason(reason)
+        proto = self._proto
+        if proto is None or proto.transport is None or proto.transport.is_closing():
+            return
+        self._proto = None
+        transport = proto.transport
+        sock = transport.get_extra_info("socket")
+        if sock is not None:
+            with contextlib.suppress(OSError):
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, _LINGER_ABORT)
+        transport.abort()  # drops the write buffer; closes the socket on the next iteration
+        asyncio.get_running_loop().call_soon(self._reset_event, reason)
+        self._start_reconnect()
 
     async def close(self) -> None:
         """Stop reconnecting and close the socket; returns once everything is released.
@@ -299,10 +352,17 @@ class TcpTransport(Transport):
         if self._closing:
             return
         reason = f"connection lost: {exc}" if exc is not None else "peer closed the connection"
-        call_guarded(
-            self._on_event, LinkEvent(LinkEventKind.LOST, f"{self.url}: {reason}"), "event"
-        )
-        if self._reconnect:
+        event = LinkEvent(LinkEventKind.LOST, f"{self.url}: {reason}")
+        call_guarded(self._on_event, event, "event")
+        self._start_reconnect()
+
+    def _reset_event(self, reason: str) -> None:
+        if not self._closing:  # a deliberate close() since: no event, as for any close
+            event = LinkEvent(LinkEventKind.LOST, f"reset: {reason} ({self.url})")
+            call_guarded(self._on_event, event, "event")
+
+    def _start_reconnect(self) -> None:
+        if self._reconnect and not self._closing and self._proto is None:
             self._task = asyncio.get_running_loop().create_task(
                 self._reconnect_loop(), name=f"gcu_async reconnect {self.url}"
             )

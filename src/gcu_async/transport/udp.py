@@ -16,11 +16,21 @@ Source filtering
     Note: a GCU answers from its own unicast address, so when ``host`` is a broadcast
     address use ``discovery=True`` or nothing will be accepted.
 
+Reading
+    Every readiness event reads *all* queued datagrams (up to 10,000 per event, so one
+    socket cannot starve the loop), each delivered by its own ``on_data`` call
+    (:attr:`UdpTransport.datagram` is True): however long an event-loop iteration takes,
+    replies never pile up in the kernel. asyncio's own datagram transport reads one per
+    event; it is used only on loops without ``add_reader`` (Windows' proactor loop), where
+    :attr:`UdpTransport.draining` is False.
+
 Errors
     UDP is connectionless: send errors (``EMSGSIZE``, ICMP port unreachable reported as
-    ``ConnectionRefusedError``, ...) are counted in :attr:`UdpTransport.send_errors` and
-    kept in :attr:`UdpTransport.last_error`; the transport stays usable. Silence is
-    detected by the session's link health, not here.
+    ``ConnectionRefusedError``, ``BlockingIOError`` when the socket's send buffer is full:
+    that datagram is dropped, never queued) are counted in :attr:`UdpTransport.send_errors`
+    and kept in :attr:`UdpTransport.last_error`; the transport stays usable.
+    Silence is detected by the session's link health, not here.
+    :meth:`~gcu_async.transport.Transport.reset` does nothing: no datagram is ever queued.
 """
 
 from __future__ import annotations
@@ -37,6 +47,7 @@ from gcu_async.transport._common import (
     format_hostport,
     same_address,
 )
+from gcu_async.transport._datagram import DrainingDatagramTransport
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 GCU_UDP_PORT = 2337
@@ -44,8 +55,8 @@ GCU_UDP_PORT = 2337
 HOST_UDP_PORT = 2338
 """Port the host listens on; the GCU broadcasts to it (NOTES §9)."""
 MAX_DATAGRAM = 65536
-"""Receive buffer size: no UDP payload is larger. asyncio's default (256 KiB) is above
-glibc's mmap threshold, which costs an mmap/mremap/munmap per received datagram."""
+"""Receive buffer size: no UDP payload is larger. (On the fallback path, asyncio's default
+of 256 KiB is above glibc's mmap threshold: an mmap/mremap/munmap per received datagram.)"""
 
 
 def is_broadcast_address(host: str) -> bool:
@@ -56,6 +67,20 @@ def is_broadcast_address(host: str) -> bool:
     except ValueError:
         return False
     return isinstance(ip, ipaddress.IPv4Address) and ip.packed[3] == 255
+
+
+async def _endpoint(
+    loop: asyncio.AbstractEventLoop, sock: socket.socket, proto: _UdpProtocol
+) -> asyncio.DatagramTransport:
+    """A draining transport where the loop has ``add_reader``; else asyncio's own."""
+    try:
+        return DrainingDatagramTransport(loop, sock, proto, MAX_DATAGRAM)
+    except NotImplementedError:  # e.g. Windows' proactor loop
+        pass
+    dtransport, _ = await loop.create_datagram_endpoint(lambda: proto, sock=sock)
+    if getattr(dtransport, "max_size", 0) > MAX_DATAGRAM:  # a selector loop's transport
+        dtransport.max_size = MAX_DATAGRAM  # type: ignore[attr-defined]
+    return dtransport
 
 
 class _UdpProtocol(asyncio.DatagramProtocol):
@@ -132,8 +157,19 @@ class UdpTransport(Transport):
         return False
 
     @property
+    def datagram(self) -> bool:
+        """Every ``on_data`` call carries exactly one datagram."""
+        return True
+
+    @property
     def connected(self) -> bool:
         return self._dtransport is not None and not self._dtransport.is_closing()
+
+    @property
+    def draining(self) -> bool:
+        """True while open on a loop with ``add_reader``: each readiness event reads every
+        queued datagram. False before :meth:`open` and on the fallback (proactor) path."""
+        return isinstance(self._dtransport, DrainingDatagramTransport)
 
     @property
     def broadcast(self) -> bool:
@@ -208,7 +244,7 @@ class UdpTransport(Transport):
             sock.bind((local_host, self._local_port))
             sock.setblocking(False)
             proto = _UdpProtocol(self)
-            dtransport, _ = await loop.create_datagram_endpoint(lambda: proto, sock=sock)
+            dtransport = await _endpoint(loop, sock, proto)
         except OSError as exc:
             sock.close()
             where = format_hostport(local_host, self._local_port)
@@ -216,8 +252,6 @@ class UdpTransport(Transport):
         except BaseException:
             sock.close()
             raise
-        if getattr(dtransport, "max_size", 0) > MAX_DATAGRAM:  # selector loop's transport
-            dtransport.max_size = MAX_DATAGRAM  # type: ignore[attr-defined]
         bound = sock.getsockname()
         self._local = (str(bound[0]), int(bound[1]))
         self._remote = remote
