@@ -184,10 +184,13 @@ def test_build_argument_out_of_range(case: Case) -> None:
     check_error(info.value, case.field, case.value, case.low, case.high, case.high_open)
 
 
-@pytest.mark.parametrize("zoom", [0.5, 0.0, -1.0, NAN, INF])
+# The zoom ends at 6553.5, the largest ratio the GCU can report (U16, 0.1x): before, any
+# finite zoom passed and a huge one made even a zero rate fail (0 * inf is NaN).
+@pytest.mark.parametrize("zoom", [0.5, 0.0, -1.0, 6553.6, 1e300, NAN, INF])
 def test_rate_zoom_out_of_range(zoom: float) -> None:
-    with pytest.raises(ValueError, match=r"^zoom: .* is outside the allowed range \[1, inf\)"):
+    with pytest.raises(ValueError, match=r"^zoom: .* is outside the allowed range \[1, 6553.5\]"):
         ControlValues.rates(1.0, zoom=zoom)
+    assert ControlValues.rates(0.0, zoom=6553.5) == ControlValues(0, 0, 0)
 
 
 @pytest.mark.parametrize(
