@@ -685,7 +685,8 @@ class UnknownCommand(Command):
     def __post_init__(self) -> None:
         check_int("opcode", self.code, 0, 255)
         if self.code in COMMAND_TYPES:
-            raise ValueError(f"opcode 0x{self.code:02X} is a known command; use its class")
+            name = COMMAND_TYPES[self.code].__name__
+            raise ValueError(f"opcode: 0x{self.code:02X} is a known command; use {name}")
         if not isinstance(self.params, (bytes, bytearray)):
             raise type_error("params", "bytes", self.params)
         if len(self.params) > MAX_PARAMS:
@@ -726,7 +727,11 @@ MODE_COMMANDS: frozenset[Opcode] = frozenset({
 
 def command_code(command: Command) -> int:
     """The opcode byte of ``command`` (works for :class:`UnknownCommand` too)."""
-    return command.code if isinstance(command, UnknownCommand) else int(command.OPCODE)
+    if isinstance(command, UnknownCommand):
+        return command.code
+    if not isinstance(command, Command):
+        raise type_error("command", "a Command", command)
+    return int(command.OPCODE)
 
 
 def decode_command(opcode: int, params: bytes) -> Command:

@@ -9,6 +9,7 @@ import struct
 from typing import Any, NamedTuple
 
 from gcu_async._checks import check_int, type_error
+from gcu_async.errors import FieldRangeError
 from gcu_async.protocol.enums import (
     PIP_MODE_MASK,
     CameraFlags,
@@ -231,7 +232,8 @@ class GcuSubFrame(NamedTuple):
         pip_mode: int = 0,
         time_zone: int = 0,
     ) -> GcuSubFrame:
-        """Build from engineering units (metres, degrees, zoom ratio). ``pod_model`` is a
+        """Build from engineering units (metres, degrees, zoom ratio). ``camera_flags`` must
+        leave bits 2–0 clear (they carry ``pip_mode``). ``pod_model`` is a
         :class:`PodModel` member or any code 0–255; the flag arguments are ``int``s (their
         IntFlag members welcome); ``target_position`` a :class:`GeoPosition` (or tuple) or
         ``None`` (zeros); ``target_distance=None`` sends "no measurement" (0)."""
@@ -254,8 +256,7 @@ class GcuSubFrame(NamedTuple):
             quantize("camera 1 zoom", camera1_zoom, 10, 0, 0xFFFF, "x"),
             quantize("camera 2 zoom", camera2_zoom, 10, 0, 0xFFFF, "x"),
             check_int("thermal flags", thermal_flags, 0, 0xFF),
-            check_int("camera flags", camera_flags, 0, 0xFFFF) & ~PIP_MODE_MASK
-            | check_int("pip mode", pip_mode, 0, PIP_MODE_MASK),
+            _camera_flags(camera_flags) | check_int("pip mode", pip_mode, 0, PIP_MODE_MASK),
             check_int("time zone", time_zone, -128, 127, "h"),
         )  # fmt: skip
 
@@ -377,6 +378,14 @@ class GcuSubFrame(NamedTuple):
             "camera_flags_raw": self.camera_flags_raw,
             "time_zone": self.time_zone,
         }  # fmt: skip
+
+
+def _camera_flags(value: object) -> int:
+    flags = check_int("camera flags", value, 0, 0xFFFF)
+    if flags & PIP_MODE_MASK:
+        raise FieldRangeError("camera flags", value, 0, 0xFFFF,
+                              detail="bits 2-0 hold the pip mode: pass pip_mode=")  # fmt: skip
+    return flags
 
 
 class UnknownSubFrame(NamedTuple):

@@ -77,10 +77,16 @@ def utc_to_gps(utc: datetime, *, apply_leap_seconds: bool = False) -> tuple[int,
     """
     _aware("gnss_time", utc)
     check_bool("apply_leap_seconds", apply_leap_seconds)
-    utc = utc.astimezone(timezone.utc)
-    if not GPS_EPOCH <= utc <= UTC_MAX:
-        side = "before the GPS epoch" if utc < GPS_EPOCH else "too late for datetime"
-        raise ValueError(f"gnss_time: {utc.isoformat()} is outside the allowed range "
+    given = utc
+    try:
+        utc = utc.astimezone(timezone.utc)
+        early, late = utc < GPS_EPOCH, utc > UTC_MAX
+    except OverflowError:  # e.g. datetime.min at UTC+1 is before year 1 in UTC
+        early = utc.year < 1980
+        late = not early
+    if early or late:
+        side = "before the GPS epoch" if early else "too late for datetime"
+        raise ValueError(f"gnss_time: {given.isoformat()} is outside the allowed range "
                          f"[{GPS_EPOCH.isoformat()}, {UTC_MAX.isoformat()}] ({side})")  # fmt: skip
     gps = utc + timedelta(seconds=gps_minus_utc(utc)) if apply_leap_seconds else utc
     total_ms = (gps - GPS_EPOCH) // timedelta(milliseconds=1)

@@ -141,16 +141,27 @@ def check_member(field: str, value: object, enum: type[_IE]) -> _IE:
                               detail=f"one of {allowed}") from None  # fmt: skip
 
 
+def check_finite(field: str, value: object) -> float:
+    """``value`` as a finite ``float``: :func:`~gcu_async._checks.check_real` without bounds
+    lets ±inf through (they lie inside [-inf, inf]), so infinities are rejected here."""
+    f = check_real(field, value)
+    if not -math.inf < f < math.inf:
+        raise FieldRangeError(field, value, -math.inf, math.inf, detail="not a finite number")
+    return f
+
+
 def wrap_degrees_360(angle: float) -> float:
     """Wrap an angle into [0, 360), e.g. for yaw sources that report ±180° (call it explicitly).
     ``angle`` is any finite real number (``float % 360`` is exact); NaN and infinities are a
     :class:`FieldRangeError`, non-numbers a ``TypeError``."""
     if type(angle) is not float or not -math.inf < angle < math.inf:
-        angle = check_real("angle", angle)
+        angle = check_finite("angle", angle)
     wrapped = angle % 360.0
     return 0.0 if wrapped >= 360.0 else wrapped
 
 
 def wrap_degrees_180(angle: float) -> float:
     """Wrap an angle into [-180, 180) (same checks as :func:`wrap_degrees_360`)."""
+    if type(angle) is not float or not -math.inf < angle < math.inf:
+        angle = check_finite("angle", angle)
     return wrap_degrees_360(angle + 180.0) - 180.0
