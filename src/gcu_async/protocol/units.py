@@ -18,6 +18,7 @@ from gcu_async._checks import check_enum, check_int, check_real, type_error
 from gcu_async.errors import FieldRangeError
 
 _NT = TypeVar("_NT", bound=tuple[Any, ...])
+_new = tuple.__new__
 _IE = TypeVar("_IE", bound=IntEnum)
 
 
@@ -121,7 +122,7 @@ def check_tuple(field: str, value: object, cls: type[_NT]) -> _NT:
         return value
     names: tuple[str, ...] = cls._fields  # type: ignore[attr-defined]
     if (type(value) is tuple or isinstance(value, cls)) and len(value) == len(names):
-        return cls(*value)
+        return _new(cls, value)  # what NamedTuple._make does, without its checks
     expected = f"a {cls.__name__} or a tuple ({', '.join(names)})"
     raise type_error(field, expected, value)
 
