@@ -7,6 +7,8 @@ class; a test fails if a class in ``COMMAND_TYPES`` has none.
 
 from __future__ import annotations
 
+from typing import Any
+
 import crcmod.predefined
 from hypothesis import strategies as st
 
@@ -72,6 +74,68 @@ U16 = st.integers(0, 0xFFFF)
 VERSIONS = st.sampled_from([1, 2])
 
 _xmodem = crcmod.predefined.mkCrcFun("xmodem")
+S16_RANGE, S32_RANGE = (-(2**15), 2**15 - 1), (-(2**31), 2**31 - 1)
+
+# The wire range of every raw frame field, as validate() must enforce it.
+RAW_RANGES: dict[type[Any], dict[str, tuple[int, int]]] = {
+    HostMainFrame: {
+        "control_roll_raw": (-18000, 18000),
+        "control_pitch_raw": (-18000, 18000),
+        "control_yaw_raw": (-18000, 18000),
+        "flags_raw": (0, 0xFFFF),
+        "aircraft_roll_raw": (-18000, 17999),
+        "aircraft_pitch_raw": (-9000, 9000),
+        "aircraft_yaw_raw": (0, 35999),
+        "accel_north_raw": S16_RANGE,
+        "accel_east_raw": S16_RANGE,
+        "accel_up_raw": S16_RANGE,
+        "vel_north_raw": S16_RANGE,
+        "vel_east_raw": S16_RANGE,
+        "vel_up_raw": S16_RANGE,
+        "subframe_request": (0, 255),
+    },
+    HostSubFrame: {
+        "longitude_raw": (-1_800_000_000, 1_800_000_000),
+        "latitude_raw": (-900_000_000, 900_000_000),
+        "altitude_raw": S32_RANGE,
+        "satellites": (0, 255),
+        "gnss_ms": (0, 604_799_999),
+        "gnss_week": (0, 32767),
+        "relative_altitude_raw": S32_RANGE,
+    },
+    GcuMainFrame: {
+        "mode_raw": (0, 255),
+        "pod_status_raw": (0, 0xFFFF),
+        "miss_x": (-1000, 1000),
+        "miss_y": (-1000, 1000),
+        "relative_x_raw": (-18000, 17999),
+        "relative_y_raw": (-18000, 17999),
+        "relative_z_raw": (-18000, 17999),
+        "roll_raw": (-9000, 9000),
+        "pitch_raw": (-18000, 17999),
+        "yaw_raw": (0, 35999),
+        "rate_x_raw": S16_RANGE,
+        "rate_y_raw": S16_RANGE,
+        "rate_z_raw": S16_RANGE,
+    },
+    GcuSubFrame: {
+        "hardware_version_raw": (0, 255),
+        "firmware_version_raw": (0, 255),
+        "pod_code": (0, 255),
+        "fault_raw": (0, 0xFFFF),
+        "target_distance_raw": S32_RANGE,
+        "target_longitude_raw": S32_RANGE,
+        "target_latitude_raw": S32_RANGE,
+        "target_altitude_raw": S32_RANGE,
+        "camera1_zoom_raw": (0, 0xFFFF),
+        "camera2_zoom_raw": (0, 0xFFFF),
+        "thermal_flags_raw": (0, 255),
+        "camera_flags_raw": (0, 0xFFFF),
+        "time_zone": (-128, 127),
+    },
+}
+"""Every raw frame field's allowed range (inclusive): what ``validate()`` / ``encode()``
+enforce (``flags_raw`` also has reserved bits)."""
 
 
 def seal(header: bytes, body: bytes, version: int = 2) -> bytes:

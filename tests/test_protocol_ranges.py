@@ -13,6 +13,7 @@ from typing import Any, NamedTuple
 
 import pytest
 
+from _protocol_strategies import RAW_RANGES
 from gcu_async.errors import FieldRangeError, LocalProtocolError
 from gcu_async.protocol import (
     COMMAND_TYPES,
@@ -184,10 +185,13 @@ def test_build_argument_out_of_range(case: Case) -> None:
     check_error(info.value, case.field, case.value, case.low, case.high, case.high_open)
 
 
-@pytest.mark.parametrize("zoom", [0.5, 0.0, -1.0, NAN, INF])
+# The zoom ends at 6553.5, the largest ratio the GCU can report (U16, 0.1x): before, any
+# finite zoom passed and a huge one made even a zero rate fail (0 * inf is NaN).
+@pytest.mark.parametrize("zoom", [0.5, 0.0, -1.0, 6553.6, 1e300, NAN, INF])
 def test_rate_zoom_out_of_range(zoom: float) -> None:
-    with pytest.raises(ValueError, match=r"^zoom: .* is outside the allowed range \[1, inf\)"):
+    with pytest.raises(ValueError, match=r"^zoom: .* is outside the allowed range \[1, 6553.5\]"):
         ControlValues.rates(1.0, zoom=zoom)
+    assert ControlValues.rates(0.0, zoom=6553.5) == ControlValues(0, 0, 0)
 
 
 @pytest.mark.parametrize(
@@ -216,63 +220,6 @@ def test_naive_gnss_time_is_rejected() -> None:
 
 
 # --- raw fields: validate() --------------------------------------------------------------------
-RAW_RANGES: dict[type[Any], dict[str, tuple[int, int]]] = {
-    HostMainFrame: {
-        "control_roll_raw": (-18000, 18000),
-        "control_pitch_raw": (-18000, 18000),
-        "control_yaw_raw": (-18000, 18000),
-        "flags_raw": (0, 0xFFFF),
-        "aircraft_roll_raw": (-18000, 17999),
-        "aircraft_pitch_raw": (-9000, 9000),
-        "aircraft_yaw_raw": (0, 35999),
-        "accel_north_raw": S16,
-        "accel_east_raw": S16,
-        "accel_up_raw": S16,
-        "vel_north_raw": S16,
-        "vel_east_raw": S16,
-        "vel_up_raw": S16,
-        "subframe_request": (0, 255),
-    },
-    HostSubFrame: {
-        "longitude_raw": (-1_800_000_000, 1_800_000_000),
-        "latitude_raw": (-900_000_000, 900_000_000),
-        "altitude_raw": S32,
-        "satellites": (0, 255),
-        "gnss_ms": (0, 604_799_999),
-        "gnss_week": (0, 32767),
-        "relative_altitude_raw": S32,
-    },
-    GcuMainFrame: {
-        "mode_raw": (0, 255),
-        "pod_status_raw": (0, 0xFFFF),
-        "miss_x": (-1000, 1000),
-        "miss_y": (-1000, 1000),
-        "relative_x_raw": (-18000, 17999),
-        "relative_y_raw": (-18000, 17999),
-        "relative_z_raw": (-18000, 17999),
-        "roll_raw": (-9000, 9000),
-        "pitch_raw": (-18000, 17999),
-        "yaw_raw": (0, 35999),
-        "rate_x_raw": S16,
-        "rate_y_raw": S16,
-        "rate_z_raw": S16,
-    },
-    GcuSubFrame: {
-        "hardware_version_raw": (0, 255),
-        "firmware_version_raw": (0, 255),
-        "pod_code": (0, 255),
-        "fault_raw": (0, 0xFFFF),
-        "target_distance_raw": S32,
-        "target_longitude_raw": S32,
-        "target_latitude_raw": S32,
-        "target_altitude_raw": S32,
-        "camera1_zoom_raw": (0, 0xFFFF),
-        "camera2_zoom_raw": (0, 0xFFFF),
-        "thermal_flags_raw": (0, 255),
-        "camera_flags_raw": (0, 0xFFFF),
-        "time_zone": (-128, 127),
-    },
-}
 RAW_CASES = [
     pytest.param(cls, field, value, low, high, id=f"{cls.__name__}.{field}={value}")
     for cls, ranges in RAW_RANGES.items()

@@ -2,6 +2,28 @@
 
 No asyncio, sockets or serial here — bytes in, typed values out, and back. The simulator,
 the client, the CLI and the tests all share this package.
+
+**The rule for values users build.** Every public constructor, builder and function of this
+package that takes user values checks type and range before anything is stored:
+
+- a bool is a ``bool``: ``"false"``, ``0``, ``1`` and ``None`` raise ``TypeError``;
+- an integer is an ``int``, not a bool, a float or a string (``IntEnum``/``IntFlag``
+  members are ints and fine); camera masks are ints 1–255 (``CameraMask`` members fine);
+- a real number is an ``int`` or ``float`` (not a bool) and finite: NaN, ±inf and values
+  outside the wire range (``1e30``, ``10**40``) are :class:`~gcu_async.errors.FieldRangeError`;
+- an enum parameter takes its members or their exact integer values;
+- tuple parameters (``ImageBox``, ``ImagePoint``, ``Attitude``, ``NorthEastUp``,
+  ``GeoPosition``, ``AxisAngles``) take their NamedTuple or a plain tuple of the same length
+  (stored as the NamedTuple; lists and other NamedTuples raise ``TypeError``), checked
+  element by element with the element in the field name (``box.left``, ``aircraft roll``).
+
+Nothing is coerced, clipped or wrapped (real values are rounded to the wire resolution;
+the range applies to the rounded value). Errors are ``TypeError`` or ``ValueError``
+(usually :class:`~gcu_async.errors.FieldRangeError`) and name the field, the allowed range or
+type, and the value. Frames, packets and ``ControlValues`` are NamedTuples that can be
+built raw and cannot check themselves on construction: ``validate()`` / ``encode()`` check
+them, and :meth:`ControlValues.check` is what a consumer calls before storing one.
+Decoding is liberal by design: ``decode_*`` accept whatever the wire can carry.
 """
 
 from gcu_async.protocol.aircraft import AircraftState

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from datetime import datetime
 
+from gcu_async._checks import check_int
 from gcu_async.protocol.enums import SubFrameRequest
 from gcu_async.protocol.gpstime import utc_to_gps
 from gcu_async.protocol.host_frames import (
@@ -19,14 +20,17 @@ from gcu_async.protocol.host_frames import (
     HostMainFrame,
     HostSubFrame,
 )
-from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp, check_int, quantize
+from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp, check_tuple, quantize
 
 
 @dataclass(frozen=True, slots=True)
 class AircraftState:
     """Aircraft attitude (°; yaw in [0, 360)), acceleration (m/s², N/E/U, gravity excluded),
     velocity (m/s, N/E/U), position (°, ° , m MSL), relative altitude (m), satellites and
-    GNSS week + milliseconds of week. Validated on construction."""
+    GNSS week + milliseconds of week. Validated on construction under the package rule: each
+    tuple field is ``None``, its NamedTuple or a plain tuple (stored as the NamedTuple),
+    checked element by element; the integers are ``int``. A ``dataclasses.replace`` of a
+    state validates again."""
 
     attitude: Attitude | None = None
     acceleration: NorthEastUp | None = None
@@ -38,6 +42,11 @@ class AircraftState:
     gnss_ms: int = 0
 
     def __post_init__(self) -> None:
+        for name, cls in (("attitude", Attitude), ("acceleration", NorthEastUp),
+                          ("velocity", NorthEastUp), ("position", GeoPosition)):  # fmt: skip
+            value = getattr(self, name)
+            if value is not None:
+                object.__setattr__(self, name, check_tuple(name, value, cls))
         self.main_frame()
         # the sub-frame fields are checked even while no position makes a sub frame
         check_int("satellites", self.satellites, 0, 255)
@@ -57,7 +66,8 @@ class AircraftState:
         control: ControlValues | None = None,
         subframe_request: int = SubFrameRequest.STANDARD,
     ) -> HostMainFrame:
-        """Host main frame with this state and the given control values (None = invalid)."""
+        """Host main frame with this state and the given control values (None = invalid;
+        checked with :meth:`ControlValues.check`)."""
         return HostMainFrame.build(
             control=control,
             attitude=self.attitude,

@@ -1,7 +1,12 @@
 """Every command of V2.0.6 (byte 69 + parameters, bytes 70..S-3) as a typed value.
 
 Each command is a frozen dataclass in engineering units, validated when it is built (so a
-bad argument raises before anything is sent). ``encode_params()`` gives the parameter bytes;
+bad argument raises before anything is sent) under the package rule
+(:mod:`gcu_async.protocol`): ``bool`` fields take only ``True``/``False``, integer fields
+only ``int`` (camera masks 1–255, ``CameraMask`` members welcome), real fields finite
+``int``/``float`` inside the wire range, enum fields a member or its exact value,
+``box``/``point`` an :class:`ImageBox` / :class:`ImagePoint` (or a plain tuple, stored as
+the NamedTuple) checked element by element. ``encode_params()`` gives the parameter bytes;
 :func:`decode_command` turns opcode + parameter bytes back into the typed command.
 The first parameter byte of many commands is a camera mask (NOTES §2): it is the
 ``cameras`` field, defaulting to the value the document shows.
@@ -13,13 +18,16 @@ import struct
 from dataclasses import dataclass, field, fields
 from typing import Any, ClassVar, NamedTuple, TypeVar
 
+from gcu_async._checks import check_bool, check_int, type_error
 from gcu_async.errors import FieldRangeError, RemoteProtocolError
 from gcu_async.protocol.enums import CameraMask, NightVisionMode, Opcode, OsdCoordinates
-from gcu_async.protocol.units import check_int, quantize
+from gcu_async.protocol.units import check_member, check_tuple, quantize
 
 _C = TypeVar("_C", bound="Command")
 
 IMAGE_SCALE = 10000  # image coordinates: U16 [0, 10000], origin top-left
+MAX_PARAMS = 0xFFFF - 72
+"""Most parameter bytes a packet can carry (S, a U16, counts 72 bytes besides them)."""
 S32 = (-(2**31), 2**31 - 1)
 
 
@@ -61,8 +69,13 @@ def _box(x0: int, y0: int, x1: int, y1: int) -> ImageBox:
     return ImageBox(x0 / s, y0 / s, x1 / s, y1 / s)
 
 
-def _mask(name: str, cameras: int) -> int:
-    return check_int(name, int(cameras), 1, 0xFF, "camera mask")
+def _mask(name: str, cameras: object) -> int:
+    return check_int(name, cameras, 1, 0xFF, "camera mask")
+
+
+def _store(command: Command, name: str, value: object) -> None:
+    """Store a checked, normalised field value on a frozen command."""
+    object.__setattr__(command, name, value)
 
 
 def _switch(name: str, value: int, on: int = 1) -> bool:
@@ -81,7 +94,13 @@ class Command:
     LAYOUT: ClassVar[struct.Struct] = struct.Struct("<")
 
     def __post_init__(self) -> None:
+        if not hasattr(self, "OPCODE"):
+            raise TypeError(f"{type(self).__name__} is abstract: build one of its subclasses")
+        self._normalize()
         self.raw_params()  # validates every field, raising before anything is sent
+
+    def _normalize(self) -> None:
+        """Check tuple and enum fields and store them as their classes (none here)."""
 
     @property
     def opcode(self) -> Opcode:
@@ -243,8 +262,12 @@ class Track(Command):
     box: ImageBox = ImageBox(0.0, 0.0, 0.0, 0.0)
     cameras: CameraMask | int = CameraMask.CAMERA_1
 
+    def _normalize(self) -> None:
+        _store(self, "box", check_tuple("box", self.box, ImageBox))
+
     def raw_params(self) -> tuple[int, ...]:
-        return (_mask("cameras", self.cameras), int(bool(self.enter)), *_box_raw("box", self.box))
+        return (_mask("cameras", self.cameras), int(check_bool("enter", self.enter)),
+                *_box_raw("box", self.box))  # fmt: skip
 
     @classmethod
     def from_raw_params(cls, raw: tuple[int, ...]) -> Track:
@@ -261,6 +284,9 @@ class ClickToPan(Command):
     LAYOUT = struct.Struct("<BHH")
     point: ImagePoint
     cameras: CameraMask | int = CameraMask.CAMERA_1
+
+    def _normalize(self) -> None:
+        _store(self, "point", check_tuple("point", self.point, ImagePoint))
 
     def raw_params(self) -> tuple[int, ...]:
         return (
@@ -284,8 +310,11 @@ class OsdCoordinatesCommand(Command):
     LAYOUT = struct.Struct("<B")
     coordinates: OsdCoordinates = OsdCoordinates.AIRCRAFT
 
+    def _normalize(self) -> None:
+        _store(self, "coordinates", check_member("coordinates", self.coordinates, OsdCoordinates))
+
     def raw_params(self) -> tuple[int, ...]:
-        return (check_int("coordinates", int(self.coordinates), 0, 1),)
+        return (int(self.coordinates),)
 
     @classmethod
     def from_raw_params(cls, raw: tuple[int, ...]) -> OsdCoordinatesCommand:
@@ -301,7 +330,7 @@ class ImageAutoFlip(Command):
     enabled: bool = True
 
     def raw_params(self) -> tuple[int, ...]:
-        return (0 if self.enabled else 1,)
+        return (0 if check_bool("enabled", self.enabled) else 1,)
 
     @classmethod
     def from_raw_params(cls, raw: tuple[int, ...]) -> ImageAutoFlip:
@@ -447,8 +476,11 @@ class NightVision(Command):
     mode: NightVisionMode = NightVisionMode.ON
     cameras: CameraMask | int = CameraMask.CAMERA_1
 
+    def _normalize(self) -> None:
+        _store(self, "mode", check_member("mode", self.mode, NightVisionMode))
+
     def raw_params(self) -> tuple[int, ...]:
-        return (_mask("cameras", self.cameras), check_int("mode", int(self.mode), 0, 2))
+        return (_mask("cameras", self.cameras), int(self.mode))
 
     @classmethod
     def from_raw_params(cls, raw: tuple[int, ...]) -> NightVision:
@@ -465,8 +497,12 @@ class AreaTemperature(Command):
     box: ImageBox = ImageBox(0.0, 0.0, 1.0, 1.0)
     cameras: CameraMask | int = CameraMask.CAMERA_2
 
+    def _normalize(self) -> None:
+        _store(self, "box", check_tuple("box", self.box, ImageBox))
+
     def raw_params(self) -> tuple[int, ...]:
-        return (_mask("cameras", self.cameras), int(bool(self.enabled)), *_box_raw("box", self.box))
+        return (_mask("cameras", self.cameras), int(check_bool("enabled", self.enabled)),
+                *_box_raw("box", self.box))  # fmt: skip
 
     @classmethod
     def from_raw_params(cls, raw: tuple[int, ...]) -> AreaTemperature:
@@ -498,7 +534,7 @@ class TemperatureAlarm(Command):
     cameras: CameraMask | int = CameraMask.CAMERA_2
 
     def raw_params(self) -> tuple[int, ...]:
-        return (_mask("cameras", self.cameras), int(bool(self.enabled)),
+        return (_mask("cameras", self.cameras), int(check_bool("enabled", self.enabled)),
                 *_temps(self.high, self.low))  # fmt: skip
 
     @classmethod
@@ -519,7 +555,7 @@ class Isotherm(Command):
     cameras: CameraMask | int = CameraMask.CAMERA_2
 
     def raw_params(self) -> tuple[int, ...]:
-        return (_mask("cameras", self.cameras), int(bool(self.enabled)),
+        return (_mask("cameras", self.cameras), int(check_bool("enabled", self.enabled)),
                 *_temps(self.high, self.low))  # fmt: skip
 
     @classmethod
@@ -538,10 +574,13 @@ class SpotTemperature(Command):
     point: ImagePoint = ImagePoint(0.5, 0.5)
     cameras: CameraMask | int = CameraMask.CAMERA_2
 
+    def _normalize(self) -> None:
+        _store(self, "point", check_tuple("point", self.point, ImagePoint))
+
     def raw_params(self) -> tuple[int, ...]:
         return (
             _mask("cameras", self.cameras),
-            int(bool(self.enabled)),
+            int(check_bool("enabled", self.enabled)),
             _img("point.x", self.point.x),
             _img("point.y", self.point.y),
         )
@@ -559,7 +598,7 @@ class _Switch(Command):
     enabled: bool = True
 
     def raw_params(self) -> tuple[int, ...]:
-        return (int(bool(self.enabled)),)
+        return (int(check_bool("enabled", self.enabled)),)
 
     @classmethod
     def from_raw_params(cls: type[_C], raw: tuple[int, ...]) -> _C:
@@ -628,7 +667,7 @@ class Ranging(Command):
     enabled: bool = True
 
     def raw_params(self) -> tuple[int, ...]:
-        return (2 if self.enabled else 0,)
+        return (2 if check_bool("enabled", self.enabled) else 0,)
 
     @classmethod
     def from_raw_params(cls, raw: tuple[int, ...]) -> Ranging:
@@ -646,7 +685,14 @@ class UnknownCommand(Command):
     def __post_init__(self) -> None:
         check_int("opcode", self.code, 0, 255)
         if self.code in COMMAND_TYPES:
-            raise ValueError(f"opcode 0x{self.code:02X} is a known command; use its class")
+            name = COMMAND_TYPES[self.code].__name__
+            raise ValueError(f"opcode: 0x{self.code:02X} is a known command; use {name}")
+        if not isinstance(self.params, (bytes, bytearray)):
+            raise type_error("params", "bytes", self.params)
+        if len(self.params) > MAX_PARAMS:
+            raise FieldRangeError("params", len(self.params), 0, MAX_PARAMS, "bytes",
+                                  detail="its length: the packet length S is a U16")  # fmt: skip
+        _store(self, "params", bytes(self.params))  # an immutable copy
 
     @property
     def opcode(self) -> Opcode:  # pragma: no cover - unknown opcodes have no Opcode member
@@ -681,7 +727,11 @@ MODE_COMMANDS: frozenset[Opcode] = frozenset({
 
 def command_code(command: Command) -> int:
     """The opcode byte of ``command`` (works for :class:`UnknownCommand` too)."""
-    return command.code if isinstance(command, UnknownCommand) else int(command.OPCODE)
+    if isinstance(command, UnknownCommand):
+        return command.code
+    if not isinstance(command, Command):
+        raise type_error("command", "a Command", command)
+    return int(command.OPCODE)
 
 
 def decode_command(opcode: int, params: bytes) -> Command:

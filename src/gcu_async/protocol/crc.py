@@ -8,7 +8,12 @@ from __future__ import annotations
 
 from binascii import crc_hqx
 
+from gcu_async._checks import type_error
+
 
 def crc16_xmodem(data: bytes | bytearray | memoryview) -> int:
-    """CRC-16/XMODEM of ``data``."""
+    """CRC-16/XMODEM of ``data`` (``bytes``, ``bytearray`` or ``memoryview``; anything else
+    is a ``TypeError`` naming ``data``)."""
+    if not isinstance(data, (bytes, bytearray, memoryview)):
+        raise type_error("data", "bytes, bytearray or memoryview", data)
     return crc_hqx(data, 0)

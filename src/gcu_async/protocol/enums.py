@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from enum import IntEnum, IntFlag
 
+from gcu_async._checks import check_int
+
 
 class Opcode(IntEnum):
     """Command opcodes of V2.0.6 (byte 69 of both directions)."""
@@ -53,7 +55,10 @@ _OPCODE_VALUES = frozenset(int(o) for o in Opcode)
 
 
 def opcode_name(opcode: int) -> str:
-    """The protocol name of ``opcode`` (``"UNKNOWN_0x42"`` for opcodes V2.0.6 does not define)."""
+    """The protocol name of ``opcode`` (``"UNKNOWN_0x42"`` for opcodes V2.0.6 does not define);
+    ``opcode`` is an ``int`` 0–255 (``TypeError`` / ``FieldRangeError`` otherwise)."""
+    if type(opcode) is not int or not 0 <= opcode <= 0xFF:
+        opcode = check_int("opcode", opcode, 0, 0xFF)
     return Opcode(opcode).name if opcode in _OPCODE_VALUES else f"UNKNOWN_0x{opcode:02X}"
 
 

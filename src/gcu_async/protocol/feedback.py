@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from typing import Any, NamedTuple
 
+from gcu_async._checks import check_int
 from gcu_async.protocol.enums import CameraMask, ExecutionStatus, Opcode, opcode_name
 
 ZOOM_OPCODES = frozenset({Opcode.ZOOM_IN, Opcode.ZOOM_OUT, Opcode.ZOOM_STOP, Opcode.ZOOM_TO})
@@ -20,13 +21,14 @@ CALIBRATION_IN_PROGRESS = 0x02
 
 
 def failure_status(opcode: int, failed_cameras: int = CameraMask.CAMERA_1) -> int:
-    """The status byte a GCU sends when ``opcode`` fails (for the simulator and tests).
-    For zoom commands it is the mask of the failed cameras, which must not be empty
-    (0x00 would read as success)."""
+    """The status byte a GCU sends when ``opcode`` (an ``int`` 0–255) fails (for the
+    simulator and tests). For zoom commands it is ``failed_cameras``, the mask of the
+    failed cameras; it must not be empty (0x00 would read as success), so it is an ``int``
+    1–255 for every opcode."""
+    check_int("opcode", opcode, 0, 0xFF)
+    mask = check_int("failed_cameras", failed_cameras, 1, 0xFF, "camera mask")
     if opcode in ZOOM_OPCODES:
-        if not 1 <= failed_cameras <= 0xFF:
-            raise ValueError(f"failed_cameras: {failed_cameras!r} is outside [1, 255]")
-        return int(failed_cameras)
+        return mask
     return 0x02 if opcode in THERMAL_OPCODES else 0x01
 
 

@@ -8,6 +8,8 @@ from __future__ import annotations
 import struct
 from typing import Any, NamedTuple
 
+from gcu_async._checks import check_int, type_error
+from gcu_async.errors import FieldRangeError
 from gcu_async.protocol.enums import (
     PIP_MODE_MASK,
     CameraFlags,
@@ -17,7 +19,7 @@ from gcu_async.protocol.enums import (
     PodStatus,
     ThermalFlags,
 )
-from gcu_async.protocol.units import Attitude, AxisAngles, GeoPosition, check_int, quantize
+from gcu_async.protocol.units import Attitude, AxisAngles, GeoPosition, check_tuple, quantize
 
 GCU_MAIN = struct.Struct("<BHhhhhhhhHhhh7x")
 """Bytes 5–36 of a GCU packet."""
@@ -75,19 +77,26 @@ class GcuMainFrame(NamedTuple):
         attitude: tuple[float, float, float] = (0.0, 0.0, 0.0),
         angular_rates: tuple[float, float, float] = (0.0, 0.0, 0.0),
     ) -> GcuMainFrame:
-        """Build from engineering units (degrees, °/s)."""
+        """Build from engineering units (degrees, °/s). ``mode`` is a :class:`Mode` member or
+        any code 0–255 (a simulator may play a firmware with modes V2.0.6 does not define);
+        ``pod_status`` an ``int`` 0–0xFFFF (:class:`PodStatus` flags); the tuples are checked
+        element by element (``relative X angle``, ``camera roll``, ``miss distance x``, …)."""
+        relative = check_tuple("relative_angles", relative_angles, AxisAngles)
         rx, ry, rz = (
             quantize(f"relative {axis} angle", v, 100, -18000, 18000, "deg", high_open=True)
-            for axis, v in zip("XYZ", relative_angles, strict=True)
+            for axis, v in zip("XYZ", relative, strict=True)
         )
-        roll, pitch, yaw = attitude
+        roll, pitch, yaw = check_tuple("attitude", attitude, Attitude)
+        rates = check_tuple("angular_rates", angular_rates, AxisAngles)
         wx, wy, wz = (
             quantize(f"{axis} angular rate", v, 10, *S16, "deg/s")
-            for axis, v in zip("XYZ", angular_rates, strict=True)
+            for axis, v in zip("XYZ", rates, strict=True)
         )
+        if not isinstance(miss_distance, tuple) or len(miss_distance) != 2:
+            raise type_error("miss_distance", "a tuple (x, y) of ints", miss_distance)
         frame = cls(
-            check_int("mode", int(mode), 0, 255),
-            check_int("pod_status", int(pod_status), 0, 0xFFFF),
+            check_int("mode", mode, 0, 255),
+            check_int("pod_status", pod_status, 0, 0xFFFF),
             check_int("miss distance x", miss_distance[0], -1000, 1000),
             check_int("miss distance y", miss_distance[1], -1000, 1000),
             rx,
@@ -223,13 +232,21 @@ class GcuSubFrame(NamedTuple):
         pip_mode: int = 0,
         time_zone: int = 0,
     ) -> GcuSubFrame:
-        """Build from engineering units (metres, degrees, zoom ratio)."""
-        pos = target_position or GeoPosition(0.0, 0.0, 0.0)
+        """Build from engineering units (metres, degrees, zoom ratio). ``camera_flags`` must
+        leave bits 2–0 clear (they carry ``pip_mode``). ``pod_model`` is a
+        :class:`PodModel` member or any code 0–255; the flag arguments are ``int``s (their
+        IntFlag members welcome); ``target_position`` a :class:`GeoPosition` (or tuple) or
+        ``None`` (zeros); ``target_distance=None`` sends "no measurement" (0)."""
+        pos = (
+            GeoPosition(0.0, 0.0, 0.0)
+            if target_position is None
+            else check_tuple("target_position", target_position, GeoPosition)
+        )
         return cls(
             quantize("hardware version", hardware_version, 10, 0, 255),
             quantize("firmware version", firmware_version, 10, 0, 255),
-            check_int("pod model", int(pod_model), 0, 255),
-            check_int("faults", int(faults), 0, 0xFFFF),
+            check_int("pod model", pod_model, 0, 255),
+            check_int("faults", faults, 0, 0xFFFF),
             0 if target_distance is None else quantize(
                 "target distance", target_distance, 10, 0, S32[1], "m"
             ),
@@ -238,9 +255,8 @@ class GcuSubFrame(NamedTuple):
             quantize("target altitude", pos.altitude, 1000, *S32, "m"),
             quantize("camera 1 zoom", camera1_zoom, 10, 0, 0xFFFF, "x"),
             quantize("camera 2 zoom", camera2_zoom, 10, 0, 0xFFFF, "x"),
-            check_int("thermal flags", int(thermal_flags), 0, 0xFF),
-            check_int("camera flags", int(camera_flags), 0, 0xFFFF) & ~PIP_MODE_MASK
-            | check_int("pip mode", pip_mode, 0, PIP_MODE_MASK),
+            check_int("thermal flags", thermal_flags, 0, 0xFF),
+            _camera_flags(camera_flags) | check_int("pip mode", pip_mode, 0, PIP_MODE_MASK),
             check_int("time zone", time_zone, -128, 127, "h"),
         )  # fmt: skip
 
@@ -364,6 +380,14 @@ class GcuSubFrame(NamedTuple):
         }  # fmt: skip
 
 
+def _camera_flags(value: object) -> int:
+    flags = check_int("camera flags", value, 0, 0xFFFF)
+    if flags & PIP_MODE_MASK:
+        raise FieldRangeError("camera flags", value, 0, 0xFFFF,
+                              detail="bits 2-0 hold the pip mode: pass pip_mode=")  # fmt: skip
+    return flags
+
+
 class UnknownSubFrame(NamedTuple):
     """A sub frame whose header V2.0.6 does not define, kept byte for byte (bytes 37–68)."""
 
@@ -372,7 +396,14 @@ class UnknownSubFrame(NamedTuple):
     """Bytes 38–68 (31 bytes)."""
 
     def validate(self) -> None:
+        """Raise unless ``header`` is an ``int`` 0–255 other than 0x01 (that is the standard
+        sub frame: build :class:`GcuSubFrame` / ``HostSubFrame``) and ``data`` 31 bytes."""
         check_int("sub frame header", self.header, 0, 255)
+        if self.header == SUB_FRAME_HEADER:
+            raise ValueError("sub frame header: 0x01 is the standard sub frame; build a "
+                             "GcuSubFrame or HostSubFrame, not an UnknownSubFrame")  # fmt: skip
+        if not isinstance(self.data, (bytes, bytearray)):
+            raise type_error("sub frame data", "31 bytes", self.data)
         if len(self.data) != 31:
             raise ValueError(f"sub frame data: expected 31 bytes, got {len(self.data)}")
 

@@ -10,9 +10,13 @@ from __future__ import annotations
 
 from datetime import datetime, timedelta, timezone
 
+from gcu_async._checks import check_bool, check_instance, check_int
+
 GPS_EPOCH = datetime(1980, 1, 6, tzinfo=timezone.utc)
 SECONDS_PER_WEEK = 604_800
 MS_PER_WEEK = SECONDS_PER_WEEK * 1000
+UTC_MAX = datetime(9999, 12, 31, 23, 59, tzinfo=timezone.utc)
+"""Latest time :func:`utc_to_gps` takes (leap seconds added must stay inside ``datetime``)."""
 
 # UTC date from which GPS − UTC equals the count (IERS Bulletin C).
 LEAP_SECONDS: tuple[tuple[datetime, int], ...] = tuple(
@@ -29,7 +33,8 @@ LEAP_SECONDS: tuple[tuple[datetime, int], ...] = tuple(
 
 
 def gps_minus_utc(utc: datetime) -> int:
-    """Leap-second offset GPS − UTC (seconds) in force at ``utc``."""
+    """Leap-second offset GPS − UTC (seconds) in force at ``utc`` (an aware datetime)."""
+    _aware("utc", utc)
     offset = 0
     for start, n in LEAP_SECONDS:
         if utc >= start:
@@ -41,7 +46,12 @@ def gps_to_utc(week: int, ms: int, *, apply_leap_seconds: bool = False) -> datet
     """UTC datetime for GNSS ``week`` and milliseconds of week ``ms``.
 
     With ``apply_leap_seconds=False`` this is the document's rule (GPS time taken as UTC).
+    ``week`` is an ``int`` in the wire's S16 range and ``ms`` in its U32 range (decoded
+    frames may carry any of those; ``ms`` past the week's end runs into the next week).
     """
+    check_int("week", week, -(2**15), 2**15 - 1)
+    check_int("ms", ms, 0, 2**32 - 1, "ms")
+    check_bool("apply_leap_seconds", apply_leap_seconds)
     seconds, millis = divmod(ms, 1000)
     gps = GPS_EPOCH + timedelta(days=7 * week, seconds=seconds, microseconds=1000 * millis)
     if not apply_leap_seconds:
@@ -51,17 +61,33 @@ def gps_to_utc(week: int, ms: int, *, apply_leap_seconds: bool = False) -> datet
     return gps - timedelta(seconds=gps_minus_utc(utc))
 
 
+def _aware(field: str, utc: object) -> None:
+    check_instance(field, utc, datetime, "an aware datetime")
+    assert isinstance(utc, datetime)
+    if utc.tzinfo is None or utc.utcoffset() is None:
+        raise ValueError(f"{field}: {utc!r} is naive; pass an aware datetime (tz=timezone.utc)")
+
+
 def utc_to_gps(utc: datetime, *, apply_leap_seconds: bool = False) -> tuple[int, int]:
     """(week, milliseconds of week) for an aware ``utc`` datetime.
 
-    Raises ``ValueError`` for a naive datetime (its time zone would be a guess) or a time
-    before the GPS epoch.
+    Raises ``TypeError`` for anything but a ``datetime`` (or a non-bool
+    ``apply_leap_seconds``), ``ValueError`` for a naive datetime (its time zone would be a
+    guess) or a time outside [1980-01-06, 9999-12-31T23:59:00] UTC.
     """
-    if utc.tzinfo is None or utc.utcoffset() is None:
-        raise ValueError(f"gnss_time: {utc!r} is naive; pass an aware datetime (tz=timezone.utc)")
-    utc = utc.astimezone(timezone.utc)
-    if utc < GPS_EPOCH:
-        raise ValueError(f"gnss_time: {utc.isoformat()} is before the GPS epoch 1980-01-06")
+    _aware("gnss_time", utc)
+    check_bool("apply_leap_seconds", apply_leap_seconds)
+    given = utc
+    try:
+        utc = utc.astimezone(timezone.utc)
+        early, late = utc < GPS_EPOCH, utc > UTC_MAX
+    except OverflowError:  # e.g. datetime.min at UTC+1 is before year 1 in UTC
+        early = utc.year < 1980
+        late = not early
+    if early or late:
+        side = "before the GPS epoch" if early else "too late for datetime"
+        raise ValueError(f"gnss_time: {given.isoformat()} is outside the allowed range "
+                         f"[{GPS_EPOCH.isoformat()}, {UTC_MAX.isoformat()}] ({side})")  # fmt: skip
     gps = utc + timedelta(seconds=gps_minus_utc(utc)) if apply_leap_seconds else utc
     total_ms = (gps - GPS_EPOCH) // timedelta(milliseconds=1)
     week, ms = divmod(total_ms, MS_PER_WEEK)

@@ -10,13 +10,14 @@ import struct
 from datetime import datetime
 from typing import Any, NamedTuple
 
+from gcu_async._checks import check_bool, check_instance, check_int, check_real
 from gcu_async.protocol.enums import HostFlags, SubFrameRequest
 from gcu_async.protocol.units import (
     Attitude,
     GeoPosition,
     NorthEastUp,
     check_flags,
-    check_int,
+    check_tuple,
     quantize,
 )
 
@@ -30,6 +31,8 @@ SUB_FRAME_HEADER = 0x01
 """Byte 37 of a standard sub frame (the only one V2.0.6 defines)."""
 CONTROL_ANGLE_RAW = 18000  # 0.01°
 CONTROL_RATE_RAW = 1500  # 0.1 °/s ÷ zoom
+ZOOM_MAX = 6553.5
+"""Largest zoom ratio the GCU can report (sub frame camera zoom: U16, 0.1×)."""
 MS_PER_WEEK = 604_800_000
 _FLAG_BITS = 0
 for _flag in HostFlags:
@@ -40,11 +43,36 @@ _NOT_FLAG_BITS = ~_FLAG_BITS
 
 class ControlValues(NamedTuple):
     """Host main frame bytes 5–10 as raw S16 values; their meaning depends on the mode
-    (NOTES §5). Build them with :meth:`angles` or :meth:`rates`."""
+    (NOTES §5). Build them with :meth:`angles` or :meth:`rates`, which check their
+    arguments.
+
+    Invariant: each raw value is an ``int`` in [-18000, 18000] (±180° at 0.01°; rates use
+    ±1500 of it). A ``NamedTuple`` cannot check itself when built raw
+    (``ControlValues(99999, 0, 0)``), so every consumer checks it with :meth:`check` (or
+    :meth:`validate`) before storing or sending it; :meth:`HostMainFrame.build` does.
+    """
 
     roll_raw: int = 0
     pitch_raw: int = 0
     yaw_raw: int = 0
+
+    @classmethod
+    def check(cls, value: object, field: str = "control") -> ControlValues:
+        """``value`` if it is a :class:`ControlValues` holding the invariant; else a
+        ``TypeError`` (not a ControlValues, or a raw value not an ``int``) or a
+        :class:`FieldRangeError` naming ``field.roll_raw`` etc."""
+        control = check_instance(field, value, cls)
+        control.validate(field)
+        return control
+
+    def validate(self, field: str = "control") -> None:
+        """Raise unless each raw value is an ``int`` in [-18000, 18000] (see the class)."""
+        r, p, y = self
+        c = CONTROL_ANGLE_RAW
+        if int is type(r) is type(p) is type(y) and -c <= r <= c and -c <= p <= c and -c <= y <= c:
+            return
+        for name, v in zip(self._fields, self, strict=True):
+            check_int(f"{field}.{name}", v, -c, c, "raw")
 
     @classmethod
     def angles(cls, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0) -> ControlValues:
@@ -61,9 +89,9 @@ class ControlValues(NamedTuple):
         cls, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0, *, zoom: float = 1.0
     ) -> ControlValues:
         """Desired angular rates in °/s. The wire value is in units of 0.1/zoom °/s (the
-        current main-view zoom ratio), range ±1500, so the reachable rate shrinks with zoom."""
-        if not 1.0 <= zoom < float("inf"):
-            raise ValueError(f"zoom: {zoom!r} is outside the allowed range [1, inf) ratio")
+        current main-view zoom ratio), range ±1500, so the reachable rate shrinks with zoom.
+        ``zoom`` is a real number in [1, 6553.5] (what the GCU can report)."""
+        zoom = check_real("zoom", zoom, 1.0, ZOOM_MAX, "ratio")
         scale = 10.0 * zoom
         r = CONTROL_RATE_RAW
         return cls(
@@ -77,7 +105,10 @@ class ControlValues(NamedTuple):
         return Attitude(self.roll_raw / 100, self.pitch_raw / 100, self.yaw_raw / 100)
 
     def as_rates(self, zoom: float = 1.0) -> Attitude:
-        """Read the raw values as angular rates (°/s) at the given zoom ratio."""
+        """Read the raw values as angular rates (°/s) at the given zoom ratio (checked as in
+        :meth:`rates`)."""
+        if type(zoom) is not float or not 1.0 <= zoom <= ZOOM_MAX:
+            zoom = check_real("zoom", zoom, 1.0, ZOOM_MAX, "ratio")
         s = 10.0 * zoom
         return Attitude(self.roll_raw / s, self.pitch_raw / s, self.yaw_raw / s)
 
@@ -125,15 +156,17 @@ class HostMainFrame(NamedTuple):
         subframe_request: int = SubFrameRequest.STANDARD,
     ) -> HostMainFrame:
         """Build from engineering units. ``control=None`` sends the control values invalid
-        (B2 = 0); ``attitude=None`` marks the INS data invalid (B0 = 0) and sends zeros."""
+        (B2 = 0); ``attitude=None`` marks the INS data invalid (B0 = 0) and sends zeros.
+        ``control`` is checked with :meth:`ControlValues.check`; the tuples are checked
+        element by element (``aircraft roll``, ``aircraft velocity up``, …)."""
         flags = 0
-        c = control if control is not None else ControlValues()
+        c = ControlValues.check(control) if control is not None else ControlValues()
         if control is not None:
             flags |= HostFlags.CONTROL_VALID
         roll = pitch = yaw = 0
         if attitude is not None:
             flags |= HostFlags.INS_VALID
-            a_roll, a_pitch, a_yaw = attitude
+            a_roll, a_pitch, a_yaw = check_tuple("attitude", attitude, Attitude)
             roll = quantize("aircraft roll", a_roll, 100, -18000, 18000, "deg", high_open=True)
             pitch = quantize("aircraft pitch", a_pitch, 100, -9000, 9000, "deg")
             yaw = quantize("aircraft yaw", a_yaw, 100, 0, 36000, "deg", high_open=True)
@@ -238,7 +271,7 @@ def _neu(
 ) -> tuple[int, int, int]:
     if value is None:
         return (0, 0, 0)
-    n, e, u = value
+    n, e, u = check_tuple(field.removeprefix("aircraft "), value, NorthEastUp)
     lo, hi = S16
     return (
         quantize(f"{field} north", n, 100, lo, hi, unit),
@@ -281,21 +314,25 @@ class HostSubFrame(NamedTuple):
         apply_leap_seconds: bool = False,
     ) -> HostSubFrame:
         """Build from degrees and metres. ``gnss_time`` (an aware UTC datetime) replaces
-        ``gnss_week``/``gnss_ms``; see :mod:`gcu_async.protocol.gpstime` for leap seconds."""
+        ``gnss_week``/``gnss_ms`` (giving both is a ``ValueError``); see
+        :mod:`gcu_async.protocol.gpstime` for leap seconds."""
+        lon = quantize("longitude", longitude, 1e7, -1_800_000_000, 1_800_000_000, "deg")
+        lat = quantize("latitude", latitude, 1e7, -900_000_000, 900_000_000, "deg")
+        alt = quantize("altitude", altitude, 1000, -(2**31), 2**31 - 1, "m")
+        sats = check_int("satellites", satellites, 0, 255)
+        ms = check_int("gnss_ms", gnss_ms, 0, MS_PER_WEEK - 1, "ms")
+        week = check_int("gnss_week", gnss_week, 0, 32767)
+        rel = quantize("relative altitude", relative_altitude, 1000, -(2**31), 2**31 - 1, "m")
+        check_bool("apply_leap_seconds", apply_leap_seconds)
         if gnss_time is not None:
             from gcu_async.protocol.gpstime import utc_to_gps
 
-            gnss_week, gnss_ms = utc_to_gps(gnss_time, apply_leap_seconds=apply_leap_seconds)
-        frame = cls(
-            quantize("longitude", longitude, 1e7, -1_800_000_000, 1_800_000_000, "deg"),
-            quantize("latitude", latitude, 1e7, -900_000_000, 900_000_000, "deg"),
-            quantize("altitude", altitude, 1000, -(2**31), 2**31 - 1, "m"),
-            check_int("satellites", satellites, 0, 255),
-            check_int("gnss_ms", gnss_ms, 0, MS_PER_WEEK - 1, "ms"),
-            check_int("gnss_week", gnss_week, 0, 32767),
-            quantize("relative altitude", relative_altitude, 1000, -(2**31), 2**31 - 1, "m"),
-        )
-        return frame
+            if week or ms:
+                raise ValueError("gnss_time: give gnss_time or gnss_week/gnss_ms, not both "
+                                 f"(got gnss_week={week}, gnss_ms={ms})")  # fmt: skip
+            week, ms = utc_to_gps(gnss_time, apply_leap_seconds=apply_leap_seconds)
+            check_int("gnss_week (of gnss_time)", week, 0, 32767)  # after the year 2608
+        return cls(lon, lat, alt, sats, ms, week, rel)
 
     @property
     def latitude(self) -> float:

@@ -11,6 +11,7 @@ import struct
 from binascii import crc_hqx
 from typing import Any, NamedTuple, NoReturn
 
+from gcu_async._checks import check_int, type_error
 from gcu_async.errors import FieldRangeError, RemoteProtocolError
 from gcu_async.protocol.commands import (
     Command,
@@ -35,7 +36,6 @@ from gcu_async.protocol.host_frames import (
     HostMainFrame,
     HostSubFrame,
 )
-from gcu_async.protocol.units import check_int
 
 HOST_HEADER = b"\xa8\xe5"
 GCU_HEADER = b"\x8a\x5e"
@@ -61,7 +61,8 @@ GcuSub = GcuSubFrame | UnknownSubFrame | None
 
 
 class HostPacket(NamedTuple):
-    """A host → GCU packet."""
+    """A host → GCU packet. Built raw; :meth:`encode` checks every part (types and ranges)
+    and raises ``TypeError`` / :class:`FieldRangeError` naming the part and field."""
 
     main: HostMainFrame
     sub: HostSub = None
@@ -72,9 +73,15 @@ class HostPacket(NamedTuple):
     def encode(self) -> bytes:
         """Validate every field and return the wire bytes."""
         main, sub, command, version = self
+        if not isinstance(main, HostMainFrame):
+            raise type_error("main", "a HostMainFrame", main)
         main.validate()
         if sub is not None:
+            if not isinstance(sub, (HostSubFrame, UnknownSubFrame)):
+                raise type_error("sub", "a HostSubFrame, an UnknownSubFrame or None", sub)
             sub.validate()
+        if not isinstance(command, Command):
+            raise type_error("command", "a Command", command)
         if type(version) is not int or not 0 <= version <= 255:
             check_int("version", version, 0, 255)
         params = command.encode_params()
@@ -105,7 +112,8 @@ class HostPacket(NamedTuple):
 
 
 class GcuPacket(NamedTuple):
-    """A GCU → host packet."""
+    """A GCU → host packet. Built raw; :meth:`encode` checks every part (types and ranges)
+    and raises ``TypeError`` / :class:`FieldRangeError` naming the part and field."""
 
     main: GcuMainFrame
     sub: GcuSub = None
@@ -115,10 +123,16 @@ class GcuPacket(NamedTuple):
 
     def encode(self) -> bytes:
         """Validate every field and return the wire bytes."""
+        if not isinstance(self.main, GcuMainFrame):
+            raise type_error("main", "a GcuMainFrame", self.main)
         self.main.validate()
         if self.sub is not None:
+            if not isinstance(self.sub, (GcuSubFrame, UnknownSubFrame)):
+                raise type_error("sub", "a GcuSubFrame, an UnknownSubFrame or None", self.sub)
             self.sub.validate()
         check_int("version", self.version, 0, 255)
+        if not isinstance(self.feedback, Feedback):
+            raise type_error("feedback", "a Feedback", self.feedback)
         check_int("feedback opcode", self.feedback.opcode, 0, 255)
         status = self.feedback.status
         n = BASE_LENGTH if status is None else BASE_LENGTH + 1

@@ -5,6 +5,7 @@ Appendix 8 lists 18 commands; commands it does not list are supported by every m
 
 from __future__ import annotations
 
+from gcu_async._checks import check_int, type_error
 from gcu_async.protocol.enums import Opcode, PodModel
 
 POD_NAMES: dict[PodModel, str] = {
@@ -60,11 +61,13 @@ SUPPORT: dict[PodModel, frozenset[Opcode]] = {
 
 
 def supports(model: PodModel | int | str, opcode: Opcode | int) -> bool:
-    """Does ``model`` support ``opcode``? Commands Appendix 8 does not list: always.
+    """Does ``model`` support ``opcode`` (an ``int`` 0–255)? Commands Appendix 8 does not
+    list, unknown opcodes included: always.
 
     Raises ``ValueError`` for a model Appendix 7 does not list (support is unknown).
     """
     pod = resolve_pod_model(model)
+    check_int("opcode", opcode, 0, 0xFF)
     if opcode not in MATRIX_COMMANDS:
         return True
     return Opcode(opcode) in SUPPORT[pod]
@@ -81,26 +84,35 @@ def is_radiometric(model: PodModel | int | str) -> bool:
 
 
 def pod_name(model: PodModel | int) -> str:
-    """Vendor spelling of a model code (``"unknown (code 99)"`` for unlisted codes)."""
+    """Vendor spelling of a model code (``"unknown (code 99)"`` for unlisted codes): a
+    :class:`PodModel` member or a code 0–255 (what the wire carries)."""
+    if not isinstance(model, PodModel):
+        model = check_int("pod model", model, 0, 0xFF)
     pod = PodModel(model)
     return POD_NAMES.get(pod, f"unknown (code {int(model)})")
 
 
 def resolve_pod_model(model: PodModel | int | str) -> PodModel:
     """A :class:`PodModel` from a member, an Appendix 7 code, or a name (``"D-90Pro(TA)"``,
-    ``"d_90pro_ta"`` or ``"45"``). Raises ``ValueError`` naming the known models."""
+    ``"d_90pro_ta"`` or ``"45"``). Raises ``ValueError`` naming the known models or codes,
+    ``TypeError`` for anything but a ``str`` or an ``int`` (bools and floats included)."""
     if isinstance(model, str):
         key = _norm(model)
         for pod, name in POD_NAMES.items():
             if key in (_norm(name), _norm(pod.name)):
                 return pod
-        if model.strip().isdigit():
-            model = int(model)
+        digits = model.strip()
+        if digits.isascii() and digits.isdigit():
+            model = int(digits)
         else:
             raise ValueError(f"pod model: {model!r} is not one of {', '.join(POD_NAMES.values())}")
+    elif isinstance(model, bool) or not isinstance(model, int):
+        raise type_error("pod model", "a PodModel, its code (int) or its name (str)", model)
     pod = PodModel(model)
     if pod not in POD_NAMES:
-        raise ValueError(f"pod model: code {int(model)} is not listed in Appendix 7")
+        codes = ", ".join(str(int(p)) for p in POD_NAMES)
+        raise ValueError(f"pod model: code {int(model)} is not listed in Appendix 7 "
+                         f"(listed: {codes})")  # fmt: skip
     return pod
 
 

@@ -1,16 +1,25 @@
 """Engineering-unit value types and the one place that turns units into raw wire integers.
 
 Every conversion goes through :func:`quantize` (units → raw, rounded, range-checked in units)
-or :func:`check_raw` (raw → range-checked), so every out-of-range value raises the same
-:class:`~gcu_async.errors.FieldRangeError` naming the field, the allowed range and the value.
+or :func:`~gcu_async._checks.check_int` (raw → range-checked), so every out-of-range value
+raises the same :class:`~gcu_async.errors.FieldRangeError` naming the field, the allowed range
+and the value, and every wrong type a ``TypeError`` naming the field (the package rule in
+:mod:`gcu_async.protocol`). :func:`check_tuple` and :func:`check_member` check the tuple and
+enum arguments of the builders.
 """
 
 from __future__ import annotations
 
-from enum import IntFlag
-from typing import NamedTuple
+import math
+from enum import IntEnum, IntFlag
+from typing import Any, NamedTuple, TypeVar
 
+from gcu_async._checks import check_enum, check_int, check_real, type_error
 from gcu_async.errors import FieldRangeError
+
+_NT = TypeVar("_NT", bound=tuple[Any, ...])
+_new = tuple.__new__
+_IE = TypeVar("_IE", bound=IntEnum)
 
 
 class Attitude(NamedTuple):
@@ -56,11 +65,16 @@ def quantize(
     high_open: bool = False,
 ) -> int:
     """Return ``round(value * scale)`` after checking it lies in ``[raw_low, raw_high]``
-    (``raw_high`` excluded when ``high_open``); errors speak in the caller's units."""
+    (``raw_high`` excluded when ``high_open``); errors speak in the caller's units.
+
+    ``value`` must be a real number (``int`` or ``float``, not a ``bool``): anything else is a
+    ``TypeError``. NaN, infinities and values too large for a float are out of range. The
+    range applies to the rounded value, so a value less than half a wire step outside a
+    bound is sent as that bound (rounding to the wire resolution, never clipping)."""
     if type(value) is not float and (
         isinstance(value, bool) or not isinstance(value, (int, float))
     ):  # the common float takes one cheap test
-        raise TypeError(f"{field}: expected a number, got {type(value).__name__} {value!r}")
+        raise type_error(field, "a real number", value)
     high_limit = raw_high - 1 if high_open else raw_high
     try:
         raw: int | None = round(value * scale)
@@ -68,8 +82,9 @@ def quantize(
         raw = None
     if raw is None or not raw_low <= raw <= high_limit:
         raise FieldRangeError(
-            field, value, _unit(raw_low, scale), _unit(raw_high, scale), unit, high_open=high_open
-        )
+            field, value, _unit(raw_low, scale), _unit(raw_high, scale), unit, high_open=high_open,
+            detail="" if raw is not None or isinstance(value, int) else "not a finite number",
+        )  # fmt: skip
     return raw
 
 
@@ -79,24 +94,16 @@ def _unit(raw: int, scale: float) -> float | int:
     return round(raw / scale, 10)
 
 
-def check_int(field: str, value: int, low: int, high: int, unit: str = "") -> int:
-    """Check an integer-valued field (flags, counts, raw values) against ``[low, high]``."""
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise TypeError(f"{field}: expected an integer, got {type(value).__name__} {value!r}")
-    if not low <= value <= high:
-        raise FieldRangeError(field, value, low, high, unit)
-    return int(value)
-
-
-def check_flags(field: str, value: int, allowed: int | type[IntFlag]) -> int:
-    """Check that ``value`` sets no bit outside ``allowed`` (reserved bits must be zero)."""
+def check_flags(field: str, value: object, allowed: int | type[IntFlag]) -> int:
+    """Check that ``value`` is an ``int`` that sets no bit outside ``allowed`` (reserved
+    bits must be zero)."""
     mask = allowed if isinstance(allowed, int) else _all_bits(allowed)
-    check_int(field, value, 0, 0xFFFF)
-    if value & ~mask:
+    bits = check_int(field, value, 0, 0xFFFF)
+    if bits & ~mask:
         raise FieldRangeError(
-            field, value, 0, mask, detail=f"reserved bits 0x{value & ~mask:X} must be zero"
+            field, value, 0, mask, detail=f"reserved bits 0x{bits & ~mask:X} must be zero"
         )
-    return value
+    return bits
 
 
 def _all_bits(flag: type[IntFlag]) -> int:
@@ -106,12 +113,56 @@ def _all_bits(flag: type[IntFlag]) -> int:
     return bits
 
 
+def check_tuple(field: str, value: object, cls: type[_NT]) -> _NT:
+    """``value`` as a ``cls`` (one of the NamedTuples above): an instance of ``cls`` or a
+    plain ``tuple`` of the same length. Lists, other NamedTuples (an :class:`AxisAngles`
+    where an :class:`Attitude` is meant) and anything else are a ``TypeError``. The elements
+    are the caller's to check, each under ``field.element``."""
+    if type(value) is cls:
+        return value
+    names: tuple[str, ...] = cls._fields  # type: ignore[attr-defined]
+    if (type(value) is tuple or isinstance(value, cls)) and len(value) == len(names):
+        return _new(cls, value)  # what NamedTuple._make does, without its checks
+    expected = f"a {cls.__name__} or a tuple ({', '.join(names)})"
+    raise type_error(field, expected, value)
+
+
+def check_member(field: str, value: object, enum: type[_IE]) -> _IE:
+    """A member of the integer enum ``enum`` from a member or its exact ``int`` value
+    (:func:`~gcu_async._checks.check_enum`); an ``int`` that names no member is a
+    :class:`FieldRangeError` listing the members."""
+    try:
+        return check_enum(field, value, enum)
+    except TypeError:
+        raise
+    except ValueError:
+        codes = [int(m) for m in enum]
+        allowed = ", ".join(f"{m.name}={int(m)}" for m in enum)
+        raise FieldRangeError(field, value, min(codes), max(codes),
+                              detail=f"one of {allowed}") from None  # fmt: skip
+
+
+def check_finite(field: str, value: object) -> float:
+    """``value`` as a finite ``float``: :func:`~gcu_async._checks.check_real` without bounds
+    lets ±inf through (they lie inside [-inf, inf]), so infinities are rejected here."""
+    f = check_real(field, value)
+    if not -math.inf < f < math.inf:
+        raise FieldRangeError(field, value, -math.inf, math.inf, detail="not a finite number")
+    return f
+
+
 def wrap_degrees_360(angle: float) -> float:
-    """Wrap an angle into [0, 360), e.g. for yaw sources that report ±180° (call it explicitly)."""
+    """Wrap an angle into [0, 360), e.g. for yaw sources that report ±180° (call it explicitly).
+    ``angle`` is any finite real number (``float % 360`` is exact); NaN and infinities are a
+    :class:`FieldRangeError`, non-numbers a ``TypeError``."""
+    if type(angle) is not float or not -math.inf < angle < math.inf:
+        angle = check_finite("angle", angle)
     wrapped = angle % 360.0
     return 0.0 if wrapped >= 360.0 else wrapped
 
 
 def wrap_degrees_180(angle: float) -> float:
-    """Wrap an angle into [-180, 180)."""
+    """Wrap an angle into [-180, 180) (same checks as :func:`wrap_degrees_360`)."""
+    if type(angle) is not float or not -math.inf < angle < math.inf:
+        angle = check_finite("angle", angle)
     return wrap_degrees_360(angle + 180.0) - 180.0
