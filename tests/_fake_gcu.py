@@ -12,19 +12,23 @@ from gcu_async.protocol import (
     GcuPacket,
     GcuSubFrame,
     HostPacket,
+    Mode,
     command_code,
     decode_host_packet,
 )
+from gcu_async.session.control import REPORTED
 from gcu_async.transport.memory import MemoryTransport
 
 
 def succeed(packet: HostPacket) -> Feedback | None:
+    """Success for every command (no status for the null command)."""
     op = command_code(packet.command)
     return Feedback(op, None if op == 0 else 0)
 
 
 class FakeGcu:
-    """``answer(packet)`` returns the feedback to send, or ``None`` to stay silent."""
+    """``answer(packet)`` returns the feedback to send, or ``None`` to stay silent. A mode
+    command answered with success switches the mode the main frame reports."""
 
     def __init__(self, answer: Callable[[HostPacket], Feedback | None] = succeed) -> None:
         self.client_end, self._end = MemoryTransport.pair(("client", "fake-gcu"))
@@ -33,6 +37,7 @@ class FakeGcu:
         self.answer = answer
         self.packets: list[HostPacket] = []
         self.sub = GcuSubFrame.build(pod_model=45, camera1_zoom=1.0)
+        self.mode = Mode.POINTING_FOLLOW
 
     async def start(self) -> None:
         await self._end.open()
@@ -45,5 +50,9 @@ class FakeGcu:
             packet = decode_host_packet(raw)
             self.packets.append(packet)
             feedback = self.answer(packet)
+            opcode = command_code(packet.command)
+            if feedback is not None and feedback.status == 0 and opcode in REPORTED:
+                self.mode = REPORTED[opcode]
             if feedback is not None and self._end.connected:
-                self._end.send(GcuPacket(GcuMainFrame(), self.sub, feedback).encode())
+                main = GcuMainFrame.build(mode=self.mode)
+                self._end.send(GcuPacket(main, self.sub, feedback).encode())

@@ -217,7 +217,7 @@ async def test_bad_arguments_raise_before_anything_is_sent(gcu_sim: SimHandle) -
         await gcu.take_photo()
         control, aircraft = gcu.control, gcu.aircraft
         for name, call in BAD_CALLS:
-            submitted = gcu.scheduler.stats.commands_submitted
+            submitted = gcu.session.stats.submitted
             executions = dict(model.executions)
             async def attempt(call: Callable[[GcuClient], Any] = call) -> None:
                 result = call(gcu)
@@ -227,7 +227,7 @@ async def test_bad_arguments_raise_before_anything_is_sent(gcu_sim: SimHandle) -
             with pytest.raises((ValueError, TypeError)) as info:
                 await attempt()
             assert str(info.value), name
-            assert gcu.scheduler.stats.commands_submitted == submitted, name
+            assert gcu.session.stats.submitted == submitted, name
             assert dict(model.executions) == executions, name
             assert gcu.control == control, name
             assert gcu.aircraft == aircraft, name

@@ -85,14 +85,21 @@ async def test_control_values_valid_bit_and_invalid_during_centre(fake: FakeGcu)
 
     fake.answer = answer
     async with GcuClient(fake.client_end) as gcu:
-        gcu.set_angles(pitch=-20.0, yaw=10.0)
+        await gcu.pointing_lock(pitch_rate=-2.0)
+        gcu.set_rates(pitch=-4.0, yaw=1.0)
         n = len(fake.packets)
         await until(lambda: len(fake.packets) > n + 1)
         assert last(fake).main.control_valid
-        assert last(fake).main.control.as_angles() == (0.0, -20.0, 10.0)
+        assert last(fake).main.control.as_rates() == (0.0, -4.0, 1.0)
         await gcu.centre()
         assert len(centre_packets) >= 3
         assert all(not p.main.control_valid for p in centre_packets)
+        n = len(fake.packets)
+        await until(lambda: len(fake.packets) > n + 1)
+        # the old rates would steer away from the centre: cleared, sent invalid
+        assert gcu.control is None
+        assert not last(fake).main.control_valid
+        gcu.set_rates(yaw=2.0)  # the mode is unchanged: new rates go out valid
         n = len(fake.packets)
         await until(lambda: len(fake.packets) > n + 1)
         assert last(fake).main.control_valid
@@ -100,24 +107,30 @@ async def test_control_values_valid_bit_and_invalid_during_centre(fake: FakeGcu)
 
 async def test_mode_helper_sends_control_invalid_until_mode_confirmed(fake: FakeGcu) -> None:
     async with GcuClient(fake.client_end) as gcu:
-        gcu.set_rates(yaw=5.0)
+        await gcu.pointing_lock(yaw_rate=5.0)
         await gcu.euler_control(pitch=-45.0, yaw=270.0)
         euler = [p for p in fake.packets if command_code(p.command) == Opcode.EULER_CONTROL]
         assert euler
-        assert all(not p.main.control_valid for p in euler)
+        assert all(not p.main.control_valid for p in euler)  # rates never read as angles
         # yaw 270 is sent as -90 (the control field is ±180)
         assert gcu.control is not None
         assert gcu.control.as_angles() == (0.0, -45.0, -90.0)
+        n = len(fake.packets)
+        await until(lambda: len(fake.packets) > n + 1)
+        assert last(fake).main.control_valid
+        assert last(fake).main.control.as_angles() == (0.0, -45.0, -90.0)
 
 
 async def test_command_goes_out_at_once_not_at_the_next_tick(fake: FakeGcu) -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        client = GcuClient(fake.client_end, rate_hz=0.5)  # a tick every 2 s
+        client = GcuClient(fake.client_end, rate_hz=2.0)  # a tick every 0.5 s
     async with client as gcu:
+        await asyncio.sleep(0.6)  # mid-way between ticks, with room in the rate bound
         start = time.monotonic()
         await asyncio.wait_for(gcu.take_photo(), 1.0)
-        assert time.monotonic() - start < 1.0
+        assert time.monotonic() - start < 0.4
+        assert gcu.session.stats.early_packets == 1
 
 
 async def test_failure_raises_command_failed_with_cameras(fake: FakeGcu) -> None:
@@ -196,7 +209,7 @@ async def test_cancelled_call_leaves_session_consistent(fake: FakeGcu) -> None:
             await task
         with pytest.raises(asyncio.CancelledError):
             await queued
-        assert gcu.scheduler.pending == 0
+        assert gcu.session.pending == 0
         silent = False
         await asyncio.wait_for(gcu.take_photo(), 2.0)
 
@@ -205,10 +218,10 @@ async def test_check_support_refuses_without_sending(fake: FakeGcu) -> None:
     fake.sub = GcuSubFrame.build(pod_model=0)  # Z-6A: no palette, no zoom-to
     async with GcuClient(fake.client_end, check_support=True) as gcu:
         await until(lambda: gcu.pod_model is not None)
-        submitted = gcu.scheduler.stats.commands_submitted
+        submitted = gcu.session.stats.submitted
         with pytest.raises(UnsupportedCommandError, match="Z-6A does not support PALETTE"):
             await gcu.set_palette(2)
-        assert gcu.scheduler.stats.commands_submitted == submitted
+        assert gcu.session.stats.submitted == submitted
         assert all(command_code(p.command) != Opcode.PALETTE for p in fake.packets)
         await gcu.take_photo()  # not in Appendix 8: every model
 
@@ -252,21 +265,25 @@ def test_built_frames_hold_plain_integers() -> None:
 
 async def test_click_to_pan_and_track_release_the_control_values(fake: FakeGcu) -> None:
     async with GcuClient(fake.client_end) as gcu:
-        gcu.set_angles(pitch=-30.0)
+        await gcu.euler_control(pitch=-30.0)
         await gcu.click_to_pan(0.8, 0.2)
         assert gcu.control is None  # pointing-lock would read angle targets as rates
         n = len(fake.packets)
         await until(lambda: len(fake.packets) > n + 1)
         assert not last(fake).main.control_valid
-        gcu.set_angles(pitch=-30.0)
+        with pytest.raises(ValueError, match="no mode is confirmed"):
+            gcu.set_angles(pitch=-30.0)
+        await gcu.euler_control(pitch=-30.0)
         await gcu.track((0.4, 0.4, 0.6, 0.6))
         assert gcu.control is None
+        with pytest.raises(ValueError, match="TRACK takes no control values"):
+            gcu.set_angles(pitch=-30.0)
 
 
 async def test_connect_passes_reorder_guard() -> None:
     from gcu_async import connect
 
     client = connect("udp://127.0.0.1:2337", reorder_guard=0.05, local_port=0)
-    assert client.scheduler.reorder_guard == 0.05
-    assert connect("udp://127.0.0.1:2337").scheduler.reorder_guard == 0.015
-    assert connect("tcp://127.0.0.1:2332").scheduler.reorder_guard == 0.0
+    assert client.reorder_guard == 0.05
+    assert connect("udp://127.0.0.1:2337").reorder_guard == 0.015
+    assert connect("tcp://127.0.0.1:2332").reorder_guard == 0.0

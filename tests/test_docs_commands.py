@@ -19,6 +19,7 @@ import pytest
 from gcu_async import CameraFlags, GcuClient, GcuSubFrame
 from gcu_async.client.api import CommandMethods
 from gcu_async.protocol import Command, ControlValues, Feedback, command_code
+from gcu_async.session import ControlKind
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 START = "<!-- --8<-- [start:commands] -->"
@@ -55,17 +56,33 @@ ROWS = table_rows(README.read_text(encoding="utf-8"))
 
 
 class Recorder(CommandMethods):
-    """The client's command methods with ``execute`` recording instead of sending."""
+    """The client's command methods with ``_submit`` recording instead of sending; a
+    state-checked record command is recorded only if the camera flags call for it."""
 
     def __init__(self, info: GcuSubFrame | None) -> None:
-        self._info = info
+        self._sub = info
         self.commands: list[Command] = []
 
-    async def execute(self, command: Command, *, timeout: float | None = None) -> Feedback:
+    @property
+    def _info(self) -> GcuSubFrame | None:
+        return self._sub
+
+    async def _submit(
+        self,
+        command: Command,
+        *,
+        timeout: float | None = None,
+        queue_timeout: float | None = None,
+        control: ControlValues | None = None,
+        recording_target: bool | None = None,
+    ) -> Feedback | None:
+        recording = self._sub is not None and self._sub.recording
+        if recording_target is not None and recording == recording_target:
+            return None
         self.commands.append(command)
         return Feedback(command_code(command), 0)
 
-    def set_control(self, control: ControlValues | None) -> None:
+    def _set_control(self, control: ControlValues | None, kind: ControlKind) -> None:
         pass
 
 

@@ -407,7 +407,8 @@ async def test_link_lost_is_503_and_reported_live(web: Web) -> None:
         await eventually(link_down, what="link down in /api/status")
         response = await web.command("photo")
         assert response.status_code == 503
-        assert response.json()["kind"] == "LinkLost"
+        assert response.json()["kind"] == "CommandLinkLost"
+        assert response.json()["outcome"] == "not sent"
         # the socket keeps reporting the link while no telemetry arrives
         deadline = time.monotonic() + 3.0
         while True:

@@ -23,6 +23,7 @@ import asyncio
 import contextlib
 import json
 import logging
+import math
 import os
 from collections.abc import AsyncGenerator, AsyncIterator
 from pathlib import Path
@@ -36,6 +37,7 @@ from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from gcu_async import (
+    CommandError,
     CommandFailed,
     CommandTimeout,
     FieldRangeError,
@@ -119,7 +121,14 @@ def _client(conn: Request | WebSocket) -> GcuClient:
 
 def _error(code: int, exc: BaseException | str, **extra: Any) -> JSONResponse:
     kind = "error" if isinstance(exc, str) else type(exc).__name__
+    if isinstance(exc, CommandError):  # did it execute? "not sent", "unknown" or "failed"
+        extra["outcome"] = exc.outcome.value
     return JSONResponse({"error": str(exc), "kind": kind, **extra}, status_code=code)
+
+
+def _number(x: float) -> float | None:
+    """JSON has no infinity: an unbounded side of a range is null."""
+    return x if math.isfinite(x) else None
 
 
 # -- HTTP ---------------------------------------------------------------------------------
@@ -169,7 +178,8 @@ async def run_command(request: Request) -> Response:
     except LinkLost as exc:
         return _error(503, exc)
     except FieldRangeError as exc:
-        return _error(422, exc, field=exc.field, low=exc.low, high=exc.high, unit=exc.unit)
+        return _error(422, exc, field=exc.field, low=_number(exc.low), high=_number(exc.high),
+                      unit=exc.unit)  # fmt: skip
     except ValueError as exc:
         return _error(422, exc)
     return JSONResponse(

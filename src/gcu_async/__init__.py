@@ -4,12 +4,15 @@
 from gcu_async.client import GcuClient, LinkHealth, TelemetrySample
 from gcu_async.client.connect import connect
 from gcu_async.errors import (
+    CommandError,
     CommandFailed,
+    CommandLinkLost,
     CommandTimeout,
     FieldRangeError,
     GcuError,
     LinkLost,
     LocalProtocolError,
+    Outcome,
     RemoteProtocolError,
     UnsupportedCommandError,
 )
@@ -19,8 +22,9 @@ from gcu_async.protocol import __all__ as _protocol_all
 __version__ = "0.1.0"
 
 __all__ = [
-    "CommandFailed", "CommandTimeout", "FieldRangeError", "GcuClient", "GcuError", "LinkHealth",
-    "LinkLost", "LocalProtocolError", "RemoteProtocolError", "TelemetrySample",
+    "CommandError", "CommandFailed", "CommandLinkLost", "CommandTimeout", "FieldRangeError",
+    "GcuClient", "GcuError", "LinkHealth", "LinkLost", "LocalProtocolError", "Outcome",
+    "RemoteProtocolError", "TelemetrySample",
     "UnsupportedCommandError", "__version__", "connect",
     *_protocol_all,
 ]  # fmt: skip

@@ -70,7 +70,7 @@ def check_real(
         except OverflowError:  # an int too large for a float
             raise FieldRangeError(field, value, low, high, unit, high_open=high_open,
                                   detail=detail or "not representable") from None  # fmt: skip
-    if not (low <= value < high if high_open else low <= value <= high):
+    if not math.isfinite(value) or not (low <= value < high if high_open else low <= value <= high):
         extra = detail or ("not a finite number" if not math.isfinite(value) else "")
         raise FieldRangeError(field, value, low, high, unit, high_open=high_open, detail=extra)
     return value

@@ -8,6 +8,8 @@ builtin ``TimeoutError`` / ``ConnectionError`` so generic handlers keep working.
 
 from __future__ import annotations
 
+import enum
+
 
 class GcuError(Exception):
     """Root of every error raised by gcu_async."""
@@ -67,29 +69,71 @@ class RemoteProtocolError(GcuError, ValueError):
     """The peer sent bytes that are not a valid packet of this protocol."""
 
 
-class CommandFailed(GcuError):
-    """The GCU answered a command with a failure execution status.
+class Outcome(enum.Enum):
+    """What a command that did not succeed may have done on the GCU (docs/client.md,
+    "Outcomes"). Every :class:`CommandError` carries one."""
+
+    NOT_SENT = "not sent"
+    """No packet ever carried it: it did not execute and never will. Safe to retry."""
+    UNKNOWN = "unknown"
+    """It was sent, but no feedback proves what happened: it may have executed once (never
+    twice), and packets already on their way may still make it execute later."""
+    FAILED = "failed"
+    """The GCU answered with a failure status for it."""
+
+
+class CommandError(GcuError):
+    """A command did not succeed. ``outcome`` says whether it may have executed;
+    ``command`` is the command object and ``opcode`` its opcode byte."""
+
+    def __init__(
+        self, message: str, *, outcome: Outcome, opcode: int | None = None,
+        command: object | None = None,
+    ) -> None:  # fmt: skip
+        self.outcome = outcome
+        self.opcode = opcode
+        self.command = command
+        super().__init__(message)
+
+    @property
+    def sent(self) -> bool:
+        """True if at least one packet carried the command (outcome not ``NOT_SENT``)."""
+        return self.outcome is not Outcome.NOT_SENT
+
+
+class CommandFailed(CommandError):
+    """The GCU answered a command with a failure execution status (outcome ``FAILED``).
 
     ``opcode`` is the command's opcode, ``status`` the raw execution-status byte and
     ``failed_cameras`` the camera mask of the cameras that failed (zoom commands only;
     an empty mask otherwise).
     """
 
-    def __init__(self, opcode: int, status: int | None, failed_cameras: int = 0) -> None:
+    def __init__(
+        self, opcode: int, status: int | None, failed_cameras: int = 0, *,
+        command: object | None = None,
+    ) -> None:  # fmt: skip
         from gcu_async.protocol.enums import CameraMask, opcode_name
 
-        self.opcode = opcode
         self.status = status
         self.failed_cameras = CameraMask(failed_cameras)
         cams = f", failed cameras {self.failed_cameras!r}" if failed_cameras else ""
         status_txt = "none" if status is None else f"0x{status:02X}"
         name = opcode_name(opcode)
-        super().__init__(f"{name} (0x{opcode:02X}) failed: status {status_txt}{cams}")
+        super().__init__(f"{name} (0x{opcode:02X}) failed: status {status_txt}{cams}",
+                         outcome=Outcome.FAILED, opcode=opcode, command=command)  # fmt: skip
 
 
-class CommandTimeout(GcuError, TimeoutError):
-    """No feedback for a command arrived before its timeout."""
+class CommandTimeout(CommandError, TimeoutError):
+    """A command ran out of time: on the wire without feedback (outcome ``UNKNOWN``), or in
+    the queue before it was ever sent (outcome ``NOT_SENT``)."""
 
 
 class LinkLost(GcuError, ConnectionError):
     """The link to the GCU is down (closed, silent too long, or never came up)."""
+
+
+class CommandLinkLost(LinkLost, CommandError):
+    """A command ended because the link went down or the client closed: ``outcome`` is
+    ``NOT_SENT`` if it was still queued (or the link was already down), ``UNKNOWN`` if it
+    had been sent."""

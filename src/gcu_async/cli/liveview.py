@@ -15,9 +15,9 @@ import time
 from typing import TextIO
 
 from gcu_async.client.client import GcuClient
-from gcu_async.client.health import LinkHealth
 from gcu_async.client.telemetry import TelemetrySample
 from gcu_async.protocol.enums import CameraFlags, PodStatus
+from gcu_async.session import LinkHealth
 
 CLEAR_LINE = "\r\x1b[2K"
 LIVE_MODES = ("tty", "plain", "off")

@@ -1,10 +1,6 @@
-"""The asyncio client: session, command scheduler, telemetry and link health."""
+"""The asyncio client: a thin driver of the sans-I/O :mod:`gcu_async.session`."""
 
-from gcu_async.client.client import GcuClient
-from gcu_async.client.health import LinkHealth
-from gcu_async.client.scheduler import CommandScheduler, SchedulerStats, Ticket
-from gcu_async.client.telemetry import TelemetrySample
+from gcu_async.client.client import ClientState, GcuClient
+from gcu_async.session import LinkHealth, TelemetrySample
 
-__all__ = [
-    "CommandScheduler", "GcuClient", "LinkHealth", "SchedulerStats", "TelemetrySample", "Ticket",
-]  # fmt: skip
+__all__ = ["ClientState", "GcuClient", "LinkHealth", "TelemetrySample"]

@@ -1,193 +1,252 @@
 """One awaitable method per command of V2.0.6, typed and in engineering units.
 
-A mixin over :meth:`GcuClient.execute`: each method builds the protocol core's command
-(validating every argument before anything is sent) and awaits its feedback.
+A mixin over :meth:`GcuClient._submit`: each method checks its arguments (type and range,
+named as the caller named them: docs/client.md, "The API boundary"), builds the protocol
+core's command and awaits its feedback. Nothing is sent when a check fails.
 """
 
 from __future__ import annotations
 
 import abc
+from collections.abc import Sequence
 
+from gcu_async._checks import check_bool, check_enum, check_int, check_real, type_error
 from gcu_async.protocol import commands as c
 from gcu_async.protocol.enums import CameraMask, NightVisionMode, OsdCoordinates
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuSubFrame
-from gcu_async.protocol.host_frames import ControlValues
-from gcu_async.protocol.units import wrap_degrees_180
+from gcu_async.protocol.host_frames import CONTROL_RATE_RAW, ControlValues
+from gcu_async.session import ControlKind
 
 CAM1 = CameraMask.CAMERA_1
 CAM2 = CameraMask.CAMERA_2
+RATE_LIMIT = CONTROL_RATE_RAW / 10
+"""°/s at zoom 1×: the largest rate the control field carries (it shrinks with zoom)."""
+
+
+def _angle(name: str, value: object, low: float = -180.0, high: float = 180.0) -> float:
+    return check_real(name, value, low, high, "deg")
+
+
+def _cameras(value: object) -> int:
+    return check_int("cameras", value, 1, 0xFF, "camera mask")
+
+
+def _point(x: object, y: object) -> c.ImagePoint:
+    return c.ImagePoint(check_real("x", x, 0.0, 1.0, "image fraction"),
+                        check_real("y", y, 0.0, 1.0, "image fraction"))  # fmt: skip
+
+
+def _box(value: object) -> c.ImageBox:
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 4:
+        raise type_error("box", "an ImageBox or a (left, top, right, bottom) tuple", value)
+    return c.ImageBox(*(check_real(f"box.{f}", v, 0.0, 1.0, "image fraction")
+                        for f, v in zip(c.ImageBox._fields, value, strict=True)))  # fmt: skip
 
 
 class CommandMethods(abc.ABC):
     """Command methods shared by :class:`GcuClient`."""
 
-    _info: GcuSubFrame | None
+    @property
+    @abc.abstractmethod
+    def _info(self) -> GcuSubFrame | None:
+        """The latest sub frame."""
 
     @abc.abstractmethod
-    async def execute(self, command: c.Command, *, timeout: float | None = None) -> Feedback:
-        """Send a command and await its feedback."""
+    async def _submit(
+        self,
+        command: c.Command,
+        *,
+        timeout: float | None = None,
+        queue_timeout: float | None = None,
+        control: ControlValues | None = None,
+        recording_target: bool | None = None,
+    ) -> Feedback | None:
+        """Submit a command and await its outcome."""
 
     @abc.abstractmethod
-    def set_control(self, control: ControlValues | None) -> None:
-        """Set the control values."""
+    def _set_control(self, control: ControlValues | None, kind: ControlKind) -> None:
+        """New control values of ``kind`` for the current mode."""
+
+    async def _run(self, command: c.Command, *, timeout: float | None = None,
+                   control: ControlValues | None = None) -> Feedback:  # fmt: skip
+        result = await self._submit(command, timeout=timeout, control=control)
+        assert result is not None  # only state-checked record commands are ever skipped
+        return result
 
     def _main_zoom(self) -> float:
-        zoom = self._info.camera1_zoom if self._info is not None else 1.0
+        info = self._info
+        zoom = info.camera1_zoom if info is not None else 1.0
         return zoom if zoom >= 1.0 else 1.0
 
-    async def _mode(self, command: c.Command, control: ControlValues | None) -> Feedback:
-        # Control values change meaning with the mode: send them invalid (rates 0, angles
-        # held) until the GCU confirms the new mode, then the new values.
-        self.set_control(None)
-        feedback = await self.execute(command)
-        self.set_control(control)
-        return feedback
+    def _rates(self, roll: object, pitch: object, yaw: object) -> ControlValues:
+        zoom = self._main_zoom()
+        limit = RATE_LIMIT / zoom
+        unit = f"deg/s at zoom {zoom:g}x"
+        return ControlValues.rates(
+            check_real("roll_rate", roll, -limit, limit, unit),
+            check_real("pitch_rate", pitch, -limit, limit, unit),
+            check_real("yaw_rate", yaw, -limit, limit, unit),
+            zoom=zoom,
+        )
 
-    # -- pod: modes ----------------------------------------------------------------------
+    # -- pod: modes ------------------------------------------------------------------------
     async def euler_control(
         self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0
     ) -> Feedback:
-        """Euler-angle control mode (0x14) holding roll/pitch/yaw Euler angles in degrees
-        (yaw may be given in [0, 360); it is sent as ±180)."""
-        control = ControlValues.angles(roll, pitch, wrap_degrees_180(yaw))
-        return await self._mode(c.EulerControl(), control)
+        """Euler-angle control mode (0x14) holding roll/pitch/yaw Euler angles in degrees.
+        ``yaw`` may be given in [-180, 360): [180, 360) is sent as its −180…0 equivalent.
+        The angles go out valid once the GCU confirmed the mode."""
+        y = check_real("yaw", yaw, -180.0, 360.0, "deg", high_open=True)
+        values = ControlValues.angles(_angle("roll", roll), _angle("pitch", pitch),
+                                      y - 360.0 if y >= 180.0 else y)  # fmt: skip
+        return await self._run(c.EulerControl(), control=values)
 
     async def angle_control(
         self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0
     ) -> Feedback:
-        """Angle-control mode (0x10): roll/pitch Euler angles, yaw relative to the aircraft."""
-        return await self._mode(c.AngleControl(), ControlValues.angles(roll, pitch, yaw))
+        """Angle-control mode (0x10): roll/pitch Euler angles, yaw relative to the aircraft
+        (degrees, ±180)."""
+        values = ControlValues.angles(_angle("roll", roll), _angle("pitch", pitch),
+                                      _angle("yaw", yaw))  # fmt: skip
+        return await self._run(c.AngleControl(), control=values)
 
     async def fpv(self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0) -> Feedback:
-        """FPV mode (0x1C): roll/pitch/yaw angles relative to the aircraft, degrees."""
-        return await self._mode(c.Fpv(), ControlValues.angles(roll, pitch, yaw))
+        """FPV mode (0x1C): roll/pitch/yaw angles relative to the aircraft, degrees (±180)."""
+        values = ControlValues.angles(_angle("roll", roll), _angle("pitch", pitch),
+                                      _angle("yaw", yaw))  # fmt: skip
+        return await self._run(c.Fpv(), control=values)
 
     async def pointing_lock(self, *, pitch_rate: float = 0.0, yaw_rate: float = 0.0) -> Feedback:
-        """Pointing-lock mode (0x11) with pitch/yaw rates in °/s at the current zoom."""
-        control = ControlValues.rates(0.0, pitch_rate, yaw_rate, zoom=self._main_zoom())
-        return await self._mode(c.PointingLock(), control)
+        """Pointing-lock mode (0x11) with pitch/yaw rates in °/s at the current zoom
+        (at most 150 / zoom °/s)."""
+        return await self._run(c.PointingLock(), control=self._rates(0.0, pitch_rate, yaw_rate))
 
     async def pointing_follow(
         self, *, pitch_rate: float = 0.0, yaw_rate: float = 0.0
     ) -> Feedback:
         """Pointing-follow mode (0x12); yaw rate 0 follows the aircraft's heading."""
-        control = ControlValues.rates(0.0, pitch_rate, yaw_rate, zoom=self._main_zoom())
-        return await self._mode(c.PointingFollow(), control)
+        values = self._rates(0.0, pitch_rate, yaw_rate)
+        return await self._run(c.PointingFollow(), control=values)
 
     async def top_down(self, *, yaw_rate: float = 0.0) -> Feedback:
         """Top-down mode (0x13): pitch −90°, yaw rate in °/s."""
-        control = ControlValues.rates(0.0, 0.0, yaw_rate, zoom=self._main_zoom())
-        return await self._mode(c.TopDown(), control)
+        return await self._run(c.TopDown(), control=self._rates(0.0, 0.0, yaw_rate))
 
     async def gaze_lock(self, *, pitch_rate: float = 0.0, yaw_rate: float = 0.0) -> Feedback:
         """Gaze (geographic target lock) at the image centre (0x16); needs valid INS data."""
-        control = ControlValues.rates(0.0, pitch_rate, yaw_rate, zoom=self._main_zoom())
-        return await self._mode(c.GazeLock(), control)
+        return await self._run(c.GazeLock(), control=self._rates(0.0, pitch_rate, yaw_rate))
 
     async def gaze_at(self, latitude: float, longitude: float, altitude: float) -> Feedback:
-        """Gaze at a coordinate (0x15): degrees, degrees, metres MSL; needs valid INS data."""
-        command = c.GazeAtCoordinates(latitude=latitude, longitude=longitude, altitude=altitude)
-        return await self._mode(command, None)
+        """Gaze at a coordinate (0x15): degrees, degrees, metres MSL; needs valid INS data.
+        Control values stay invalid (the pod locks the point) until :meth:`set_rates`."""
+        command = c.GazeAtCoordinates(
+            latitude=check_real("latitude", latitude, -90.0, 90.0, "deg"),
+            longitude=check_real("longitude", longitude, -180.0, 180.0, "deg"),
+            altitude=check_real("altitude", altitude, unit="m"),
+        )
+        return await self._run(command)
 
     def set_angles(self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0) -> None:
-        """New target angles (degrees) for the angle-based modes, from the next packet on."""
-        self.set_control(ControlValues.angles(roll, pitch, yaw))
+        """New target angles (degrees, ±180) for the current angle-based mode (Euler, angle
+        control, FPV). Raises ``ValueError`` if the current mode does not take angles."""
+        values = ControlValues.angles(_angle("roll", roll), _angle("pitch", pitch),
+                                      _angle("yaw", yaw))  # fmt: skip
+        self._set_control(values, ControlKind.ANGLES)
 
-    def set_rates(
-        self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0
-    ) -> None:
-        """New angular rates (°/s at the current main-view zoom) for the rate-based modes."""
-        self.set_control(ControlValues.rates(roll, pitch, yaw, zoom=self._main_zoom()))
+    def set_rates(self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0) -> None:
+        """New angular rates (°/s at the current main-view zoom) for the current rate-based
+        mode. Raises ``ValueError`` if the current mode does not take rates."""
+        values = self._rates(roll, pitch, yaw)
+        self._set_control(values, ControlKind.RATES)
 
     def release_control(self) -> None:
-        """Send the control values invalid: rates 0, angles held."""
-        self.set_control(None)
+        """Send the control values invalid from now on: rates 0, angles held."""
+        self._set_control(None, ControlKind.NONE)
 
-    # -- pod: other ----------------------------------------------------------------------
+    # -- pod: other ------------------------------------------------------------------------
     async def calibrate(self, *, timeout: float = 15.0) -> Feedback:
         """Calibrate (0x01); keeps waiting while the GCU answers "in progress"."""
-        return await self.execute(c.Calibration(), timeout=timeout)
+        return await self._run(c.Calibration(), timeout=timeout)
 
     async def centre(self) -> Feedback:
-        """Centre pitch and heading (0x03); control values are sent invalid meanwhile."""
-        return await self.execute(c.Centre())
+        """Centre pitch and heading (0x03). Control values go out invalid while it runs and
+        are cleared afterwards (they would steer away from the centre)."""
+        return await self._run(c.Centre())
 
     async def track(
         self, box: c.ImageBox | tuple[float, float, float, float], *, cameras: int = CAM1
     ) -> Feedback:
         """Track the target in ``box`` (left, top, right, bottom as image fractions). The
-        pod steers itself while tracking: control values are sent invalid from now on."""
-        command = c.Track(True, c.ImageBox(*box), cameras)
-        self.set_control(None)
-        return await self.execute(command)
+        pod steers itself while tracking: control values go out invalid."""
+        return await self._run(c.Track(True, _box(box), _cameras(cameras)))
 
     async def stop_tracking(self, *, cameras: int = CAM1) -> Feedback:
-        """Exit tracking (0x17 with TT = 0)."""
-        return await self.execute(c.Track(False, cameras=cameras))
+        """Exit tracking (0x17 with TT = 0); control values stay invalid until a mode
+        command is confirmed."""
+        return await self._run(c.Track(False, cameras=_cameras(cameras)))
 
     async def click_to_pan(self, x: float, y: float, *, cameras: int = CAM1) -> Feedback:
         """Bring image point (x, y) (fractions) to the centre (0x1A). The pod ends in
-        pointing-lock, where control values are rates: they are sent invalid (hold) from now
-        on, so earlier angle targets are never read as rates."""
-        command = c.ClickToPan(c.ImagePoint(x, y), cameras)
-        self.set_control(None)
-        return await self.execute(command)
+        pointing-lock; control values stay invalid until a mode command is confirmed."""
+        return await self._run(c.ClickToPan(_point(x, y), _cameras(cameras)))
 
-    # -- camera --------------------------------------------------------------------------
+    # -- camera ----------------------------------------------------------------------------
     async def take_photo(self, *, cameras: int = CAM1) -> Feedback:
         """Take a photo (0x20)."""
-        return await self.execute(c.TakePhoto(cameras))
+        return await self._run(c.TakePhoto(_cameras(cameras)))
 
     async def toggle_recording(self, *, cameras: int = CAM1) -> Feedback:
-        """Start or stop recording (0x21, a toggle)."""
-        return await self.execute(c.Record(cameras))
+        """Start or stop recording (0x21, a toggle), unconditionally."""
+        return await self._run(c.Record(_cameras(cameras)))
 
     async def start_recording(self, *, cameras: int = CAM1) -> Feedback | None:
-        """Start recording unless the camera flags say it already records (then ``None``)."""
-        if self._info is not None and self._info.recording:
-            return None
-        return await self.toggle_recording(cameras=cameras)
+        """Start recording unless the camera already records (then ``None``, nothing sent).
+        Record commands run one at a time and the state is checked when this one's turn
+        comes, so concurrent calls start recording once (docs/client.md, "Recording")."""
+        return await self._submit(c.Record(_cameras(cameras)), recording_target=True)
 
     async def stop_recording(self, *, cameras: int = CAM1) -> Feedback | None:
-        """Stop recording if the camera flags say it records (else ``None``)."""
-        if self._info is None or not self._info.recording:
-            return None
-        return await self.toggle_recording(cameras=cameras)
+        """Stop recording if the camera records (else ``None``, nothing sent)."""
+        return await self._submit(c.Record(_cameras(cameras)), recording_target=False)
 
     async def zoom_in(self, *, cameras: int = CAM1) -> Feedback:
         """Start zooming in (0x22) until :meth:`zoom_stop`."""
-        return await self.execute(c.ZoomIn(cameras))
+        return await self._run(c.ZoomIn(_cameras(cameras)))
 
     async def zoom_out(self, *, cameras: int = CAM1) -> Feedback:
         """Start zooming out (0x23) until :meth:`zoom_stop`."""
-        return await self.execute(c.ZoomOut(cameras))
+        return await self._run(c.ZoomOut(_cameras(cameras)))
 
     async def zoom_stop(self, *, cameras: int = CAM1) -> Feedback:
         """Stop a continuous zoom (0x24)."""
-        return await self.execute(c.ZoomStop(cameras))
+        return await self._run(c.ZoomStop(_cameras(cameras)))
 
     async def zoom_to(self, ratio: float, *, cameras: int = CAM1) -> Feedback:
-        """Zoom to a ratio (0x25), e.g. ``10.0`` for 10×, 0.1× resolution."""
-        return await self.execute(c.ZoomTo(ratio=ratio, cameras=cameras))
+        """Zoom to a ratio (0x25), e.g. ``10.0`` for 10×, 0.1× resolution, 1 … 3276.8."""
+        r = check_real("ratio", ratio, 1.0, c.ZOOM_RATIO_MAX, "x")
+        return await self._run(c.ZoomTo(ratio=r, cameras=_cameras(cameras)))
 
     async def zoom_to_fraction(self, fraction: float, *, cameras: int = CAM1) -> Feedback:
-        """Zoom to a fraction (0, 1] of the maximum ratio (0x25, positive form)."""
-        return await self.execute(c.ZoomTo(fraction=fraction, cameras=cameras))
+        """Zoom to a fraction (0, 1] of the maximum ratio (0x25, positive form; resolution
+        1/10000)."""
+        f = check_real("fraction", fraction, 1e-4, 1.0, "of maximum ratio")
+        return await self._run(c.ZoomTo(fraction=f, cameras=_cameras(cameras)))
 
     async def focus(self, *, cameras: int = CAM1) -> Feedback:
         """Trigger focus (0x26)."""
-        return await self.execute(c.Focus(cameras))
+        return await self._run(c.Focus(_cameras(cameras)))
 
     async def set_palette(self, palette: int = 0, *, cameras: int = CAM2) -> Feedback:
         """Thermal palette 1–10, or 0 to cycle (0x2A)."""
-        return await self.execute(c.Palette(palette, cameras))
+        return await self._run(c.Palette(check_int("palette", palette, 0, 10), _cameras(cameras)))
 
     async def set_night_vision(
         self, mode: NightVisionMode | int = NightVisionMode.ON, *, cameras: int = CAM1
     ) -> Feedback:
         """Night vision off / on / auto (0x2B)."""
-        return await self.execute(c.NightVision(NightVisionMode(mode), cameras))
+        command = c.NightVision(check_enum("mode", mode, NightVisionMode), _cameras(cameras))
+        return await self._run(command)
 
     async def area_temperature(
         self,
@@ -197,61 +256,72 @@ class CommandMethods(abc.ABC):
         cameras: int = CAM2,
     ) -> Feedback:
         """Area temperature measurement over ``box`` (0x30)."""
-        return await self.execute(c.AreaTemperature(enabled, c.ImageBox(*box), cameras))
+        command = c.AreaTemperature(check_bool("enabled", enabled), _box(box), _cameras(cameras))
+        return await self._run(command)
 
     async def temperature_alarm(
         self, enabled: bool = True, *, high: float = 0.0, low: float = 0.0, cameras: int = CAM2
     ) -> Feedback:
         """Temperature alarm with high/low thresholds in °C (0x31)."""
-        return await self.execute(c.TemperatureAlarm(enabled, high, low, cameras))
+        command = c.TemperatureAlarm(check_bool("enabled", enabled), _temp("high", high),
+                                     _temp("low", low), _cameras(cameras))  # fmt: skip
+        return await self._run(command)
 
     async def isotherm(
         self, enabled: bool = True, *, high: float = 0.0, low: float = 0.0, cameras: int = CAM2
     ) -> Feedback:
         """Isotherm between ``low`` and ``high`` °C (0x32)."""
-        return await self.execute(c.Isotherm(enabled, high, low, cameras))
+        command = c.Isotherm(check_bool("enabled", enabled), _temp("high", high),
+                             _temp("low", low), _cameras(cameras))  # fmt: skip
+        return await self._run(command)
 
     async def spot_temperature(
         self, enabled: bool = True, x: float = 0.5, y: float = 0.5, *, cameras: int = CAM2
     ) -> Feedback:
         """Spot temperature at image point (x, y) (0x33)."""
-        command = c.SpotTemperature(enabled, c.ImagePoint(x, y), cameras)
-        return await self.execute(command)
+        command = c.SpotTemperature(check_bool("enabled", enabled), _point(x, y),
+                                    _cameras(cameras))  # fmt: skip
+        return await self._run(command)
 
     async def set_osd(self, enabled: bool = True) -> Feedback:
         """On-screen display on/off (0x73)."""
-        return await self.execute(c.Osd(enabled))
+        return await self._run(c.Osd(check_bool("enabled", enabled)))
 
     async def set_osd_coordinates(
         self, coordinates: OsdCoordinates | int = OsdCoordinates.AIRCRAFT
     ) -> Feedback:
         """OSD shows aircraft or target coordinates (0x06)."""
-        return await self.execute(c.OsdCoordinatesCommand(OsdCoordinates(coordinates)))
+        value = check_enum("coordinates", coordinates, OsdCoordinates)
+        return await self._run(c.OsdCoordinatesCommand(value))
 
     async def set_image_auto_flip(self, enabled: bool = True) -> Feedback:
         """Image auto-flip on/off (0x07)."""
-        return await self.execute(c.ImageAutoFlip(enabled))
+        return await self._run(c.ImageAutoFlip(check_bool("enabled", enabled)))
 
     async def set_time_zone(self, offset_hours: int) -> Feedback:
         """The pod's UTC offset in whole hours, −12 … +14 (0x08)."""
-        return await self.execute(c.TimeZone(offset_hours))
+        return await self._run(c.TimeZone(check_int("offset_hours", offset_hours, -12, 14, "h")))
 
     async def set_picture_in_picture(self, mode: int = 0) -> Feedback:
         """Picture-in-picture mode 1–4, or 0 to cycle (0x74)."""
-        return await self.execute(c.PictureInPicture(mode))
+        return await self._run(c.PictureInPicture(check_int("mode", mode, 0, 4)))
 
     async def set_target_detection(self, enabled: bool = True) -> Feedback:
         """AI target detection on/off (0x75)."""
-        return await self.execute(c.TargetDetection(enabled))
+        return await self._run(c.TargetDetection(check_bool("enabled", enabled)))
 
     async def set_digital_zoom(self, enabled: bool = True) -> Feedback:
         """Digital zoom on/off (0x76)."""
-        return await self.execute(c.DigitalZoom(enabled))
+        return await self._run(c.DigitalZoom(check_bool("enabled", enabled)))
 
     async def set_fill_light(self, brightness: int) -> Feedback:
         """Fill light brightness 0–255, 0 = off (0x80); on also turns night vision on."""
-        return await self.execute(c.FillLight(brightness))
+        return await self._run(c.FillLight(check_int("brightness", brightness, 0, 255)))
 
     async def set_ranging(self, enabled: bool = True) -> Feedback:
         """Continuous laser ranging on/off (0x81)."""
-        return await self.execute(c.Ranging(enabled))
+        return await self._run(c.Ranging(check_bool("enabled", enabled)))
+
+
+def _temp(name: str, value: object) -> float:
+    return check_real(name, value, -3276.8, 3276.7, "degC")

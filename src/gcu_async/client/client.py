@@ -1,16 +1,18 @@
-"""The asyncio session: heartbeat, command exchange, telemetry and link health.
+"""The asyncio driver of a :class:`~gcu_async.session.Session`: timers, futures, transport.
 
-``GcuClient`` owns one transport and the protocol core (composition): every host packet is
-built from the latest aircraft state, the current control values and the command the
-:class:`CommandScheduler` picks; every reply updates status/info, link health, telemetry and
-the waiting command.
+``GcuClient`` owns one transport and one sans-I/O session (composition). It does I/O only:
+it hands received bytes and transport news to the session, sends the packet the session
+asks for at the time it asks, and turns the session's events into resolved futures,
+telemetry and link callbacks. Every rule (pacing, separation, matching, timeouts, control
+values, link health) lives in the session (docs/client.md, "The session contract").
 """
 
 from __future__ import annotations
 
 import asyncio
-import contextlib
+import enum
 import logging
+import math
 import time
 import warnings
 from collections.abc import AsyncGenerator, Callable
@@ -19,33 +21,48 @@ from datetime import datetime
 from types import TracebackType
 from typing import Any
 
+from gcu_async._checks import (
+    check_bool,
+    check_instance,
+    check_int,
+    check_positive,
+    check_real,
+    type_error,
+)
 from gcu_async.client.api import CommandMethods
-from gcu_async.client.health import HealthTracker, LinkHealth
-from gcu_async.client.scheduler import CommandScheduler, Ticket
-from gcu_async.client.telemetry import TelemetrySample, TelemetrySubscription
+from gcu_async.client.telemetry import TelemetrySubscription
 from gcu_async.errors import (
-    CommandFailed,
-    CommandTimeout,
+    CommandLinkLost,
     GcuError,
     LinkLost,
-    RemoteProtocolError,
+    Outcome,
     UnsupportedCommandError,
 )
 from gcu_async.protocol.aircraft import AircraftState
 from gcu_async.protocol.commands import Command, command_code
-from gcu_async.protocol.deframer import Deframer
-from gcu_async.protocol.enums import ExecutionStatus, PodModel, SubFrameRequest, opcode_name
+from gcu_async.protocol.enums import PodModel, opcode_name
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
-from gcu_async.protocol.host_frames import ControlValues, HostMainFrame, HostSubFrame
-from gcu_async.protocol.packets import DEFAULT_VERSION, HostPacket, decode_gcu_packet
+from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.protocol.packets import DEFAULT_VERSION
 from gcu_async.protocol.pods import POD_NAMES, pod_name, supports
 from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp
+from gcu_async.session import (
+    ControlKind,
+    LinkDown,
+    LinkHealth,
+    LinkUp,
+    ResetLink,
+    Session,
+    TelemetrySample,
+    Ticket,
+    TicketDone,
+    TicketState,
+)
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 log = logging.getLogger("gcu_async.client")
 
-RATE_MAX_HZ = 200.0
 DEFAULT_REORDER_GUARD = 0.015
 """Seconds; the reordering guard on links that may reorder (UDP)."""
 RATE_ADVISED = (30.0, 50.0)
@@ -55,25 +72,38 @@ LinkCallback = Callable[[LinkEvent], None]
 TelemetryCallback = Callable[[TelemetrySample], None]
 
 
+class ClientState(enum.Enum):
+    """The client's lifecycle (reusable, not reentrant)."""
+
+    CLOSED = "closed"
+    OPENING = "opening"
+    OPEN = "open"
+    CLOSING = "closing"
+
+
 class GcuClient(CommandMethods):
     """An asyncio session with one GCU.
 
-    ``async with GcuClient(transport) as gcu:`` opens the transport, starts the heartbeat
-    (``rate_hz`` host packets per second), waits up to ``connect_timeout`` for the first
-    reply, and on exit stops every task and closes the transport.
+    ``async with GcuClient(transport) as gcu:`` opens the transport, starts the heartbeat,
+    waits up to ``connect_timeout`` for the first reply and, on exit, ends pending commands,
+    stops the heartbeat and closes the transport. A closed client can be opened again;
+    opening one that is open (or opening) raises ``RuntimeError``.
 
     Args:
         transport: any :class:`~gcu_async.transport.Transport` (not yet opened).
-        rate_hz: heartbeat rate; the protocol advises 30–50 Hz (warned outside), must be in
-            (0, 200].
-        command_timeout: default seconds a command may take, from the call to its feedback.
+        rate_hz: heartbeat rate, (0, 200] packets per second; the protocol advises 30–50 Hz
+            (a warning outside). Host packets never exceed ``rate_hz`` + 1 in any second.
+        command_timeout: default seconds a command may take on the wire, from its first
+            packet to its feedback (:class:`CommandTimeout`, outcome ``UNKNOWN``).
+        queue_timeout: default seconds a command may wait before its first packet
+            (:class:`CommandTimeout`, outcome ``NOT_SENT``).
         connect_timeout: seconds to wait for the first reply when opening.
         silence_timeout: seconds without a reply after which the link counts as lost.
         check_support: refuse commands the pod model does not support (Appendix 8) once the
             model is known, raising :class:`UnsupportedCommandError` without sending.
-        reorder_guard: seconds between the last packet of a finished command and the next
-            packet (see :mod:`gcu_async.client.scheduler`); must exceed the link's worst
-            reordering delay. Default: 0 on ordered transports (TCP, serial), 15 ms on UDP.
+        reorder_guard: seconds between the last packet of one opcode and the first of the
+            next; must exceed how much more the link may delay one packet than another.
+            Default: 0 on ordered transports (TCP, serial), 15 ms otherwise (UDP).
         version: protocol version byte to send (2; some field devices expect 1).
         clock: monotonic time source (seconds).
     """
@@ -84,6 +114,7 @@ class GcuClient(CommandMethods):
         *,
         rate_hz: float = 50.0,
         command_timeout: float = 2.0,
+        queue_timeout: float = 30.0,
         connect_timeout: float = 3.0,
         silence_timeout: float = 1.0,
         check_support: bool = False,
@@ -91,55 +122,65 @@ class GcuClient(CommandMethods):
         version: int = DEFAULT_VERSION,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
-        if not 0 < rate_hz <= RATE_MAX_HZ:
-            raise ValueError(f"rate_hz: {rate_hz!r} is outside the allowed range (0, 200] Hz")
-        if not RATE_ADVISED[0] <= rate_hz <= RATE_ADVISED[1]:
-            warnings.warn(
-                f"rate_hz={rate_hz:g}: the protocol advises 30-50 Hz host packets",
-                stacklevel=2,
-            )
-        for name, value in (
-            ("command_timeout", command_timeout),
-            ("connect_timeout", connect_timeout),
-        ):
-            if not value > 0:
-                raise ValueError(f"{name}: {value!r} must be > 0 seconds")
-        if version not in (1, 2):
-            raise ValueError(f"version: {version!r} is not one of 1, 2")
-        self.transport = transport
-        self.rate_hz = float(rate_hz)
-        self.command_timeout = command_timeout
-        self.connect_timeout = connect_timeout
-        self.check_support = check_support
-        self.version = version
-        self._clock = clock
+        if not isinstance(transport, Transport):
+            raise type_error("transport", "a Transport", transport)
+        rate = check_real("rate_hz", rate_hz, 0.0, 200.0, "Hz")
+        if not RATE_ADVISED[0] <= rate <= RATE_ADVISED[1] and rate > 0:
+            warnings.warn(f"rate_hz={rate:g}: the protocol advises 30-50 Hz host packets",
+                          stacklevel=2)  # fmt: skip
         if reorder_guard is None:
             reorder_guard = 0.0 if transport.ordered else DEFAULT_REORDER_GUARD
-        self._scheduler = CommandScheduler(reorder_guard)
-        self._deferred: asyncio.TimerHandle | None = None
-        self._deframer = Deframer.for_gcu_packets()
-        self._health = HealthTracker(silence_timeout)
-        self._aircraft = AircraftState()
-        self._control: ControlValues | None = None
-        self._main_valid = self._main_invalid = HostMainFrame()
-        self._sub: HostSubFrame | None = None
-        self._rebuild_frames()
-        self._status: GcuMainFrame | None = None
-        self._info: GcuSubFrame | None = None
-        self._futures: dict[Ticket, asyncio.Future[Feedback]] = {}
-        self._timers: dict[Ticket, asyncio.TimerHandle] = {}
+        if not callable(clock):
+            raise type_error("clock", "a callable returning seconds", clock)
+        self.transport = transport
+        self.session = Session(
+            rate_hz=rate_hz, reorder_guard=reorder_guard, command_timeout=command_timeout,
+            queue_timeout=queue_timeout, silence_timeout=silence_timeout,
+            version=check_int("version", version, 1, 2), name=transport.url,
+        )  # fmt: skip
+        self.connect_timeout = check_positive("connect_timeout", connect_timeout)
+        self.check_support = check_bool("check_support", check_support)
+        self._clock = clock
+        self._state = ClientState.CLOSED
+        self._timer: asyncio.TimerHandle | None = None
+        self._timer_at = math.inf
+        self._futures: dict[Ticket, asyncio.Future[Feedback | None]] = {}
         self._subscriptions: set[TelemetrySubscription] = set()
         self._telemetry_callbacks: list[TelemetryCallback] = []
         self._link_callbacks: list[LinkCallback] = []
-        self._tasks: list[asyncio.Task[None]] = []
-        self._first_reply: asyncio.Event | None = None
-        self._open = False
-        self._closing = False
+        self._first_reply: asyncio.Future[None] | None = None
+        self._datagram = transport.datagram
+        self._rx_bound: float | None = None
+        """Replies delivered from now on arrived after this time (links that reorder):
+        when the last wake-up found the link empty. None: the transport cannot tell."""
         self.telemetry_dropped = 0
-        self.heartbeat_ticks = 0
-        self.heartbeat_late = 0
 
-    # -- lifecycle ---------------------------------------------------------------------
+    # -- configuration (read-only views of the session's) ----------------------------------
+    @property
+    def rate_hz(self) -> float:
+        return self.session.rate_hz
+
+    @property
+    def reorder_guard(self) -> float:
+        return self.session.reorder_guard
+
+    @property
+    def command_timeout(self) -> float:
+        return self.session.command_timeout
+
+    @property
+    def queue_timeout(self) -> float:
+        return self.session.queue_timeout
+
+    @property
+    def version(self) -> int:
+        return self.session.version
+
+    @property
+    def state(self) -> ClientState:
+        return self._state
+
+    # -- lifecycle -------------------------------------------------------------------------
     async def __aenter__(self) -> GcuClient:
         await self.open()
         return self
@@ -153,52 +194,74 @@ class GcuClient(CommandMethods):
         await self.close()
 
     async def open(self) -> None:
-        """Open the transport, start the heartbeat, wait for the first reply."""
-        if self._open:
-            raise RuntimeError("GcuClient is already open")
-        self._first_reply = asyncio.Event()
+        """Open the transport, start the heartbeat, wait for the first reply.
+
+        Raises :class:`LinkLost` if the transport cannot open or no reply comes within
+        ``connect_timeout`` (everything is closed again), ``RuntimeError`` if the client is
+        not closed."""
+        if self._state is not ClientState.CLOSED:
+            raise RuntimeError(
+                f"GcuClient is {self._state.value}: a client is reusable but not reentrant "
+                "(close it before opening it again)"
+            )
+        self._state = ClientState.OPENING
+        loop = asyncio.get_running_loop()
+        self._first_reply = loop.create_future()
         self.transport.set_handlers(self._on_data, self._on_link_event)
-        await self.transport.open()
-        self._open = True
-        self._closing = False
-        self._tasks.append(asyncio.create_task(self._heartbeat(), name="gcu-heartbeat"))
         try:
-            await asyncio.wait_for(self._first_reply.wait(), self.connect_timeout)
+            await self.transport.open()
+        except BaseException:
+            self._state = ClientState.CLOSED
+            raise
+        self.session.open(self._clock())
+        self._rx_bound = None
+        if not self.transport.ordered:
+            now = self._clock()
+            if self.transport.read_pending():
+                self._rx_bound = now
+            else:
+                log.info("%s cannot be read on demand: reply timing assumes a responsive "
+                         "event loop (docs/client.md, \"Assumptions\")", self.transport.url)
+        self._pump()
+        try:
+            await asyncio.wait_for(asyncio.shield(self._first_reply), self.connect_timeout)
         except asyncio.TimeoutError:
-            await self.close()
+            await self._shutdown("no reply")
             raise LinkLost(
                 f"{self.transport.url}: no reply from the GCU within {self.connect_timeout:g} s"
             ) from None
         except BaseException:
-            await self.close()
+            await self._shutdown("open interrupted")
             raise
+        self._state = ClientState.OPEN
+        log.info("link to %s up", self.transport.url)
 
     async def close(self) -> None:
-        """Stop the heartbeat, fail waiting commands with :class:`LinkLost`, close the
-        transport. Idempotent."""
-        if not self._open:
+        """End pending commands (:class:`CommandLinkLost`), stop the heartbeat, end the
+        telemetry iterators and close the transport. Idempotent."""
+        if self._state in (ClientState.CLOSED, ClientState.CLOSING):
             return
-        self._closing = True
-        if self._deferred is not None:
-            self._deferred.cancel()
-            self._deferred = None
-        tasks, self._tasks = self._tasks, []
-        for task in tasks:
-            task.cancel()
-        for task in tasks:
-            with contextlib.suppress(asyncio.CancelledError):
-                await task
-        self._fail_all(LinkLost("client closed"))
-        for sub in self._subscriptions:
-            sub.close()
-        self._open = False
-        await self.transport.close()
+        await self._shutdown("client closed")
 
-    # -- aircraft state and control values ------------------------------------------------
+    async def _shutdown(self, reason: str) -> None:
+        self._state = ClientState.CLOSING
+        try:
+            self.session.close(self._clock(), reason)
+            self._dispatch()
+            if self._timer is not None:
+                self._timer.cancel()
+                self._timer, self._timer_at = None, math.inf
+            for sub in self._subscriptions:
+                sub.close()
+            await self.transport.close()
+        finally:
+            self._state = ClientState.CLOSED
+
+    # -- aircraft state and control values -------------------------------------------------
     @property
     def aircraft(self) -> AircraftState:
         """The aircraft state sent in every packet."""
-        return self._aircraft
+        return self.session.aircraft
 
     def update_aircraft(
         self,
@@ -218,109 +281,102 @@ class GcuClient(CommandMethods):
         east/up without gravity, m/s north/east/up, (latitude °, longitude °, altitude m MSL),
         metres. ``gnss_time`` (aware UTC) sets week + ms with leap seconds applied.
 
-        Raises :class:`FieldRangeError` (nothing changes) for any out-of-range value.
+        Raises ``TypeError`` or :class:`FieldRangeError` (nothing changes) for a bad value.
         """
         changes: dict[str, Any] = {}
-        if attitude is not _UNSET:
-            changes["attitude"] = None if attitude is None else Attitude(*attitude)
-        if acceleration is not _UNSET:
-            changes["acceleration"] = None if acceleration is None else NorthEastUp(*acceleration)
-        if velocity is not _UNSET:
-            changes["velocity"] = None if velocity is None else NorthEastUp(*velocity)
-        if position is not _UNSET:
-            changes["position"] = None if position is None else GeoPosition(*position)
-        for name, value in (
+        for name, value, kind in (
+            ("attitude", attitude, Attitude),
+            ("acceleration", acceleration, NorthEastUp),
+            ("velocity", velocity, NorthEastUp),
+            ("position", position, GeoPosition),
+        ):
+            if value is not _UNSET:
+                changes[name] = None if value is None else _triple(name, value, kind)
+        for name, scalar in (
             ("relative_altitude", relative_altitude),
             ("satellites", satellites),
             ("gnss_week", gnss_week),
             ("gnss_ms", gnss_ms),
         ):
-            if value is not _UNSET:
-                changes[name] = value
+            if scalar is not _UNSET:
+                changes[name] = scalar
         if gnss_time is not None:
+            check_instance("gnss_time", gnss_time, datetime)
             changes["gnss_week"], changes["gnss_ms"] = AircraftState.gnss_from_utc(gnss_time)
-        state = replace(self._aircraft, **changes)  # validates
-        self._aircraft = state
-        self._rebuild_frames()
+        state = replace(self.session.aircraft, **changes)  # validates
+        self.session.set_aircraft(state)
         return state
 
     def set_aircraft(self, state: AircraftState) -> None:
-        """Replace the whole aircraft state."""
-        self._aircraft = state
-        self._rebuild_frames()
+        """Replace the whole aircraft state (an :class:`AircraftState`)."""
+        self.session.set_aircraft(state)
 
     @property
     def control(self) -> ControlValues | None:
-        """Control values sent (``None``: sent invalid — rates 0, angles held)."""
-        return self._control
+        """The control values given for the current mode (``None``: none, sent invalid).
+        Whether they go out valid right now: :attr:`control_valid`."""
+        return self.session.control
+
+    @property
+    def control_valid(self) -> bool:
+        """True if the next packet carries the control values valid (docs/client.md,
+        "Control values")."""
+        return self.session.control_valid(self._clock()) is not None
 
     def set_control(self, control: ControlValues | None) -> None:
-        """Set the raw control values (their meaning depends on the mode, NOTES §5)."""
-        self._control = control
-        self._rebuild_frames()
+        """Raw control values for the current mode (their meaning depends on the mode,
+        NOTES §5); ``None`` sends them invalid (rates 0, angles held). Raises ``ValueError``
+        (nothing changes) when no mode takes values or a value is out of range."""
+        self.session.set_control(control)
 
-    def _rebuild_frames(self) -> None:
-        request = SubFrameRequest.STANDARD
-        self._main_invalid = self._aircraft.main_frame(None, request)
-        self._main_valid = (
-            self._aircraft.main_frame(self._control, request)
-            if self._control is not None
-            else self._main_invalid
-        )
-        self._sub = self._aircraft.sub_frame()
+    def _set_control(self, control: ControlValues | None, kind: ControlKind) -> None:
+        self.session.set_control(control, kind)
 
-    # -- telemetry -----------------------------------------------------------------------
+    # -- telemetry -------------------------------------------------------------------------
     @property
     def status(self) -> GcuMainFrame:
         """The latest main frame (mode, pod status, angles, rates)."""
-        if self._status is None:
+        status = self.session.status
+        if status is None:
             raise GcuError("no reply from the GCU yet")
-        return self._status
+        return status
 
     @property
     def info(self) -> GcuSubFrame:
         """The latest sub frame (pod model, versions, zoom, ranging, flags)."""
-        if self._info is None:
+        info = self.session.info
+        if info is None:
             raise GcuError("no reply with a sub frame from the GCU yet")
-        return self._info
+        return info
+
+    @property
+    def _info(self) -> GcuSubFrame | None:
+        return self.session.info
 
     @property
     def pod_model(self) -> PodModel | None:
         """The pod model once a sub frame arrived, else ``None``."""
-        return None if self._info is None else self._info.pod_model
+        info = self.session.info
+        return None if info is None else info.pod_model
+
+    @property
+    def recording(self) -> bool | None:
+        """Whether the camera records, as far as the client can tell (``None``: not known
+        yet)."""
+        return self.session.recording(self._clock())
 
     @property
     def link(self) -> LinkHealth:
         """A snapshot of the link's health."""
-        h, now, d = self._health, self._clock(), self._deframer.stats
-        return LinkHealth(
-            up=h.up,
-            reply_rate=h.reply_rate(now),
-            last_reply_age=None if h.last_reply is None else now - h.last_reply,
-            packets_sent=h.packets_sent,
-            packets_received=h.packets_received,
-            send_errors=h.send_errors,
-            crc_errors=d.crc_errors,
-            length_errors=d.length_errors,
-            bytes_discarded=d.bytes_discarded,
-            decode_errors=h.decode_errors,
-            unmatched_feedback=self._scheduler.stats.unmatched_feedback,
-            lost_count=h.lost_count,
-            restored_count=h.restored_count,
-        )
-
-    @property
-    def scheduler(self) -> CommandScheduler:
-        """The command scheduler (for its statistics)."""
-        return self._scheduler
+        return self.session.link_health(self._clock())
 
     async def telemetry(self, maxsize: int = 1) -> AsyncGenerator[TelemetrySample, None]:
         """Iterate over replies as they arrive. The queue holds ``maxsize`` samples; when
         the consumer falls behind the oldest are dropped (counted in
         ``telemetry_dropped``). Ends when the client closes."""
-        sub = TelemetrySubscription(maxsize)
+        sub = TelemetrySubscription(check_int("maxsize", maxsize, 1))
         self._subscriptions.add(sub)
-        if self._closing or not self._open:
+        if self._state in (ClientState.CLOSED, ClientState.CLOSING):
             sub.close()
         try:
             while (sample := await sub.get()) is not None:
@@ -330,56 +386,71 @@ class GcuClient(CommandMethods):
 
     def on_telemetry(self, callback: TelemetryCallback) -> Callable[[], None]:
         """Call ``callback(sample)`` for every reply; returns a function that unsubscribes."""
+        if not callable(callback):
+            raise type_error("callback", "a callable", callback)
         self._telemetry_callbacks.append(callback)
         return lambda: self._telemetry_callbacks.remove(callback)
 
     def on_link_change(self, callback: LinkCallback) -> Callable[[], None]:
         """Call ``callback(LinkEvent)`` when the link is lost or restored."""
+        if not callable(callback):
+            raise type_error("callback", "a callable", callback)
         self._link_callbacks.append(callback)
         return lambda: self._link_callbacks.remove(callback)
 
-    # -- commands ------------------------------------------------------------------------
-    async def execute(self, command: Command, *, timeout: float | None = None) -> Feedback:
+    # -- commands --------------------------------------------------------------------------
+    async def execute(
+        self, command: Command, *, timeout: float | None = None,
+        queue_timeout: float | None = None,
+    ) -> Feedback:  # fmt: skip
         """Send ``command`` and wait for its feedback.
 
-        Returns the success feedback. Raises :class:`CommandFailed` on a failure status,
-        :class:`CommandTimeout` (a ``TimeoutError``) after ``timeout`` seconds (default
-        ``command_timeout``), :class:`LinkLost` (a ``ConnectionError``) at once if the link is
-        or goes down, :class:`UnsupportedCommandError` with ``check_support``.
+        Returns the success feedback. Raises :class:`CommandFailed` on a failure status;
+        :class:`CommandTimeout` (a ``TimeoutError``) after ``timeout`` seconds on the wire
+        (default ``command_timeout``; outcome ``UNKNOWN``) or ``queue_timeout`` seconds
+        before its first packet (outcome ``NOT_SENT``); :class:`CommandLinkLost` (a
+        ``ConnectionError``) at once if the link is or goes down; and
+        :class:`UnsupportedCommandError` with ``check_support``. Cancelling the awaiting task
+        withdraws the command (it may have executed if it was already sent).
         """
-        if timeout is None:
-            timeout = self.command_timeout
-        elif not timeout > 0:
-            raise ValueError(f"timeout: {timeout!r} must be > 0 seconds")
-        if not isinstance(command, Command):
-            raise TypeError(f"command: expected a Command, got {type(command).__name__}")
-        self._check_link()
+        result = await self._submit(command, timeout=timeout, queue_timeout=queue_timeout)
+        assert result is not None  # only state-checked record commands are ever skipped
+        return result
+
+    async def _submit(
+        self,
+        command: Command,
+        *,
+        timeout: float | None = None,
+        queue_timeout: float | None = None,
+        control: ControlValues | None = None,
+        recording_target: bool | None = None,
+    ) -> Feedback | None:
+        check_instance("command", command, Command, "a Command")
+        if self._state is not ClientState.OPEN:
+            opcode = command_code(command)
+            raise CommandLinkLost(
+                f"{opcode_name(opcode)}: client is {self._state.value}; not sent",
+                outcome=Outcome.NOT_SENT, opcode=opcode, command=command,
+            )  # fmt: skip
         self._check_support(command)
         loop = asyncio.get_running_loop()
-        ticket = Ticket(command, deadline=self._clock() + timeout)
-        future: asyncio.Future[Feedback] = loop.create_future()
+        ticket = self.session.submit(
+            command, self._clock(), timeout=timeout, queue_timeout=queue_timeout,
+            control=control, recording_target=recording_target,
+        )  # fmt: skip
+        future: asyncio.Future[Feedback | None] = loop.create_future()
         self._futures[ticket] = future
-        self._timers[ticket] = loop.call_later(timeout, self._on_timeout, ticket, timeout)
-        idle = self._scheduler.in_flight is None
-        self._scheduler.submit(ticket)
-        if idle:
-            self._send_packet()  # goes out at once, not at the next tick
+        self._pump()  # goes out now if the rate allows: the heartbeat's phase moves
         try:
             return await future
         except asyncio.CancelledError:
-            self._scheduler.cancel(ticket)
-            raise
-        finally:
             self._futures.pop(ticket, None)
-            timer = self._timers.pop(ticket, None)
-            if timer is not None:
-                timer.cancel()
-
-    def _check_link(self) -> None:
-        if not self._open or self._closing:
-            raise LinkLost("client is not open")
-        if not self._health.up:
-            raise LinkLost(f"{self.transport.url}: link is down")
+            if not ticket.done:
+                self.session.cancel(ticket, self._clock())
+                self._dispatch()
+                self._schedule()
+            raise
 
     def _check_support(self, command: Command) -> None:
         model = self.pod_model
@@ -388,166 +459,103 @@ class GcuClient(CommandMethods):
         if not supports(model, command_code(command)):
             raise UnsupportedCommandError(opcode_name(command_code(command)), pod_name(model))
 
-    def _on_timeout(self, ticket: Ticket, timeout: float) -> None:
-        self._timers.pop(ticket, None)
-        if self._scheduler.time_out(ticket):
-            name = opcode_name(ticket.opcode)
-            progress = " (last status: in progress)" if ticket.progress else ""
-            self._resolve(
-                ticket,
-                error=CommandTimeout(f"{name}: no feedback within {timeout:g} s{progress}"),
-            )
-            self._send_packet()  # the next queued command goes out now
+    # -- the pump: the only place packets are sent -----------------------------------------
+    def _pump(self) -> None:
+        if self._timer is not None:  # called early (a command): this run replaces the timer
+            self._timer.cancel()
+        self._timer, self._timer_at = None, math.inf
+        session = self.session
+        try:
+            if self._rx_bound is not None:  # read what waits first: replies before sends
+                now = self._clock()
+                if self.transport.read_pending():
+                    self._rx_bound = now
+            data = session.poll(self._clock())
+            if data is not None:
+                try:
+                    self.transport.send(data)
+                except (LinkLost, OSError) as exc:
+                    session.send_failed()
+                    log.debug("send failed: %s", exc)
+            self._dispatch()
+        except Exception:  # the heartbeat must never stop
+            log.exception("gcu_async: heartbeat step failed")
+        self._schedule()
 
-    def _resolve(
-        self, ticket: Ticket, *, result: Feedback | None = None, error: BaseException | None = None
-    ) -> None:
-        future = self._futures.get(ticket)
+    def _schedule(self) -> None:
+        if self._state is ClientState.CLOSED:
+            return
+        now = self._clock()
+        when = self.session.next_wakeup(now)
+        if when == math.inf or when >= self._timer_at:
+            return
+        if self._timer is not None:
+            self._timer.cancel()
+        loop = asyncio.get_running_loop()
+        self._timer = loop.call_at(loop.time() + (when - now), self._pump)
+        self._timer_at = when
+
+    # -- input from the transport ----------------------------------------------------------
+    def _on_data(self, data: bytes) -> None:
+        self.session.receive(data, self._clock(), datagram=self._datagram,
+                             arrived_after=self._rx_bound)  # fmt: skip
+        self._dispatch()
+        self._schedule()
+
+    def _on_link_event(self, event: LinkEvent) -> None:
+        if event.kind is LinkEventKind.LOST:
+            self.session.connection_lost(self._clock(), event.detail or "transport lost")
+            self._dispatch()
+            self._schedule()
+        elif event.kind is LinkEventKind.PEER:
+            self._emit_link(event)
+
+    # -- events ----------------------------------------------------------------------------
+    def _dispatch(self) -> None:
+        for event in self.session.events():
+            if isinstance(event, TelemetrySample):
+                self._telemetry(event)
+            elif isinstance(event, TicketDone):
+                self._resolve(event.ticket)
+            elif isinstance(event, LinkUp):
+                first = self._first_reply
+                if first is not None and not first.done():
+                    first.set_result(None)
+                if event.restored:
+                    log.warning("link to %s restored", self.transport.url)
+                    self._emit_link(LinkEvent(LinkEventKind.RESTORED, event.reason))
+            elif isinstance(event, LinkDown):
+                log.warning("link to %s lost: %s", self.transport.url, event.reason)
+                self._emit_link(LinkEvent(LinkEventKind.LOST, event.reason))
+            elif isinstance(event, ResetLink):
+                reset = getattr(self.transport, "reset", None)
+                if reset is not None:
+                    reset(event.reason)
+
+    def _resolve(self, ticket: Ticket) -> None:
+        future = self._futures.pop(ticket, None)
         if future is None or future.done():
             return
-        if error is not None:
-            future.set_exception(error)
+        if ticket.state is TicketState.SUCCEEDED:
+            future.set_result(ticket.feedback)
+        elif ticket.state is TicketState.SKIPPED:
+            future.set_result(None)
         else:
-            assert result is not None
-            future.set_result(result)
+            assert ticket.error is not None
+            future.set_exception(ticket.error)
 
-    def _fail_all(self, error: LinkLost) -> None:
-        for ticket in self._scheduler.drain():
-            self._resolve(ticket, error=LinkLost(str(error)))
-
-    # -- packets out ---------------------------------------------------------------------
-    _last_encoded: tuple[object, object, object, int, bytes] = (None, None, None, -1, b"")
-
-    def _encode(self, main: HostMainFrame, command: Command) -> bytes:
-        """The packet's bytes; the previous packet's are reused when it had the very same
-        (immutable) parts, as every heartbeat of an idle session has."""
-        sub, version, last = self._sub, self.version, self._last_encoded
-        if last[0] is main and last[1] is sub and last[2] is command and last[3] == version:
-            return last[4]
-        data = HostPacket(main, sub, command, version).encode()
-        self._last_encoded = (main, sub, command, version, data)
-        return data
-
-    def _send_packet(self) -> None:
-        if not self._open or self._closing or not self.transport.connected:
-            return
-        now = self._clock()
-        hold = self._scheduler.hold_until
-        if now < hold:  # reordering guard: send this packet a little later
-            if self._deferred is None:
-                loop = asyncio.get_running_loop()
-                self._deferred = loop.call_later(hold - now, self._send_deferred)
-            return
-        command = self._scheduler.next_command(now)
-        main = self._main_invalid if self._scheduler.control_blocked else self._main_valid
-        data = self._encode(main, command)
-        try:
-            self.transport.send(data)
-        except (LinkLost, OSError) as exc:
-            self._health.send_errors += 1
-            log.debug("send failed: %s", exc)
-            return
-        self._health.packets_sent += 1
-
-    def _send_deferred(self) -> None:
-        self._deferred = None
-        self._send_packet()
-
-    async def _heartbeat(self) -> None:
-        """Send a packet every period on monotonic deadlines; never stops on errors."""
-        period = 1.0 / self.rate_hz
-        clock = self._clock
-        deadline = clock()
-        while True:
-            now = clock()
-            try:
-                self._tick(now)
-            except Exception:  # the heartbeat must never stop
-                log.exception("heartbeat tick failed")
-            self.heartbeat_ticks += 1
-            deadline += period
-            now = clock()
-            if deadline < now:  # fell behind: skip the missed slots, don't burst
-                self.heartbeat_late += 1
-                deadline = now
-            await asyncio.sleep(deadline - now)
-
-    def _tick(self, now: float) -> None:
-        if self._health.silent(now):
-            self._link_down(f"no reply for {self._health.silence_timeout:g} s")
-        self._send_packet()
-
-    # -- packets in ----------------------------------------------------------------------
-    def _on_data(self, data: bytes) -> None:
-        for raw in self._deframer.feed(data):
-            try:
-                packet = decode_gcu_packet(raw)
-            except RemoteProtocolError as exc:
-                self._health.decode_errors += 1
-                log.debug("undecodable reply: %s", exc)
-                continue
-            self._on_packet(packet.main, packet.sub, packet.feedback)
-
-    def _on_packet(self, main: GcuMainFrame, sub: object, feedback: Feedback) -> None:
-        now = self._clock()
-        self._status = main
-        if isinstance(sub, GcuSubFrame):
-            self._info = sub
-        if self._health.on_reply(now):
-            if self._health.lost_count:
-                self._health.restored_count += 1
-                self._emit_link(LinkEvent(LinkEventKind.RESTORED, "replies resumed"))
-            if self._first_reply is not None:
-                self._first_reply.set()
-        scheduler = self._scheduler
-        unmatched = scheduler.stats.unmatched_feedback
-        ticket = scheduler.on_feedback(feedback, now)
-        if ticket is not None:
-            if feedback.result is ExecutionStatus.SUCCESS:
-                self._resolve(ticket, result=feedback)
-            else:
-                cams = int(feedback.failed_cameras)
-                error = CommandFailed(feedback.opcode, feedback.status, cams)
-                self._resolve(ticket, error=error)
-        elif scheduler.stats.unmatched_feedback != unmatched:
-            log.debug("unmatched feedback %s (in flight: %s)", feedback, scheduler.in_flight)
-        if (
-            (ticket is not None or feedback.opcode == 0)
-            and scheduler.in_flight is None
-            and scheduler.pending
-            and not scheduler.waiting_for_null_ack
-        ):
-            self._send_packet()  # the next command goes out at once, not at the next tick
+    def _telemetry(self, sample: TelemetrySample) -> None:
         if not self._subscriptions and not self._telemetry_callbacks:
             return
-        sample = TelemetrySample(main, self._info, feedback, now)
-        for sub_queue in self._subscriptions:
-            before = sub_queue.dropped
-            sub_queue.put(sample)
-            self.telemetry_dropped += sub_queue.dropped - before
+        for sub in self._subscriptions:
+            before = sub.dropped
+            sub.put(sample)
+            self.telemetry_dropped += sub.dropped - before
         for callback in list(self._telemetry_callbacks):
             try:
                 callback(sample)
             except Exception:
                 log.exception("telemetry callback failed")
-
-    # -- link ----------------------------------------------------------------------------
-    def _on_link_event(self, event: LinkEvent) -> None:
-        if event.kind is LinkEventKind.LOST:
-            self._deframer.reset()
-            self._link_down(event.detail or "transport lost")
-        elif event.kind is LinkEventKind.PEER:
-            self._emit_link(event)
-
-    def _link_down(self, reason: str) -> None:
-        if not self._health.up:
-            self._fail_all(LinkLost(f"{self.transport.url}: {reason}"))
-            return
-        self._health.up = False
-        self._health.lost_count += 1
-        log.warning("link to %s lost: %s", self.transport.url, reason)
-        self._fail_all(LinkLost(f"{self.transport.url}: {reason}"))
-        self._emit_link(LinkEvent(LinkEventKind.LOST, reason))
 
     def _emit_link(self, event: LinkEvent) -> None:
         for callback in list(self._link_callbacks):
@@ -555,3 +563,11 @@ class GcuClient(CommandMethods):
                 callback(event)
             except Exception:
                 log.exception("link callback failed")
+
+
+def _triple(name: str, value: object, kind: type[Any]) -> Any:
+    """A (a, b, c) tuple of real numbers as ``kind`` (Attitude, NorthEastUp, GeoPosition)."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, (tuple, list)) or len(value) != 3:
+        raise type_error(name, f"a {kind.__name__} or a 3-tuple of numbers", value)
+    return kind(*(check_real(f"{name}.{field}", v) for field, v in
+                  zip(kind._fields, value, strict=True)))  # fmt: skip

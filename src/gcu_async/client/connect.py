@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
+import inspect
 from typing import Any
 
 from gcu_async.client.client import GcuClient
 
-CLIENT_OPTIONS = frozenset({
-    "rate_hz", "command_timeout", "connect_timeout", "silence_timeout", "check_support",
-    "reorder_guard", "version", "clock",
-})  # fmt: skip
+CLIENT_OPTIONS = frozenset(
+    name for name, p in inspect.signature(GcuClient).parameters.items()
+    if p.kind is inspect.Parameter.KEYWORD_ONLY
+)  # fmt: skip
+"""Options of :func:`connect` that go to :class:`GcuClient` (its keyword arguments)."""
 
 
 def connect(url: str, **options: Any) -> GcuClient:
@@ -18,10 +20,10 @@ def connect(url: str, **options: Any) -> GcuClient:
     URLs: ``udp://HOST[:PORT]`` (GCU port, default 2337), ``tcp://HOST[:PORT]`` (default
     2332), ``serial:///dev/ttyUSB0?baudrate=115200``. Options named like
     :class:`GcuClient`'s keyword arguments (``rate_hz``, ``command_timeout``,
-    ``connect_timeout``, ``silence_timeout``, ``check_support``, ``reorder_guard``,
-    ``version``) configure the
-    session; the rest go to the transport (e.g. ``local_port``, ``discovery``, ``baudrate``).
-    A bad URL or option raises ``ValueError`` before anything is opened.
+    ``queue_timeout``, ``connect_timeout``, ``silence_timeout``, ``check_support``,
+    ``reorder_guard``, ``version``, ``clock``) configure the session; the rest go to the
+    transport (e.g. ``local_port``, ``discovery``, ``baudrate``). A bad URL or option
+    raises ``TypeError``/``ValueError`` before anything is opened.
     """
     from gcu_async.transport.url import open_transport
 

@@ -4,22 +4,10 @@ from __future__ import annotations
 
 import asyncio
 from collections import deque
-from typing import NamedTuple
 
-from gcu_async.protocol.feedback import Feedback
-from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
+from gcu_async.session.events import TelemetrySample
 
-
-class TelemetrySample(NamedTuple):
-    """One GCU reply as telemetry."""
-
-    status: GcuMainFrame
-    """Main frame: mode, pod status, angles, rates."""
-    info: GcuSubFrame | None
-    """Sub frame: versions, pod model, faults, ranging, zoom, flags (None if absent)."""
-    feedback: Feedback
-    received_at: float
-    """Monotonic time of arrival."""
+__all__ = ["TelemetrySample", "TelemetrySubscription"]
 
 
 class TelemetrySubscription:

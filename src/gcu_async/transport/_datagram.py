@@ -49,18 +49,26 @@ class DrainingDatagramTransport(asyncio.DatagramTransport):
         loop.add_reader(sock.fileno(), self._read_ready)  # NotImplementedError: no selector
 
     def _read_ready(self) -> None:
+        self.read_all()
+
+    def read_all(self) -> bool:
+        """Read and deliver every queued datagram (at most :attr:`max_per_event`); True if
+        the socket was found empty at the end."""
         recv, view, protocol = self._sock.recvfrom_into, self._view, self._protocol
         for _ in range(self.max_per_event):
             if self._closing:  # a handler closed us: the socket may be gone already
-                return
+                return False
             try:
                 n, addr = recv(view)
-            except (BlockingIOError, InterruptedError):
-                return  # drained
+            except BlockingIOError:
+                return True  # drained
+            except InterruptedError:
+                return False
             except OSError as exc:
                 protocol.error_received(exc)
-                return  # like asyncio; anything left is read at the next event
+                return False  # like asyncio; anything left is read at the next event
             protocol.datagram_received(bytes(view[:n]), addr)
+        return False
 
     def sendto(self, data: Any, addr: Any = None) -> None:
         if self._closing:

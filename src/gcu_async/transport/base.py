@@ -94,6 +94,14 @@ class Transport(abc.ABC):
         the receiver may deframe each call on its own. False for byte streams."""
         return False
 
+    def read_pending(self) -> bool:
+        """Read and deliver, right now and synchronously, everything the OS holds for this
+        transport. True if it found the link empty at the end, so that whatever is
+        delivered later arrived after this call began; False if this transport cannot tell
+        (the default; see :meth:`UdpTransport.read_pending`). A driver on a busy event loop
+        uses this to bound how late it processes replies (docs/client.md, "Assumptions")."""
+        return False
+
     def reset(self, reason: str) -> None:
         """Discard what is queued towards the peer and start the link over, so that nothing
         queued on the way can reach the peer later. Synchronous, callable from any event-loop

@@ -269,6 +269,15 @@ class UdpTransport(Transport):
         self.tx_datagrams += 1
         dtransport.sendto(bytes(data), dest)
 
+    def read_pending(self) -> bool:
+        """Read and deliver every datagram the OS holds now; True if the socket was then
+        empty. Only the draining reader (:attr:`draining`) can do this; on the fallback
+        path (no ``add_reader``: Windows' proactor loop) it returns False."""
+        dtransport = self._dtransport
+        if isinstance(dtransport, DrainingDatagramTransport) and not dtransport.is_closing():
+            return dtransport.read_all()
+        return False
+
     async def close(self) -> None:
         """Close the socket; returns once it is released. Idempotent."""
         dtransport, proto = self._dtransport, self._proto

@@ -1,4 +1,4 @@
-"""Link health: reply rate, age of the last reply, error counters, lost/restored state."""
+"""Link health: reply rate, age of the last reply, counters, lost/restored episodes."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True)
 class LinkHealth:
-    """A snapshot of the link's health (all times in seconds, monotonic clock)."""
+    """A snapshot of the link's health (times in seconds on the session's clock)."""
 
     up: bool
     """True while replies arrive (no silence longer than ``silence_timeout``)."""
@@ -24,6 +24,9 @@ class LinkHealth:
     bytes_discarded: int
     decode_errors: int
     unmatched_feedback: int
+    """Replies that answer no packet this session could still be waiting for."""
+    ambiguous_feedback: int
+    """Replies that could answer more than one run of packets (used as proof of nothing)."""
     lost_count: int
     restored_count: int
 
@@ -31,11 +34,10 @@ class LinkHealth:
 class HealthTracker:
     """Counts and timestamps behind :class:`LinkHealth` (no I/O, no clock of its own)."""
 
-    def __init__(self, silence_timeout: float) -> None:
-        if not silence_timeout > 0:
-            raise ValueError(f"silence_timeout: {silence_timeout!r} must be > 0 seconds")
-        self.silence_timeout = silence_timeout
-        self.up = False
+    __slots__ = ("_recent", "decode_errors", "last_reply", "lost_count", "packets_received",
+                 "packets_sent", "restored_count", "send_errors")  # fmt: skip
+
+    def __init__(self) -> None:
         self.last_reply: float | None = None
         self._recent: deque[float] = deque(maxlen=1024)
         self.packets_sent = 0
@@ -45,23 +47,14 @@ class HealthTracker:
         self.lost_count = 0
         self.restored_count = 0
 
-    def on_reply(self, now: float) -> bool:
-        """Record a valid reply; True if this reply brought the link (back) up."""
+    def on_reply(self, now: float) -> None:
         self.packets_received += 1
         self.last_reply = now
         self._recent.append(now)
-        if self.up:
-            return False
-        self.up = True
-        return True
 
-    def silent(self, now: float) -> bool:
-        """True if the link is up but no reply came for ``silence_timeout``."""
-        return (
-            self.up
-            and self.last_reply is not None
-            and now - self.last_reply > self.silence_timeout
-        )
+    def silent_for(self, now: float) -> float:
+        """Seconds since the last reply (infinite before the first)."""
+        return float("inf") if self.last_reply is None else now - self.last_reply
 
     def reply_rate(self, now: float) -> float:
         recent = self._recent

@@ -1,0 +1,20 @@
+"""The command session, sans-I/O: scheduling, null separation, feedback matching, the
+heartbeat's content, link health and the lifecycle (docs/client.md, "The session")."""
+
+from gcu_async.session.control import ControlKind
+from gcu_async.session.events import (
+    Event,
+    LinkDown,
+    LinkUp,
+    ResetLink,
+    TelemetrySample,
+    TicketDone,
+)
+from gcu_async.session.health import LinkHealth
+from gcu_async.session.session import Session, SessionState, SessionStats
+from gcu_async.session.tickets import Ticket, TicketState
+
+__all__ = [
+    "ControlKind", "Event", "LinkDown", "LinkHealth", "LinkUp", "ResetLink", "Session",
+    "SessionState", "SessionStats", "TelemetrySample", "Ticket", "TicketDone", "TicketState",
+]  # fmt: skip

@@ -1,0 +1,162 @@
+"""Which control values (host bytes 5–10) go out valid, and for which mode.
+
+Control values change meaning with the mode (NOTES §5): the same raw numbers are Euler
+angles in one mode, angular rates in another. The rule (docs/client.md, "Control values"):
+values are sent valid only while
+
+- the mode they were given for is the last mode the GCU confirmed (its mode command got a
+  success feedback), and
+- no mode-changing command is queued or in flight (commands that switch mode, and centre /
+  click-to-pan / track, during which they must be invalid), and
+- the latest reply reports that very mode (the pod may change mode by itself), and
+- replies are arriving (none missing for ``control_silence`` seconds: packets queued towards a
+  GCU that stopped reading must not steer it when it resumes).
+
+Otherwise they go out invalid: rates 0, angles held. A mode command that fails or whose
+outcome is unknown leaves no values valid until the next mode command is confirmed.
+"""
+
+from __future__ import annotations
+
+import enum
+
+from gcu_async.protocol.commands import Track
+from gcu_async.protocol.enums import Mode, Opcode
+from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.session.tickets import Ticket, TicketState
+
+
+class ControlKind(enum.Enum):
+    """What a mode reads from the control values."""
+
+    ANGLES = "angles"
+    RATES = "rates"
+    NONE = "none"
+
+
+KIND: dict[int, ControlKind] = {
+    Opcode.ANGLE_CONTROL: ControlKind.ANGLES,
+    Opcode.EULER_CONTROL: ControlKind.ANGLES,
+    Opcode.FPV: ControlKind.ANGLES,
+    Opcode.POINTING_LOCK: ControlKind.RATES,
+    Opcode.POINTING_FOLLOW: ControlKind.RATES,
+    Opcode.TOP_DOWN: ControlKind.RATES,
+    Opcode.GAZE_AT_COORDINATES: ControlKind.RATES,
+    Opcode.GAZE_LOCK: ControlKind.RATES,
+    Opcode.TRACK: ControlKind.NONE,
+}
+"""Mode commands and what their mode reads from the control values."""
+
+REPORTED: dict[int, Mode] = {
+    Opcode.ANGLE_CONTROL: Mode.ANGLE_CONTROL,
+    Opcode.EULER_CONTROL: Mode.EULER_CONTROL,
+    Opcode.FPV: Mode.FPV,
+    Opcode.POINTING_LOCK: Mode.POINTING_LOCK,
+    Opcode.POINTING_FOLLOW: Mode.POINTING_FOLLOW,
+    Opcode.TOP_DOWN: Mode.TOP_DOWN,
+    Opcode.GAZE_AT_COORDINATES: Mode.GAZE,
+    Opcode.GAZE_LOCK: Mode.GAZE,
+    Opcode.TRACK: Mode.TRACK,
+}
+"""The mode byte (GCU main frame byte 5) each mode command leads to."""
+
+MODE_CHANGING = frozenset({*KIND, Opcode.CENTRE, Opcode.CLICK_TO_PAN})
+"""Commands during which (queued or in flight) no control values are sent valid."""
+
+
+class ControlState:
+    """The values the user gave, the mode they belong to, and the mode commands pending."""
+
+    def __init__(self) -> None:
+        self.confirmed: int | None = None
+        """Opcode of the mode command the GCU confirmed last (None: no mode known)."""
+        self.values: ControlValues | None = None
+        """Values for ``confirmed`` (None: sent invalid)."""
+        self._pending: dict[Ticket, ControlValues | None] = {}
+        """Mode-changing tickets not yet final, in submission order, with the values to use
+        once each is confirmed."""
+
+    def reset(self) -> None:
+        self.confirmed = None
+        self.values = None
+        self._pending.clear()
+
+    @property
+    def pending(self) -> bool:
+        return bool(self._pending)
+
+    def submitted(self, ticket: Ticket, values: ControlValues | None) -> None:
+        """Account for a submitted command; ``values`` apply once it is confirmed."""
+        if ticket.opcode in MODE_CHANGING:
+            self._pending[ticket] = values
+
+    def finished(self, ticket: Ticket) -> None:
+        """Account for a ticket that reached a final state."""
+        if ticket not in self._pending:
+            return
+        values = self._pending.pop(ticket)
+        state, opcode = ticket.state, ticket.opcode
+        if state is TicketState.NOT_SENT:
+            return  # nothing happened on the GCU
+        if state is not TicketState.SUCCEEDED:
+            self.confirmed, self.values = None, None  # the mode is not known any more
+        elif opcode == Opcode.CENTRE:
+            self.values = None  # same mode; old values would steer away from the centre
+        elif opcode == Opcode.CLICK_TO_PAN:
+            self.confirmed, self.values = None, None  # pointing-lock once the pan is done
+        elif opcode == Opcode.TRACK and not (
+            isinstance(ticket.command, Track) and ticket.command.enter
+        ):
+            self.confirmed, self.values = None, None  # tracking exited: mode not reported
+        else:
+            self.confirmed, self.values = opcode, values
+
+    def target(self) -> tuple[int | None, Ticket | None]:
+        """The mode new values are for: the last mode-changing command pending, else the
+        confirmed mode."""
+        if self._pending:
+            ticket = next(reversed(self._pending))
+            return ticket.opcode, ticket
+        return self.confirmed, None
+
+    def target_values(self) -> ControlValues | None:
+        """The values given for :meth:`target`'s mode."""
+        if self._pending:
+            return self._pending[next(reversed(self._pending))]
+        return self.values
+
+    def set_values(self, values: ControlValues | None, kind: ControlKind | None) -> int | None:
+        """Give new values for the current mode (see :meth:`target`); ``kind`` (if given)
+        must be what that mode reads. Returns the mode's opcode (None when releasing with no
+        mode known). Raises ``ValueError`` (nothing changes) when no mode takes values."""
+        opcode, ticket = self.target()
+        if opcode is None and values is None:
+            return None
+        if opcode is None:
+            raise ValueError(
+                "control values: no mode is confirmed or pending; call a mode command first "
+                "(euler_control, angle_control, fpv, pointing_lock, pointing_follow, top_down, "
+                "gaze_lock)"
+            )
+        mode_kind = KIND.get(opcode, ControlKind.NONE)
+        if values is not None and mode_kind is ControlKind.NONE:
+            raise ValueError(f"control values: {Opcode(opcode).name} takes no control values")
+        if values is not None and kind is not None and kind is not mode_kind:
+            raise ValueError(
+                f"control values: {Opcode(opcode).name} reads {mode_kind.value}, "
+                f"not {kind.value}"
+            )
+        if ticket is not None:
+            self._pending[ticket] = values
+        else:
+            self.values = values
+        return opcode
+
+    def valid(self, reported: Mode | None, silent: bool) -> ControlValues | None:
+        """The values to send valid now, or None (send them invalid)."""
+        values, confirmed = self.values, self.confirmed
+        if values is None or confirmed is None or self._pending or silent:
+            return None
+        if reported is not REPORTED[confirmed]:
+            return None
+        return values

@@ -1,0 +1,67 @@
+"""When the next host packet may go out: heartbeat slots, the rate bound and the edge guard.
+
+Sans-I/O; times are seconds on the caller's monotonic clock (docs/client.md, "The session
+contract"). Three rules, each checked by :class:`Pacer` alone:
+
+- **Heartbeat slots.** Packets go out on slots ``period = 1 / rate_hz`` apart, kept on a
+  fixed phase (a late packet does not shift the next slot) unless a packet is later than a
+  whole period, or a command goes out early: then the phase restarts at that packet.
+- **Rate bound.** No packet is sent if it would make more than ``floor(rate_hz) + 1``
+  packets within any one-second window (a sliding window over the last sends).
+  Strictly periodic slots never use the spare packet; one early command per second does.
+- **Edge guard.** A packet whose opcode differs from the previous packet's goes out no
+  earlier than ``guard`` seconds after that packet, so on a link that delays packets by
+  at most ``guard`` more than others, runs of one opcode reach the GCU in the order sent.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+
+WINDOW = 1.0
+"""Seconds over which the rate bound counts packets."""
+
+
+class Pacer:
+    """Slot schedule, sliding-window rate bound and edge guard for one session."""
+
+    __slots__ = ("_sent", "guard", "last_opcode", "last_time", "limit", "next_slot", "period")
+
+    def __init__(self, rate_hz: float, guard: float) -> None:
+        self.period = 1.0 / rate_hz
+        self.limit = math.floor(rate_hz) + 1
+        """Most packets allowed in any window of :data:`WINDOW` seconds."""
+        self.guard = guard
+        self._sent: deque[float] = deque(maxlen=self.limit)
+        self.next_slot = -math.inf
+        self.last_time = -math.inf
+        self.last_opcode: int | None = None
+
+    def reset(self) -> None:
+        """Forget every send (a new session starts)."""
+        self._sent.clear()
+        self.next_slot = -math.inf
+        self.last_time = -math.inf
+        self.last_opcode = None
+
+    def window_open_at(self) -> float:
+        """Earliest time the rate bound allows another packet."""
+        sent = self._sent
+        return sent[0] + WINDOW if len(sent) == self.limit else -math.inf
+
+    def edge_open_at(self, opcode: int) -> float:
+        """Earliest time a packet with ``opcode`` may follow the previous packet."""
+        if opcode == self.last_opcode or self.last_opcode is None:
+            return -math.inf
+        return self.last_time + self.guard
+
+    def record(self, now: float, opcode: int, *, early: bool) -> None:
+        """A packet with ``opcode`` went out at ``now`` (on its slot, or ``early``)."""
+        self._sent.append(now)
+        self.last_time = now
+        self.last_opcode = opcode
+        if early or now >= self.next_slot + self.period:
+            self.next_slot = now + self.period  # new phase: an early command, or far behind
+        else:
+            self.next_slot += self.period

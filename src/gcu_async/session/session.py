@@ -1,0 +1,629 @@
+"""The command session as a sans-I/O state machine (the h11 / wsproto pattern).
+
+Inputs: bytes received (:meth:`Session.receive`), the time (every call takes ``now``), API
+calls (:meth:`Session.submit`, :meth:`Session.cancel`, :meth:`Session.set_aircraft`,
+:meth:`Session.set_control`, :meth:`Session.open`, :meth:`Session.close`) and transport news
+(:meth:`Session.connection_lost`). Outputs: the packet to send now (:meth:`Session.poll`),
+when to call :meth:`Session.poll` next (:meth:`Session.next_wakeup`) and events
+(:meth:`Session.events`). No asyncio, no sockets, no clock of its own: a driver (the
+asyncio :class:`~gcu_async.client.GcuClient`, or a virtual-time test harness) does the I/O.
+
+The contract it keeps, with its assumptions, is in docs/client.md ("The session
+contract"); the rules behind it live in :mod:`~gcu_async.session.pacing` (when a packet may
+go), :mod:`~gcu_async.session.runs` (what a reply proves, when an opcode may start),
+:mod:`~gcu_async.session.control` (which control values go out valid) and
+:mod:`~gcu_async.session.recording` (state-checked record toggles).
+"""
+
+from __future__ import annotations
+
+import enum
+import heapq
+import itertools
+import math
+from collections import deque
+from dataclasses import dataclass
+
+from gcu_async._checks import check_bool, check_instance, check_int, check_positive
+from gcu_async.errors import (
+    CommandError,
+    CommandFailed,
+    CommandLinkLost,
+    CommandTimeout,
+    FieldRangeError,
+    GcuError,
+    Outcome,
+    RemoteProtocolError,
+)
+from gcu_async.protocol.aircraft import AircraftState
+from gcu_async.protocol.commands import Command, NullCommand, command_code
+from gcu_async.protocol.deframer import Deframer
+from gcu_async.protocol.enums import ExecutionStatus, Opcode, SubFrameRequest, opcode_name
+from gcu_async.protocol.feedback import Feedback
+from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
+from gcu_async.protocol.host_frames import (
+    CONTROL_ANGLE_RAW,
+    CONTROL_RATE_RAW,
+    ControlValues,
+    HostMainFrame,
+    HostSubFrame,
+)
+from gcu_async.protocol.packets import DEFAULT_VERSION, HostPacket, decode_gcu_packet
+from gcu_async.session.control import KIND, ControlKind, ControlState
+from gcu_async.session.events import (
+    Event,
+    LinkDown,
+    LinkUp,
+    ResetLink,
+    TelemetrySample,
+    TicketDone,
+)
+from gcu_async.session.health import HealthTracker, LinkHealth
+from gcu_async.session.pacing import Pacer
+from gcu_async.session.recording import RecordingBelief
+from gcu_async.session.runs import RunLedger
+from gcu_async.session.tickets import Ticket, TicketState
+
+NULL = NullCommand()
+RATE_MAX_HZ = 200.0
+MIN_WAKE = 1e-4
+"""Seconds; the smallest step :meth:`Session.next_wakeup` asks for (a floor against float
+round-off, never a busy loop)."""
+
+
+class SessionState(enum.Enum):
+    """The session's lifecycle: one state, not a set of flags."""
+
+    CLOSED = "closed"
+    """Not open (never opened, or closed: it may be opened again)."""
+    OPENING = "opening"
+    """Open; the heartbeat runs; no reply yet."""
+    UP = "up"
+    """Replies arrive; commands are accepted."""
+    DOWN = "down"
+    """The link was lost; the heartbeat goes on; commands fail at once until replies return."""
+
+
+@dataclass
+class SessionStats:
+    """Counters of one session (since it was created)."""
+
+    submitted: int = 0
+    succeeded: int = 0
+    skipped: int = 0
+    failed: int = 0
+    not_sent: int = 0
+    unknown: int = 0
+    cancelled: int = 0
+    late_feedback: int = 0
+    """Replies to an earlier run of the same opcode as the command in flight (expected:
+    the GCU answers every repeat of the previous command)."""
+    separator_packets: int = 0
+    """Null packets sent because the next command had to wait for proof of separation."""
+    early_packets: int = 0
+    """Commands sent before their heartbeat slot (the phase moved instead)."""
+
+
+class Session:
+    """One host's session with one GCU. See the module docstring and docs/client.md.
+
+    Args:
+        rate_hz: heartbeat rate, (0, 200] packets per second (the protocol advises 30–50).
+        reorder_guard: seconds between the last packet of one opcode and the first of the
+            next; must exceed how much more the link may delay one packet than another
+            (0 on links that never reorder: TCP, serial).
+        command_timeout: default seconds a command may spend on the wire (from its first
+            packet to its feedback).
+        queue_timeout: default seconds a command may wait before its first packet.
+        silence_timeout: seconds without a reply after which the link counts as lost.
+        control_silence: seconds without a reply after which control values go out invalid.
+        reply_window: longest round trip (GCU included) assumed possible; only used to tell
+            which packets a reply may answer when no later reply settles it.
+        record_settle: seconds a camera may take to report a record toggle in its flags.
+        version: protocol version byte to send (2; some devices expect 1).
+        name: how errors name the link (e.g. its URL).
+    """
+
+    def __init__(
+        self,
+        *,
+        rate_hz: float = 50.0,
+        reorder_guard: float = 0.0,
+        command_timeout: float = 2.0,
+        queue_timeout: float = 30.0,
+        silence_timeout: float = 1.0,
+        control_silence: float = 0.2,
+        reply_window: float = 1.0,
+        record_settle: float = 1.0,
+        version: int = DEFAULT_VERSION,
+        name: str = "gcu",
+    ) -> None:
+        rate_hz = check_positive("rate_hz", rate_hz, unit="Hz")
+        if rate_hz > RATE_MAX_HZ:
+            raise FieldRangeError("rate_hz", rate_hz, 0, RATE_MAX_HZ, "Hz")
+        self.rate_hz = rate_hz
+        self.reorder_guard = check_positive("reorder_guard", reorder_guard, allow_zero=True)
+        self.command_timeout = check_positive("command_timeout", command_timeout)
+        self.queue_timeout = check_positive("queue_timeout", queue_timeout)
+        self.silence_timeout = check_positive("silence_timeout", silence_timeout)
+        self.control_silence = check_positive("control_silence", control_silence)
+        self.reply_window = check_positive("reply_window", reply_window)
+        self.version = check_int("version", version, 1, 2)
+        self.name = check_instance("name", name, str)
+        self._pacer = Pacer(rate_hz, self.reorder_guard)
+        self._ledger = RunLedger(self.reorder_guard, self.reply_window)
+        self._control = ControlState()
+        self._recording = RecordingBelief(check_positive("record_settle", record_settle))
+        self._deframer = Deframer.for_gcu_packets()
+        self._health = HealthTracker()
+        self.stats = SessionStats()
+        self._state = SessionState.CLOSED
+        self._queue: deque[Ticket] = deque()
+        self._deadlines: list[tuple[float, int, Ticket]] = []
+        self._seq = itertools.count()
+        self._in_flight: Ticket | None = None
+        self._kick = False
+        self._events: list[Event] = []
+        self._status: GcuMainFrame | None = None
+        self._info: GcuSubFrame | None = None
+        self._aircraft = AircraftState()
+        self._sub: HostSubFrame | None = None
+        self._frames: dict[ControlValues | None, HostMainFrame] = {}
+        self._last_encoded: tuple[object, object, object, bytes] = (None, None, None, b"")
+
+    # -- lifecycle -------------------------------------------------------------------------
+    @property
+    def state(self) -> SessionState:
+        return self._state
+
+    def open(self, now: float) -> None:
+        """Start a session: the heartbeat begins with the next :meth:`poll`. Raises
+        ``RuntimeError`` unless the session is closed."""
+        if self._state is not SessionState.CLOSED:
+            raise RuntimeError(f"session is already {self._state.value}")
+        self._pacer.reset()
+        self._ledger = RunLedger(self.reorder_guard, self.reply_window)
+        self._control.reset()
+        self._recording.reset()
+        self._deframer.reset()
+        self._status = self._info = None
+        self._state = SessionState.OPENING
+
+    def close(self, now: float, reason: str = "client closed") -> None:
+        """End the session: every pending command ends (:class:`CommandLinkLost`); nothing
+        more is sent. Idempotent."""
+        if self._state is SessionState.CLOSED:
+            return
+        self._end_all(now, f"{self.name}: {reason}")
+        self._state = SessionState.CLOSED
+
+    # -- inputs ----------------------------------------------------------------------------
+    def receive(self, data: bytes, now: float, *, datagram: bool = False,
+                arrived_after: float | None = None) -> None:  # fmt: skip
+        """Bytes from the GCU, in any chunking (``datagram``: exactly one datagram, whose
+        leftovers are not joined with the next one's).
+
+        ``arrived_after``: a time before which these bytes cannot have arrived (default
+        ``now``). On links that may reorder, a driver whose event loop can lag must pass it
+        (the time it last found the link with nothing to read), or the proofs drawn from
+        reply timing assume replies are processed as they arrive."""
+        if self._state is SessionState.CLOSED:
+            return
+        deframer = self._deframer
+        packets = deframer.feed(data)
+        if datagram and deframer.buffered:
+            packets += deframer.flush()  # a datagram's leftovers never join the next one
+        for raw in packets:
+            try:
+                packet = decode_gcu_packet(raw)
+            except RemoteProtocolError:
+                self._health.decode_errors += 1
+                continue
+            sub = packet.sub if isinstance(packet.sub, GcuSubFrame) else None
+            self._on_reply(packet.main, sub, packet.feedback, now, arrived_after)
+
+    def connection_lost(self, now: float, reason: str) -> None:
+        """The transport lost its connection (stream transports): no reply to anything sent
+        so far can arrive any more; the link is down until replies return."""
+        if self._state is SessionState.CLOSED:
+            return
+        self._ledger.connection_reset(now)
+        self._deframer.reset()
+        self._link_down(now, reason, reset=False)
+
+    def submit(
+        self,
+        command: Command,
+        now: float,
+        *,
+        timeout: float | None = None,
+        queue_timeout: float | None = None,
+        control: ControlValues | None = None,
+        recording_target: bool | None = None,
+    ) -> Ticket:
+        """Queue ``command``; returns its :class:`Ticket` (its outcome arrives as a
+        :class:`TicketDone` event).
+
+        ``timeout`` (default ``command_timeout``) counts from its first packet;
+        ``queue_timeout`` (default ``queue_timeout``) bounds the wait before it.
+        ``control``: for a mode command, the values to send valid once the GCU confirmed
+        it. ``recording_target`` (record commands only): send it only if the camera is not
+        already in that state when its turn comes (else it ends ``SKIPPED``).
+        Raises :class:`CommandLinkLost` (``NOT_SENT``) unless the link is up, TypeError /
+        ValueError for bad arguments.
+        """
+        check_instance("command", command, Command, "a Command")
+        if isinstance(command, NullCommand):
+            raise ValueError("command: the null command is the session's own separator")
+        opcode = command_code(command)
+        timeout = self.command_timeout if timeout is None else check_positive("timeout", timeout)
+        queue_timeout = (self.queue_timeout if queue_timeout is None
+                         else check_positive("queue_timeout", queue_timeout))  # fmt: skip
+        if control is not None:
+            self._check_values(control, KIND.get(opcode), opcode)
+        if recording_target is not None:
+            check_bool("recording_target", recording_target)
+            if opcode != Opcode.RECORD:
+                raise ValueError(f"recording_target: only for RECORD, not {opcode_name(opcode)}")
+        if self._state is not SessionState.UP:
+            state = "closed" if self._state is SessionState.CLOSED else "down"
+            raise CommandLinkLost(
+                f"{opcode_name(opcode)}: {self.name}: link is {state}; not sent",
+                outcome=Outcome.NOT_SENT, opcode=opcode, command=command,
+            )  # fmt: skip
+        ticket = Ticket(command, opcode, now, timeout, now + queue_timeout,
+                        recording_target=recording_target)  # fmt: skip
+        self.stats.submitted += 1
+        self._queue.append(ticket)
+        heapq.heappush(self._deadlines, (ticket.queue_deadline, next(self._seq), ticket))
+        self._control.submitted(ticket, control)
+        if self._in_flight is None:
+            self._kick = True
+        self._advance_queue(now)
+        return ticket
+
+    def cancel(self, ticket: Ticket, now: float) -> None:
+        """Withdraw a ticket (its caller gave up): ``NOT_SENT`` if it was still queued,
+        ``UNKNOWN`` if it was in flight (it stops being repeated). No-op when done."""
+        if ticket.done:
+            return
+        self.stats.cancelled += 1
+        self._end(ticket, now, "cancelled by the caller", CommandError)
+
+    def set_aircraft(self, state: AircraftState) -> None:
+        """Replace the aircraft state carried by every packet from the next one on."""
+        check_instance("state", state, AircraftState)
+        self._aircraft = state
+        self._sub = state.sub_frame()
+        self._frames.clear()
+
+    @property
+    def aircraft(self) -> AircraftState:
+        return self._aircraft
+
+    def set_control(self, values: ControlValues | None,
+                    kind: ControlKind | None = None) -> int | None:  # fmt: skip
+        """New control values for the current mode: the last mode command pending, else the
+        confirmed one (``None``: send them invalid). ``kind`` (if given) must be what that
+        mode reads. Returns the mode's opcode (None: no mode known, values released).
+        Raises ``ValueError``/``TypeError`` (nothing changes) for values out of range or when
+        no mode takes values."""
+        if values is not None:
+            opcode, _ = self._control.target()
+            self._check_values(values, KIND.get(opcode) if opcode is not None else None, opcode)
+        return self._control.set_values(values, kind)
+
+    # -- outputs ---------------------------------------------------------------------------
+    def events(self) -> list[Event]:
+        """Every event since the last call, in order."""
+        events, self._events = self._events, []
+        return events
+
+    def poll(self, now: float) -> bytes | None:
+        """Run due timers; return the host packet to send now, if one is due."""
+        if self._state is SessionState.CLOSED:
+            return None
+        self._timers(now)
+        pacer = self._pacer
+        slot_due = now >= pacer.next_slot
+        if not slot_due and not self._kick:
+            return None
+        command, start = self._next_command(now)
+        if not slot_due and start is None:
+            self._kick = False  # early only to start a command, and none can start
+            return None
+        opcode = command_code(command)
+        if now < pacer.window_open_at() or now < pacer.edge_open_at(opcode):
+            return None  # the rate bound or the edge guard: next_wakeup says when
+        self._kick = False
+        ticket = self._in_flight
+        if start is not None:
+            self._queue.popleft()
+            start.state = TicketState.SENT
+            start.first_sent = now
+            if start.opcode == Opcode.RECORD:
+                belief = self._recording.value(now)
+                start.expect_recording = None if belief is None else not belief
+            self._in_flight = ticket = start
+        run = self._ledger.sent(opcode, now)
+        if ticket is not None:
+            ticket.run = run
+            ticket.packets += 1
+        elif self._queue:
+            self.stats.separator_packets += 1
+        if not slot_due:
+            self.stats.early_packets += 1
+        pacer.record(now, opcode, early=not slot_due)
+        self._health.packets_sent += 1
+        return self._encode(self._main_frame(now), command)
+
+    def next_wakeup(self, now: float) -> float:
+        """When :meth:`poll` must be called next (``inf`` when closed)."""
+        if self._state is SessionState.CLOSED:
+            return math.inf
+        pacer = self._pacer
+        command, start = self._next_command(now)
+        gate = max(pacer.window_open_at(), pacer.edge_open_at(command_code(command)))
+        when = max(pacer.next_slot, gate)
+        if self._kick and start is not None:  # a command may start before its slot
+            when = min(when, max(now, gate))
+        t = self._in_flight
+        if t is not None and t.first_sent is not None:
+            when = min(when, t.first_sent + t.timeout)
+        deadlines = self._deadlines
+        while deadlines and deadlines[0][2].state is not TicketState.QUEUED:
+            heapq.heappop(deadlines)
+        if deadlines:
+            when = min(when, deadlines[0][0])
+        if self._state is SessionState.UP and self._health.last_reply is not None:
+            when = min(when, self._health.last_reply + self.silence_timeout)
+        settle = self._recording.settles_at()
+        if settle > now and self._queue and self._queue[0].recording_target is not None:
+            when = min(when, settle)
+        return max(when, now + MIN_WAKE)
+
+    # -- observations ----------------------------------------------------------------------
+    @property
+    def status(self) -> GcuMainFrame | None:
+        """The latest main frame (None before the first reply)."""
+        return self._status
+
+    @property
+    def info(self) -> GcuSubFrame | None:
+        """The latest sub frame (None before the first)."""
+        return self._info
+
+    @property
+    def in_flight(self) -> Ticket | None:
+        return self._in_flight
+
+    @property
+    def pending(self) -> int:
+        """Commands queued or in flight."""
+        return len(self._queue) + (self._in_flight is not None)
+
+    @property
+    def control(self) -> ControlValues | None:
+        """The values given for the current mode (whether or not they go out valid now)."""
+        return self._control.target_values()
+
+    @property
+    def control_mode(self) -> int | None:
+        """Opcode of the mode command the GCU confirmed last (None: no mode is known)."""
+        return self._control.confirmed
+
+    def control_valid(self, now: float) -> ControlValues | None:
+        """The control values the next packet would carry valid (None: invalid)."""
+        return self._valid_values(now)
+
+    def recording(self, now: float) -> bool | None:
+        """Whether the camera records, as far as the session can tell (None: not known)."""
+        return self._recording.value(now)
+
+    def link_health(self, now: float) -> LinkHealth:
+        h, d, r = self._health, self._deframer.stats, self._ledger.stats
+        return LinkHealth(
+            up=self._state is SessionState.UP,
+            reply_rate=h.reply_rate(now),
+            last_reply_age=None if h.last_reply is None else now - h.last_reply,
+            packets_sent=h.packets_sent,
+            packets_received=h.packets_received,
+            send_errors=h.send_errors,
+            crc_errors=d.crc_errors,
+            length_errors=d.length_errors,
+            bytes_discarded=d.bytes_discarded,
+            decode_errors=h.decode_errors,
+            unmatched_feedback=r.unmatched,
+            ambiguous_feedback=r.ambiguous,
+            lost_count=h.lost_count,
+            restored_count=h.restored_count,
+        )
+
+    def send_failed(self) -> None:
+        """The driver could not hand the last packet to the transport (counted)."""
+        self._health.send_errors += 1
+
+    # -- internals: replies ----------------------------------------------------------------
+    def _on_reply(self, main: GcuMainFrame, sub: GcuSubFrame | None, feedback: Feedback,
+                  now: float, earliest: float | None) -> None:  # fmt: skip
+        self._health.on_reply(now)
+        self._status = main
+        if sub is not None:
+            self._info = sub
+            self._recording.observe(sub.recording, now)
+        if self._state is not SessionState.UP:
+            restored = self._state is SessionState.DOWN
+            if restored:
+                self._health.restored_count += 1
+            self._state = SessionState.UP
+            self._events.append(LinkUp(restored, "replies resumed" if restored else "first reply"))
+        run = self._ledger.identify(feedback.opcode, now, earliest)
+        ticket = self._in_flight
+        if run is not None and ticket is not None and run.opcode == ticket.opcode:
+            if run is not ticket.run:
+                self.stats.late_feedback += 1
+            else:
+                result = feedback.result
+                if result is ExecutionStatus.IN_PROGRESS:
+                    ticket.progress.append(feedback)
+                elif result is ExecutionStatus.SUCCESS:
+                    ticket.feedback = feedback
+                    self._finish(ticket, TicketState.SUCCEEDED, now)
+                else:
+                    ticket.feedback = feedback
+                    error = CommandFailed(
+                        feedback.opcode, feedback.status, int(feedback.failed_cameras),
+                        command=ticket.command,
+                    )  # fmt: skip
+                    self._finish(ticket, TicketState.FAILED, now, error)
+        elif run is not None and ticket is None and run.opcode != Opcode.NULL:
+            self.stats.late_feedback += 1
+        self._events.append(TelemetrySample(main, self._info, feedback, now))
+        self._advance_queue(now)
+
+    # -- internals: timers and the queue ---------------------------------------------------
+    def _timers(self, now: float) -> None:
+        if (self._state is SessionState.UP
+                and self._health.silent_for(now) > self.silence_timeout):  # fmt: skip
+            self._link_down(now, f"no reply for {self.silence_timeout:g} s", reset=True)
+        t = self._in_flight
+        if t is not None and t.first_sent is not None and now >= t.first_sent + t.timeout:
+            progress = " (last status: in progress)" if t.progress else ""
+            message = (
+                f"{opcode_name(t.opcode)}: no feedback within {t.timeout:g} s of its first "
+                f"packet{progress}; outcome unknown (it may have executed)"
+            )
+            self._finish(t, TicketState.UNKNOWN, now, CommandTimeout(
+                message, outcome=Outcome.UNKNOWN, opcode=t.opcode, command=t.command))  # fmt: skip
+        deadlines = self._deadlines
+        while deadlines and (deadlines[0][0] <= now
+                             or deadlines[0][2].state is not TicketState.QUEUED):  # fmt: skip
+            _, _, ticket = heapq.heappop(deadlines)
+            if ticket.state is TicketState.QUEUED:
+                queued = now - ticket.submitted_at
+                message = (f"{opcode_name(ticket.opcode)}: not sent: still queued after "
+                           f"{queued:.3g} s (queue_timeout)")  # fmt: skip
+                self._queue.remove(ticket)
+                self._finish(ticket, TicketState.NOT_SENT, now, CommandTimeout(
+                    message, outcome=Outcome.NOT_SENT, opcode=ticket.opcode,
+                    command=ticket.command))  # fmt: skip
+        self._advance_queue(now)
+
+    def _advance_queue(self, now: float) -> None:
+        """End state-checked record commands at the head whose target state holds."""
+        queue = self._queue
+        while self._in_flight is None and queue and queue[0].recording_target is not None:
+            head = queue[0]
+            if self._recording.value(now) is not head.recording_target:
+                return
+            queue.popleft()
+            self._finish(head, TicketState.SKIPPED, now)
+
+    def _next_command(self, now: float) -> tuple[Command, Ticket | None]:
+        """(command for the next packet, the queued ticket it would start or None)."""
+        t = self._in_flight
+        if t is not None:
+            return t.command, None
+        if self._queue:
+            head = self._queue[0]
+            if self._ledger.may_start(head.opcode) and (
+                head.recording_target is None or self._recording.value(now) is not None
+            ):
+                return head.command, head
+        return NULL, None
+
+    def _link_down(self, now: float, reason: str, *, reset: bool) -> None:
+        if self._state is SessionState.UP:
+            self._health.lost_count += 1
+        was = self._state
+        self._state = SessionState.DOWN
+        self._end_all(now, f"{self.name}: {reason}")
+        if was is not SessionState.DOWN:
+            self._events.append(LinkDown(reason))
+            if reset:
+                self._events.append(ResetLink(reason))
+
+    def _end_all(self, now: float, reason: str) -> None:
+        for ticket in [*([self._in_flight] if self._in_flight else []), *self._queue]:
+            self._end(ticket, now, reason, CommandLinkLost)
+
+    def _end(self, ticket: Ticket, now: float, reason: str, cls: type[CommandError]) -> None:
+        """End a pending ticket from outside: ``UNKNOWN`` if it was sent, else ``NOT_SENT``."""
+        sent = ticket.state is TicketState.SENT
+        state = TicketState.UNKNOWN if sent else TicketState.NOT_SENT
+        outcome = Outcome.UNKNOWN if sent else Outcome.NOT_SENT
+        what = ("outcome unknown (it may have executed)" if sent
+                else "not sent (it did not execute)")  # fmt: skip
+        message = f"{opcode_name(ticket.opcode)}: {reason}; {what}"
+        error = cls(message, outcome=outcome, opcode=ticket.opcode, command=ticket.command)
+        if not sent:
+            self._queue.remove(ticket)
+        self._finish(ticket, state, now, error)
+
+    def _finish(self, ticket: Ticket, state: TicketState, now: float,
+                error: GcuError | None = None) -> None:  # fmt: skip
+        ticket.state = state
+        ticket.error = error
+        ticket.finished_at = now
+        if ticket is self._in_flight:
+            self._in_flight = None
+        self._control.finished(ticket)
+        if ticket.opcode == Opcode.RECORD:
+            if state is TicketState.SUCCEEDED:
+                self._recording.toggled(ticket.expect_recording, now)
+            elif state is TicketState.UNKNOWN:
+                self._recording.uncertain(now)
+        s = self.stats
+        if state is TicketState.SUCCEEDED:
+            s.succeeded += 1
+        elif state is TicketState.SKIPPED:
+            s.skipped += 1
+        elif state is TicketState.FAILED:
+            s.failed += 1
+        elif state is TicketState.NOT_SENT:
+            s.not_sent += 1
+        else:
+            s.unknown += 1
+        self._events.append(TicketDone(ticket))
+
+    # -- internals: packets ----------------------------------------------------------------
+    def _valid_values(self, now: float) -> ControlValues | None:
+        status = self._status
+        reported = status.mode if status is not None else None
+        silent = self._health.silent_for(now) > self.control_silence
+        return self._control.valid(reported, silent)
+
+    def _main_frame(self, now: float) -> HostMainFrame:
+        values = self._valid_values(now)
+        frame = self._frames.get(values)
+        if frame is None:
+            if len(self._frames) > 8:
+                self._frames.clear()
+            frame = self._aircraft.main_frame(values, SubFrameRequest.STANDARD)
+            self._frames[values] = frame
+        return frame
+
+    def _encode(self, main: HostMainFrame, command: Command) -> bytes:
+        """The packet's bytes; the previous packet's are reused when it had the very same
+        (immutable) parts, as every heartbeat of an idle session has."""
+        sub, last = self._sub, self._last_encoded
+        if last[0] is main and last[1] is sub and last[2] is command:
+            return last[3]
+        data = HostPacket(main, sub, command, self.version).encode()
+        self._last_encoded = (main, sub, command, data)
+        return data
+
+    @staticmethod
+    def _check_values(values: ControlValues, kind: ControlKind | None,
+                      opcode: int | None) -> None:  # fmt: skip
+        """Control values must fit the wire and, when the mode is known, its kind: angles
+        ±18000 (0.01°), rates ±1500 (0.1 °/s ÷ zoom)."""
+        ControlValues.check(values)
+        limit = CONTROL_RATE_RAW if kind is ControlKind.RATES else CONTROL_ANGLE_RAW
+        for field, raw in zip(("roll_raw", "pitch_raw", "yaw_raw"), values, strict=True):
+            check_int(f"control.{field}", raw, -limit, limit)
+        if kind is ControlKind.NONE and opcode is not None:
+            raise ValueError(f"control: {opcode_name(opcode)} takes no control values")
+
+
+__all__ = ["Session", "SessionState", "SessionStats"]
