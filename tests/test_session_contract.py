@@ -23,7 +23,7 @@ from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
 from _vtime import Direction, Fate, Rig, tagged_commands
-from gcu_async.protocol import HostPacket, Opcode
+from gcu_async.protocol import HostPacket
 from gcu_async.session import Session, SessionState, TicketState
 
 GUARD = 0.015
@@ -113,8 +113,9 @@ class Scenario:
                     f"duplicate={x.duplicate}, jitter={x.jitter}, extreme={x.extreme}, "
                     f"seed={x.seed})")  # fmt: skip
 
-        return (f"Scenario(bound={self.bound}, latency={self.latency}, requests={d(self.requests)}, "
-                f"replies={d(self.replies)}, adversary={self.adversary!r}, "
+        return (f"Scenario(bound={self.bound}, latency={self.latency}, "
+                f"requests={d(self.requests)}, replies={d(self.replies)}, "
+                f"adversary={self.adversary!r}, "
                 f"stalls=<{len(self.stalls)} intervals>, rate_hz={self.rate_hz}, "
                 f"workload={self.workload!r}, seed={self.seed}, earliest={self.earliest!r}, "
                 f"stall_on_late_reply={self.stall_on_late_reply})")  # fmt: skip
