@@ -15,6 +15,7 @@ import heapq
 import itertools
 import math
 import random
+from collections import Counter
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -315,6 +316,22 @@ class Rig:
                 assert not runs and t.packets == 0, f"{t.state} but executed: {t}"
             if t.error is not None and t.state is TicketState.NOT_SENT:
                 assert getattr(t.error, "outcome", None) is Outcome.NOT_SENT
+
+    def check_counts(self) -> None:
+        """The contract for commands that cannot be told apart by their parameters: per
+        opcode, executions lie between the commands reported executed (succeeded or failed)
+        and those plus the ones whose outcome is unknown."""
+        assert not self.violations, self.violations[:5]
+        assert self.max_in_window() <= math.floor(self.session.rate_hz) + 1
+        executed = Counter(int(e.command.OPCODE) for e in self.executions)
+        by_state: dict[int, Counter[TicketState]] = {}
+        for t in self.tickets:
+            by_state.setdefault(t.opcode, Counter())[t.state] += 1
+        for opcode in set(executed) | set(by_state):
+            states = by_state.get(opcode, Counter())
+            known = states[TicketState.SUCCEEDED] + states[TicketState.FAILED]
+            assert known <= executed[opcode] <= known + states[TicketState.UNKNOWN], (
+                opcode, executed[opcode], dict(states))
 
     def pending(self) -> bool:
         return self.session.pending > 0 and self.session.state is SessionState.UP

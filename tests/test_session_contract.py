@@ -17,6 +17,7 @@ import random
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import pytest
 from hypothesis import HealthCheck, Phase, given, settings
@@ -117,8 +118,16 @@ class Scenario:
                 f"requests={d(self.requests)}, replies={d(self.replies)}, "
                 f"adversary={self.adversary!r}, "
                 f"stalls=<{len(self.stalls)} intervals>, rate_hz={self.rate_hz}, "
-                f"workload={self.workload!r}, seed={self.seed}, earliest={self.earliest!r}, "
+                f"workload={_short(self.workload)}, seed={self.seed}, "
+                f"earliest={self.earliest!r}, "
                 f"stall_on_late_reply={self.stall_on_late_reply})")  # fmt: skip
+
+
+def _short(items: list[Any]) -> str:
+    """A list as repr, cut after 20 items (shrunk counterexamples are shorter)."""
+    if len(items) <= 20:
+        return repr(items)
+    return f"[{', '.join(map(repr, items[:20]))}, ... ({len(items)} in all)]"
 
 
 @st.composite

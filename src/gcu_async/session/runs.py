@@ -73,6 +73,8 @@ class RunLedger:
         """Runs with a lower index already have a finite ``stale_after``."""
         self.delivered_index = -1
         """Index of the newest run known to have reached the GCU (-1: none yet)."""
+        self._split = False
+        """The next packet starts a new run even with the same opcode (after a reset)."""
         self.stats = RunStats()
 
     @property
@@ -83,7 +85,7 @@ class RunLedger:
     def sent(self, opcode: int, now: float) -> Run:
         """Account for a packet with ``opcode`` sent at ``now``; return its run."""
         runs = self._runs
-        if runs:
+        if runs and not self._split:
             last = runs[-1]
             if last.opcode == opcode:
                 last.last_sent = now
@@ -91,6 +93,7 @@ class RunLedger:
                 return last
         run = Run(self._next_index, opcode, now, now)
         self._next_index += 1
+        self._split = False
         runs.append(run)
         return run
 
@@ -139,11 +142,13 @@ class RunLedger:
 
     def connection_reset(self, now: float) -> None:
         """The connection carrying replies was replaced (TCP reconnect): no reply to any
-        run sent so far can arrive any more."""
+        run sent so far can arrive any more, and the next packet starts a new run (on the
+        new connection) even if it repeats the last opcode."""
         for run in self._runs:
             if run.stale_after > now:
                 run.stale_after = now
         self._stale_upto = self._next_index
+        self._split = True
 
     def _mark_stale_before(self, index: int, when: float) -> None:
         runs = self._runs
