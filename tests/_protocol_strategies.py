@@ -292,7 +292,7 @@ COMMAND_STRATEGIES: dict[type[Command], st.SearchStrategy[Command]] = {
     UnknownCommand: st.builds(
         UnknownCommand,
         code=U8.filter(lambda c: c not in COMMAND_TYPES),
-        # up to 184 parameter bytes keeps S within the deframers' default 256
+        # up to 184 parameter bytes keeps S within Deframer(header)'s default 256
         params=st.binary(max_size=184),
     ),
 }

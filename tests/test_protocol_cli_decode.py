@@ -238,3 +238,22 @@ def test_decode_into_a_closed_pipe_exits_quietly() -> None:
     )
     assert "Traceback" not in proc.stderr
     assert "BrokenPipeError" not in proc.stderr
+
+
+def test_a_packet_inside_a_false_headers_span_at_the_end_is_still_decoded() -> None:
+    """A false header claiming 80 bytes right before the last packet: at the end of the
+    input its span can never complete, so the packet inside it is found (Deframer.flush)."""
+    from gcu_async.cli.decode import decode_stream
+
+    objects, _ = decode_stream(bytes.fromhex("8a5e5000") + GCU_EXAMPLE)
+    assert len(objects) == 1 and objects[0]["feedback"]["command"] == "TAKE_PHOTO"
+
+
+def test_the_simulator_answers_a_packet_inside_a_false_headers_span_in_a_datagram() -> None:
+    from gcu_async.protocol import Deframer
+    from gcu_async.sim import SimulatorModel
+
+    model = SimulatorModel()
+    packets = model.split(bytes.fromhex("a8e55000") + HOST_EXAMPLE, Deframer.for_host_packets(),
+                          end=True)  # fmt: skip
+    assert packets == [HOST_EXAMPLE]

@@ -55,7 +55,7 @@ def decode_stream(data: bytes) -> tuple[list[dict[str, Any]], dict[str, int]]:
     for header, decoder in ((GCU_HEADER, decode_gcu_packet), (HOST_HEADER, decode_host_packet)):
         deframer = Deframer(header)
         offset = 0
-        for raw in deframer.feed(data):
+        for raw in [*deframer.feed(data), *deframer.flush()]:
             offset = data.find(raw, offset)
             try:
                 found.append((offset, decoder(raw).as_dict()))

@@ -45,7 +45,8 @@ CRC_STRUCT = struct.Struct(">H")
 BASE_LENGTH = 72
 """S of a packet with no parameters / no execution status."""
 MAX_LENGTH = 256
-"""Longest packet the deframers accept by default (V2.0.6's longest is 84 bytes)."""
+"""Longest packet ``Deframer(header)`` accepts by default (V2.0.6's longest is 84 bytes;
+the streaming deframers of each direction accept less: see :mod:`~gcu_async.protocol.deframer`)."""
 SUPPORTED_VERSIONS = frozenset({1, 2})
 DEFAULT_VERSION = 2
 _ZERO_SUB = bytes(32)

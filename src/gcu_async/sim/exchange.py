@@ -66,9 +66,7 @@ class Exchange:
         if self._deframer is not None:
             packets = model.split(data, self._deframer)
         else:
-            deframer = Deframer.for_host_packets()
-            packets = model.split(data, deframer)
-            model.discard(deframer)
+            packets = model.split(data, Deframer.for_host_packets(), end=True)
 
         def process(packet: bytes) -> None:
             self._process(packet, send)

@@ -133,12 +133,16 @@ class SimulatorModel:
             if (reply := self.handle_bytes(packet)) is not None
         ]
 
-    def split(self, data: bytes | bytearray | memoryview, deframer: Deframer) -> list[bytes]:
+    def split(self, data: bytes | bytearray | memoryview, deframer: Deframer, *,
+              end: bool = False) -> list[bytes]:  # fmt: skip
         """Deframe ``data`` with ``deframer`` (one per stream or datagram), adding what it
-        discards to :attr:`stats`; return the CRC-valid packets."""
+        discards to :attr:`stats`; return the CRC-valid packets. ``end``: the stream ends
+        here (a datagram): what is still pending is settled (:meth:`Deframer.flush`)."""
         before = deframer.stats
         crc, length, discarded = before.crc_errors, before.length_errors, before.bytes_discarded
         packets = deframer.feed(data)
+        if end:
+            packets += deframer.flush()
         after = deframer.stats
         self.stats.crc_errors += after.crc_errors - crc
         self.stats.length_errors += after.length_errors - length
