@@ -295,3 +295,24 @@ class FdPeer:
     def close(self) -> None:
         asyncio.get_running_loop().remove_reader(self.fd)
         os.close(self.fd)
+
+
+def tagged(i: int, command: Command | None = None) -> bytes:
+    """Host packet number ``i``: the aircraft yaw (i degrees) comes back in the reply, so a
+    reply tells which request it answers (:func:`tag`)."""
+    return host_bytes(command, attitude=(0.0, 0.0, float(i)))
+
+
+def tag(reply: GcuPacket) -> int:
+    """The number of the request :func:`tagged` made, read from its reply."""
+    return round(reply.main.attitude.yaw)
+
+
+async def eventually(predicate: Any, timeout: float = 2.0) -> None:
+    """Wait until ``predicate()`` holds, polling every 5 ms; TimeoutError after ``timeout``."""
+    deadline = asyncio.get_running_loop().time() + timeout
+    while not predicate():
+        if asyncio.get_running_loop().time() > deadline:
+            raise TimeoutError("condition not met in time")
+        await asyncio.sleep(0.005)
+

@@ -7,7 +7,7 @@ import asyncio
 import itertools
 import socket
 import time
-from collections.abc import AsyncIterator, Callable
+from collections.abc import AsyncIterator
 
 import pytest
 from hypothesis import given
@@ -25,7 +25,7 @@ from _fault_proxy import (
     delayed,
     duplicated,
 )
-from _sim_helpers import UdpPeer, host_bytes
+from _sim_helpers import UdpPeer, eventually, tag, tagged
 from gcu_async.protocol import (
     Command,
     Feedback,
@@ -40,23 +40,6 @@ from gcu_async.protocol import (
     decode_gcu_packet,
 )
 from gcu_async.sim import GcuSimulator, SimulatorModel
-
-
-def tagged(i: int, command: Command | None = None) -> bytes:
-    """Host packet ``i``: the aircraft yaw (i degrees) comes back in the reply."""
-    return host_bytes(command, attitude=(0.0, 0.0, float(i)))
-
-
-def tag(reply: GcuPacket) -> int:
-    return round(reply.main.attitude.yaw)
-
-
-async def eventually(predicate: Callable[[], bool], timeout: float = 2.0) -> None:
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise TimeoutError("condition not met in time")
-        await asyncio.sleep(0.005)
 
 
 @pytest.fixture

@@ -8,31 +8,13 @@ from __future__ import annotations
 import asyncio
 import sys
 import time
-from collections.abc import Callable
 
 import pytest
 
-from _sim_helpers import FdPeer, StreamPeer, UdpPeer, host_bytes
-from gcu_async.protocol import GcuPacket, Opcode, TakePhoto, decode_gcu_packet
+from _sim_helpers import FdPeer, StreamPeer, UdpPeer, eventually, tag, tagged
+from gcu_async.protocol import Opcode, TakePhoto, decode_gcu_packet
 from gcu_async.sim import FaultConfig, FaultPlan, GcuSimulator, ManualClock, StallSwitch
 from gcu_async.sim.stall import POLL_SECONDS
-
-
-def tagged(i: int, command: TakePhoto | None = None) -> bytes:
-    """Host packet number ``i``: the aircraft yaw (i degrees) comes back in the reply."""
-    return host_bytes(command, attitude=(0.0, 0.0, float(i)))
-
-
-def tag(reply: GcuPacket) -> int:
-    return round(reply.main.attitude.yaw)
-
-
-async def eventually(predicate: Callable[[], bool], timeout: float = 2.0) -> None:
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise TimeoutError("condition not met in time")
-        await asyncio.sleep(0.005)
 
 
 def manual_sim(**kw: object) -> tuple[GcuSimulator, ManualClock]:
