@@ -67,6 +67,19 @@ def queued(sock: socket.socket | int, request: int) -> int:
     return int(struct.unpack("i", fcntl.ioctl(fd, request, b"\0" * 4))[0])
 
 
+async def read_n(conn: socket.socket, n: int, timeout: float = 5.0) -> bytes:
+    """Read until ``n`` bytes came (or ``timeout`` passed) from a non-blocking socket."""
+    got = bytearray()
+    loop = asyncio.get_running_loop()
+    deadline = loop.time() + timeout
+    while len(got) < n and loop.time() < deadline:
+        data, err = read_available(conn)
+        assert err is None
+        got += data
+        await asyncio.sleep(0.001)
+    return bytes(got)
+
+
 def read_available(conn: socket.socket) -> tuple[bytes, BaseException | None]:
     """Everything ``conn`` can read now, and the error (or None at EOF / would block)."""
     data = bytearray()
@@ -143,15 +156,7 @@ async def test_backpressure_drops_new_packets_instead_of_queueing(peer: SilentPe
 
         # the peer resumes: it reads exactly the accepted packets, whole and in order
         expected = b"".join(accepted)
-        got = bytearray()
-        loop = asyncio.get_running_loop()
-        deadline = loop.time() + 5.0
-        while len(got) < len(expected) and loop.time() < deadline:
-            data, err = read_available(conn)
-            assert err is None
-            got += data
-            await asyncio.sleep(0.001)
-        assert bytes(got) == expected
+        assert await read_n(conn, len(expected)) == expected
         # once drained, sending works again
         t.send(b"after")
         await asyncio.sleep(0.05)
@@ -328,15 +333,7 @@ def test_any_send_sequence_reaches_a_stalled_peer_whole_or_not_at_all(sizes: lis
                 assert t.bytes_sent == sum(map(len, accepted))
                 assert t.bytes_sent <= KERNEL_HOLDS_AT_MOST + max(sizes)
                 expected = b"".join(accepted)
-                got = bytearray()
-                loop = asyncio.get_running_loop()
-                deadline = loop.time() + 5.0
-                while len(got) < len(expected) and loop.time() < deadline:
-                    data, err = read_available(conn)
-                    assert err is None
-                    got += data
-                    await asyncio.sleep(0.001)
-                assert bytes(got) == expected
+                assert await read_n(conn, len(expected)) == expected
         finally:
             peer.close()
 
