@@ -1,27 +1,35 @@
 """One awaitable method per command of V2.0.6, typed and in engineering units.
 
-A mixin over :meth:`GcuClient._submit`: each method checks its arguments (type and range,
-named as the caller named them: docs/client.md, "The API boundary"), builds the protocol
-core's command and awaits its feedback. Nothing is sent when a check fails.
+A mixin over :meth:`GcuClient._submit`: each method checks its arguments, builds the
+protocol core's command and awaits its feedback. The boundary (:mod:`gcu_async._checks`):
+a flag is a ``bool``, a mask or count an ``int`` (an IntFlag/IntEnum member counts as its
+value), a real number a finite ``int``/``float``, an enum one of its members or exact
+values, a box an :class:`~gcu_async.protocol.ImageBox` or a plain 4-tuple. Nothing is
+coerced, clipped or wrapped. A bad argument raises ``TypeError`` or
+:class:`~gcu_async.errors.FieldRangeError` whose message starts with the parameter name as
+the caller wrote it (``pitch_rate``, ``box.right``) and gives the allowed range and the
+value; then nothing is sent and no state changes (tests/test_client_boundary.py).
 """
 
 from __future__ import annotations
 
 import abc
-from collections.abc import Sequence
 
-from gcu_async._checks import check_bool, check_enum, check_int, check_real, type_error
+from gcu_async._checks import check_bool, check_int, check_positive, check_real
 from gcu_async.protocol import commands as c
 from gcu_async.protocol.enums import CameraMask, NightVisionMode, OsdCoordinates
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuSubFrame
 from gcu_async.protocol.host_frames import CONTROL_RATE_RAW, ControlValues
+from gcu_async.protocol.units import check_member, check_tuple
 from gcu_async.session import ControlKind
 
 CAM1 = CameraMask.CAMERA_1
 CAM2 = CameraMask.CAMERA_2
 RATE_LIMIT = CONTROL_RATE_RAW / 10
 """°/s at zoom 1×: the largest rate the control field carries (it shrinks with zoom)."""
+ALTITUDE_RANGE = (-(2**31) / 1000, (2**31 - 1) / 1000)
+"""Metres: what gaze_at's altitude field (S32, 1 mm) carries."""
 
 
 def _angle(name: str, value: object, low: float = -180.0, high: float = 180.0) -> float:
@@ -38,10 +46,11 @@ def _point(x: object, y: object) -> c.ImagePoint:
 
 
 def _box(value: object) -> c.ImageBox:
-    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 4:
-        raise type_error("box", "an ImageBox or a (left, top, right, bottom) tuple", value)
+    """An ImageBox or a plain 4-tuple (as the protocol takes it: no list, no other
+    sequence), each edge a fraction checked under ``box.<edge>``."""
+    box = check_tuple("box", value, c.ImageBox)
     return c.ImageBox(*(check_real(f"box.{f}", v, 0.0, 1.0, "image fraction")
-                        for f, v in zip(c.ImageBox._fields, value, strict=True)))  # fmt: skip
+                        for f, v in zip(c.ImageBox._fields, box, strict=True)))  # fmt: skip
 
 
 class CommandMethods(abc.ABC):
@@ -79,16 +88,14 @@ class CommandMethods(abc.ABC):
         zoom = info.camera1_zoom if info is not None else 1.0
         return zoom if zoom >= 1.0 else 1.0
 
-    def _rates(self, roll: object, pitch: object, yaw: object) -> ControlValues:
+    def _rates(self, **rates: object) -> ControlValues:
+        """Control values for three rates given as ``name=value`` (roll, pitch, yaw in that
+        order), each checked under the name the caller used."""
         zoom = self._main_zoom()
         limit = RATE_LIMIT / zoom
         unit = f"deg/s at zoom {zoom:g}x"
-        return ControlValues.rates(
-            check_real("roll_rate", roll, -limit, limit, unit),
-            check_real("pitch_rate", pitch, -limit, limit, unit),
-            check_real("yaw_rate", yaw, -limit, limit, unit),
-            zoom=zoom,
-        )
+        r, p, y = (check_real(name, v, -limit, limit, unit) for name, v in rates.items())
+        return ControlValues.rates(r, p, y, zoom=zoom)
 
     # -- pod: modes ------------------------------------------------------------------------
     async def euler_control(
@@ -120,22 +127,25 @@ class CommandMethods(abc.ABC):
     async def pointing_lock(self, *, pitch_rate: float = 0.0, yaw_rate: float = 0.0) -> Feedback:
         """Pointing-lock mode (0x11) with pitch/yaw rates in °/s at the current zoom
         (at most 150 / zoom °/s)."""
-        return await self._run(c.PointingLock(), control=self._rates(0.0, pitch_rate, yaw_rate))
+        values = self._rates(roll_rate=0.0, pitch_rate=pitch_rate, yaw_rate=yaw_rate)
+        return await self._run(c.PointingLock(), control=values)
 
     async def pointing_follow(
         self, *, pitch_rate: float = 0.0, yaw_rate: float = 0.0
     ) -> Feedback:
         """Pointing-follow mode (0x12); yaw rate 0 follows the aircraft's heading."""
-        values = self._rates(0.0, pitch_rate, yaw_rate)
+        values = self._rates(roll_rate=0.0, pitch_rate=pitch_rate, yaw_rate=yaw_rate)
         return await self._run(c.PointingFollow(), control=values)
 
     async def top_down(self, *, yaw_rate: float = 0.0) -> Feedback:
         """Top-down mode (0x13): pitch −90°, yaw rate in °/s."""
-        return await self._run(c.TopDown(), control=self._rates(0.0, 0.0, yaw_rate))
+        values = self._rates(roll_rate=0.0, pitch_rate=0.0, yaw_rate=yaw_rate)
+        return await self._run(c.TopDown(), control=values)
 
     async def gaze_lock(self, *, pitch_rate: float = 0.0, yaw_rate: float = 0.0) -> Feedback:
         """Gaze (geographic target lock) at the image centre (0x16); needs valid INS data."""
-        return await self._run(c.GazeLock(), control=self._rates(0.0, pitch_rate, yaw_rate))
+        values = self._rates(roll_rate=0.0, pitch_rate=pitch_rate, yaw_rate=yaw_rate)
+        return await self._run(c.GazeLock(), control=values)
 
     async def gaze_at(self, latitude: float, longitude: float, altitude: float) -> Feedback:
         """Gaze at a coordinate (0x15): degrees, degrees, metres MSL; needs valid INS data.
@@ -143,7 +153,7 @@ class CommandMethods(abc.ABC):
         command = c.GazeAtCoordinates(
             latitude=check_real("latitude", latitude, -90.0, 90.0, "deg"),
             longitude=check_real("longitude", longitude, -180.0, 180.0, "deg"),
-            altitude=check_real("altitude", altitude, unit="m"),
+            altitude=check_real("altitude", altitude, *ALTITUDE_RANGE, "m"),
         )
         return await self._run(command)
 
@@ -157,7 +167,7 @@ class CommandMethods(abc.ABC):
     def set_rates(self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0) -> None:
         """New angular rates (°/s at the current main-view zoom) for the current rate-based
         mode. Raises ``ValueError`` if the current mode does not take rates."""
-        values = self._rates(roll, pitch, yaw)
+        values = self._rates(roll=roll, pitch=pitch, yaw=yaw)
         self._set_control(values, ControlKind.RATES)
 
     def release_control(self) -> None:
@@ -166,8 +176,9 @@ class CommandMethods(abc.ABC):
 
     # -- pod: other ------------------------------------------------------------------------
     async def calibrate(self, *, timeout: float = 15.0) -> Feedback:
-        """Calibrate (0x01); keeps waiting while the GCU answers "in progress"."""
-        return await self._run(c.Calibration(), timeout=timeout)
+        """Calibrate (0x01); keeps waiting while the GCU answers "in progress", up to
+        ``timeout`` seconds (a finite real number > 0)."""
+        return await self._run(c.Calibration(), timeout=check_positive("timeout", timeout))
 
     async def centre(self) -> Feedback:
         """Centre pitch and heading (0x03). Control values go out invalid while it runs and
@@ -245,7 +256,7 @@ class CommandMethods(abc.ABC):
         self, mode: NightVisionMode | int = NightVisionMode.ON, *, cameras: int = CAM1
     ) -> Feedback:
         """Night vision off / on / auto (0x2B)."""
-        command = c.NightVision(check_enum("mode", mode, NightVisionMode), _cameras(cameras))
+        command = c.NightVision(check_member("mode", mode, NightVisionMode), _cameras(cameras))
         return await self._run(command)
 
     async def area_temperature(
@@ -291,7 +302,7 @@ class CommandMethods(abc.ABC):
         self, coordinates: OsdCoordinates | int = OsdCoordinates.AIRCRAFT
     ) -> Feedback:
         """OSD shows aircraft or target coordinates (0x06)."""
-        value = check_enum("coordinates", coordinates, OsdCoordinates)
+        value = check_member("coordinates", coordinates, OsdCoordinates)
         return await self._run(c.OsdCoordinatesCommand(value))
 
     async def set_image_auto_flip(self, enabled: bool = True) -> Feedback:

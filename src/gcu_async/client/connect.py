@@ -5,6 +5,7 @@ from __future__ import annotations
 import inspect
 from typing import Any
 
+from gcu_async._checks import type_error
 from gcu_async.client.client import GcuClient
 
 CLIENT_OPTIONS = frozenset(
@@ -22,10 +23,16 @@ def connect(url: str, **options: Any) -> GcuClient:
     :class:`GcuClient`'s keyword arguments (``rate_hz``, ``command_timeout``,
     ``queue_timeout``, ``connect_timeout``, ``silence_timeout``, ``check_support``,
     ``reorder_guard``, ``version``, ``clock``) configure the session; the rest go to the
-    transport (e.g. ``local_port``, ``discovery``, ``baudrate``). A bad URL or option
-    raises ``TypeError``/``ValueError`` before anything is opened.
+    transport (e.g. ``local_port``, ``discovery``, ``baudrate``). ``connect_timeout`` as a
+    keyword is the client's (the wait for the first reply); a TCP transport's own connect
+    timeout goes in the URL (``tcp://HOST?connect_timeout=5``). A bad URL or option
+    raises ``TypeError``/``ValueError`` before anything is opened (a ``url`` that is not
+    a ``str`` is a ``TypeError``).
     """
     from gcu_async.transport.url import open_transport
+
+    if not isinstance(url, str):
+        raise type_error("url", "a URL string (udp://, tcp:// or serial://)", url)
 
     client_options = {k: v for k, v in options.items() if k in CLIENT_OPTIONS}
     transport_options = {k: v for k, v in options.items() if k not in CLIENT_OPTIONS}
