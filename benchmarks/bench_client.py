@@ -1,36 +1,35 @@
-"""Client benchmark: command latency, heartbeat timing, CPU per session, concurrent sessions.
+"""Client benchmark: what the command session costs and waits, side by side with plain asyncio.
 
 Run from the repository root::
 
-    .venv/bin/python benchmarks/bench_client.py            # default: about 5 min
-    .venv/bin/python benchmarks/bench_client.py --quick    # under 30 s
+    .venv/bin/python benchmarks/bench_client.py            # default: about 4.5 minutes
+    .venv/bin/python benchmarks/bench_client.py --quick    # under 40 s
 
-Everything runs over loopback UDP (127.0.0.1, ephemeral ports); ``--parts`` picks parts.
+Every GCU is a ``GcuSimulator`` in a child process (this script with ``--serve``), one
+simulator per connection, on loopback (127.0.0.1, ephemeral ports). Parts (``--parts``):
 
-1. Command latency: ``await gcu.take_photo()`` / ``await gcu.focus()`` against a
-   ``GcuSimulator`` served over UDP in this process, each right after a raw asyncio UDP echo
-   round trip (a ``DatagramProtocol`` echo server and client in the same loop, same 73-byte
-   payload), the series taking turns in rounds. Series: isolated commands (the link idle
-   for the client's reorder guard + 2 ms first), the same against a minimal GCU (a UDP peer
-   answering with pre-encoded GCU packets: the client's path without the simulator's
-   model), and back to back: take_photo / focus alternately, and take_photo after
-   take_photo (a null command must be acknowledged in between, NOTES §3).
-2. Heartbeat timing and 3. CPU: one 50 Hz session against ``gcu-async sim`` in another
-   process. The send time of every packet is taken when the client hands it to the
-   transport (a wrapper around ``transport.send``); the CPU time of this process
-   (``time.process_time``) over the same window is everything this process did. First the
-   same with plain asyncio (a pre-encoded packet on the same deadline loop): the floor.
-4. Concurrent sessions: N clients in this process against one ``gcu-async sim`` UDP endpoint
-   in another process (it answers each sender at its own address), N ramped up until no
-   window of a step keeps every session's jitter p99 within the limit; then the same
-   against the minimal GCU in another process, which costs next to nothing per packet, so
-   the client's own cost decides. Each ramp ends with plain asyncio sessions at the
-   failing N, for reference.
+``cpu``
+    CPU time of this process while one idle 50 Hz ``GcuClient`` runs over UDP, and while bare
+    asyncio loops send the client's own heartbeat bytes to the same simulator on the same
+    deadline scheme and only read the replies; windows taken in turns, in rounds.
+``isolated``
+    Commands on an otherwise idle link, each client at most one command a second (the
+    rate bound's spare packet is then free again): over TCP (``reorder_guard`` 0) next to
+    a raw asyncio exchange of the client's own packet bytes with an identical simulator,
+    and over UDP submitted just after the edge guard has passed or at a random heartbeat
+    phase, next to a raw UDP exchange; all five taking turns, in random order, every round.
+``b2b``
+    1,000 (``--commands``) back-to-back commands per client, mixed opcodes and one opcode
+    repeated, over UDP and over TCP (four clients, concurrently): latency with each wait
+    broken out, host packets per command, and the most host packets in any 1-second window.
 
-Jitter of a session = |interval between consecutive heartbeat sends − 20 ms|.
-Rate error of one session = (sends − 1) / (last send − first send) against 50 Hz, in %; of N
-sessions: all their sends in the window / (N × window) against 50 Hz (skipped late ticks
-show as a deficit).
+Every host packet a client sends is time-stamped twice: the session's send time (the ``now``
+of the poll that produced it, read through the client's ``clock``) and the time it reached
+the transport (a wrapper around ``transport.send``). The script exits with status 1 if any
+client had more than ``floor(rate_hz) + 1`` packets within one second by either stamp, or if
+a simulator executed a different number of commands than the client completed (each command
+must run exactly once); targets only print.
+docs/benchmarks.md explains each series and its figures.
 """
 
 from __future__ import annotations
@@ -39,156 +38,120 @@ import argparse
 import asyncio
 import contextlib
 import gc
-import itertools
+import json
 import math
 import os
-import platform
 import random
-import resource
-import signal
+import socket
 import statistics
 import sys
 import time
+from collections import Counter
 from collections.abc import Awaitable, Callable, Sequence
-from dataclasses import dataclass
-from pathlib import Path
+from dataclasses import dataclass, field
 from typing import Any
 
-from _machine import cpu_model
+from _machine import load_average, machine_lines
 
 from gcu_async import connect
 from gcu_async.client import GcuClient
 from gcu_async.protocol import (
-    Feedback,
+    Command,
+    Focus,
     HostPacket,
     NullCommand,
     Opcode,
+    Osd,
     TakePhoto,
-    decode_gcu_packet,
+    ZoomStop,
+    command_code,
 )
 from gcu_async.protocol.aircraft import AircraftState
-from gcu_async.protocol.enums import SubFrameRequest
 from gcu_async.sim import GcuSimulator
 
 RATE_HZ = 50.0
 PERIOD = 1.0 / RATE_HZ
+LIMIT = math.floor(RATE_HZ) + 1
+"""Most host packets allowed within any 1-second window (the session's rate bound)."""
+WINDOW = 1.0
 LOOPBACK = "127.0.0.1"
 SCRIPT = os.path.abspath(__file__)
-OPCODE_OFFSET = 69
-"""Byte of the command opcode in a host packet (spec: host → GCU packet layout)."""
+OPCODE_AT = 69
+"""Byte of the command opcode in a host packet and of the feedback opcode in a GCU packet."""
 WAIT = 5.0
-"""Upper bound of every single wait (a reply, a subprocess line, a close)."""
+"""Upper bound of every single wait (a reply, a child's line, a close)."""
+SPACING = 1.02
+"""Seconds between two isolated commands of one client: one early packet per 1 s window."""
+GATE_TOLERANCE = 0.002
+"""A first packet this close after a gate (edge guard, rate window) counts as held by it."""
 
-TARGET_LATENCY_RATIO = 2.0
-TARGET_RATE_ERROR_PCT = 0.5
-TARGET_JITTER_P99_MS = 2.0
-TARGET_CPU_PCT = 1.0
-SESSIONS_JITTER_P99_MS = 5.0
-TARGET_SESSIONS = 200
-PHASES = {"random": "at random times within one period", "together": "all at once"}
-
-
-# --- machine ------------------------------------------------------------------------------
-def load_average() -> str:
-    try:
-        return " ".join(f"{x:.2f}" for x in os.getloadavg())
-    except OSError:
-        return "?"
+TARGET_CPU_RATIO = 1.2
+TARGET_TCP_RATIO = 2.0
+MIXED = (TakePhoto(), Focus(), ZoomStop(), Osd(True))
+"""Commands of the mixed series (each answered with success by the simulator at once)."""
+SAME = TakePhoto()
+ISOLATED = (TakePhoto(), Focus())
 
 
-# --- statistics ---------------------------------------------------------------------------
-def percentile(sorted_values: Sequence[float], q: float) -> float:
-    """Nearest-rank percentile (``q`` in [0, 100]) of an ascending sequence."""
-    if not sorted_values:
+def percentile(values: Sequence[float], q: float) -> float:
+    """Nearest-rank percentile (``q`` in [0, 100]) of ``values``."""
+    s = sorted(values)
+    if not s:
         return math.nan
-    rank = max(1, math.ceil(q / 100.0 * len(sorted_values)))
-    return sorted_values[min(rank, len(sorted_values)) - 1]
+    return s[min(len(s), max(1, math.ceil(q / 100.0 * len(s)))) - 1]
 
 
-@dataclass
-class Timing:
-    """Heartbeat timing of one session over a window."""
-
-    sends: int
-    rate_hz: float
-    jitter_ms: list[float]  # ascending
-
-    @property
-    def rate_error_pct(self) -> float:
-        return (self.rate_hz - RATE_HZ) / RATE_HZ * 100.0
-
-    def p(self, q: float) -> float:
-        return percentile(self.jitter_ms, q)
-
-    @property
-    def max_ms(self) -> float:
-        return self.jitter_ms[-1] if self.jitter_ms else math.nan
+def ms(values: Sequence[float]) -> str:
+    """``p50 / p99`` of seconds, in ms."""
+    return f"{percentile(values, 50) * 1e3:7.3f} / {percentile(values, 99) * 1e3:7.3f}"
 
 
-def timing_of(stamps: Sequence[float]) -> Timing:
-    """Rate and jitter (|interval − period| in ms) of send times ``stamps`` (seconds)."""
-    if len(stamps) < 2:
-        return Timing(len(stamps), math.nan, [])
-    jitter = sorted(abs(b - a - PERIOD) * 1e3 for a, b in itertools.pairwise(stamps))
-    rate = (len(stamps) - 1) / (stamps[-1] - stamps[0])
-    return Timing(len(stamps), rate, jitter)
+# --- the GCUs: simulators in a child process ---------------------------------------------
+async def serve(kinds: Sequence[str]) -> int:
+    """``--serve udp,tcp,...``: one simulator per endpoint; prints their URLs as one JSON
+    line, serves until stdin closes, then prints each simulator's executions."""
+    loop = asyncio.get_running_loop()
+    sims = [GcuSimulator() for _ in kinds]
+    servers = [sim.serve_udp(LOOPBACK, 0) if kind == "udp" else sim.serve_tcp(LOOPBACK, 0)
+               for sim, kind in zip(sims, kinds, strict=True)]  # fmt: skip
+    for server in servers:
+        await server.start()
+    print(json.dumps({"urls": [server.url for server in servers]}), flush=True)
+    stdin = asyncio.StreamReader()
+    await loop.connect_read_pipe(lambda: asyncio.StreamReaderProtocol(stdin), sys.stdin)
+    await stdin.read()  # until the parent closes it (or dies)
+    for server in servers:
+        await server.aclose()
+    stats = [{"executions": dict(sim.model.executions), "answered": sim.model.stats.answered}
+             for sim in sims]  # fmt: skip
+    with contextlib.suppress(BrokenPipeError):  # the parent is gone
+        print(json.dumps({"stats": stats}), flush=True)
+    return 0
 
 
-class SendStamps:
-    """Wraps a transport's ``send`` (an instance attribute shadows the method) and records
-    the ``time.perf_counter()`` of every packet handed to it."""
+class Peer:
+    """The child process of :func:`serve`."""
 
-    def __init__(self, client: GcuClient) -> None:
-        self.stamps: list[float] = []
-        self._send = client.transport.send
-        client.transport.send = self  # type: ignore[method-assign]
-
-    def __call__(self, data: bytes) -> None:
-        self.stamps.append(time.perf_counter())
-        self._send(data)
-
-
-# --- simulator in another process ---------------------------------------------------------
-def _sim_command() -> list[str]:
-    script = Path(sys.executable).with_name("gcu-async")
-    if script.exists():
-        return [str(script)]
-    return [sys.executable, "-c", "import sys; from gcu_async.cli import main; sys.exit(main())"]
-
-
-class SimProcess:
-    """A GCU in a child process: ``gcu-async sim --listen udp://127.0.0.1:0 -q``, or with
-    ``minimal=True`` this script's ``--serve-minimal`` (the minimal GCU, see
-    :class:`_InstantGcu`). Its first line of output names the URL it listens on."""
-
-    def __init__(self, proc: asyncio.subprocess.Process, url: str, name: str) -> None:
+    def __init__(self, proc: asyncio.subprocess.Process, urls: list[str]) -> None:
         self.proc = proc
-        self.url = url
-        self.name = name
-        self._ticks = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
+        self.urls = urls
+        self._tick = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
 
     @classmethod
-    async def start(cls, *, minimal: bool = False) -> SimProcess:
-        if minimal:
-            argv = [sys.executable, SCRIPT, "--serve-minimal"]
-            name = "minimal GCU"
-        else:
-            argv = [*_sim_command(), "sim", "--listen", f"udp://{LOOPBACK}:0", "-q"]
-            name = "gcu-async sim"
+    async def start(cls, kinds: Sequence[str]) -> Peer:
         proc = await asyncio.create_subprocess_exec(
-            *argv, stdin=asyncio.subprocess.DEVNULL, stdout=asyncio.subprocess.PIPE,
-            stderr=asyncio.subprocess.DEVNULL,
+            sys.executable, SCRIPT, "--serve", ",".join(kinds),
+            stdin=asyncio.subprocess.PIPE, stdout=asyncio.subprocess.PIPE,
         )  # fmt: skip
+        assert proc.stdout is not None
         try:
-            assert proc.stdout is not None
-            line = (await asyncio.wait_for(proc.stdout.readline(), 3 * WAIT)).decode()
-            url = line.rsplit(" ", 1)[-1].strip()
-            if not url.startswith(f"udp://{LOOPBACK}:"):
-                raise RuntimeError(f"{name} said {line!r}")
+            line = await asyncio.wait_for(proc.stdout.readline(), 3 * WAIT)
+            urls = json.loads(line)["urls"]
         except BaseException:
-            await cls._stop(proc)
+            proc.kill()
+            await asyncio.wait_for(proc.wait(), WAIT)
             raise
-        return cls(proc, url, name)
+        return cls(proc, urls)
 
     def cpu_seconds(self) -> float | None:
         """User + system CPU time of the child so far (Linux /proc), else None."""
@@ -197,628 +160,701 @@ class SimProcess:
                 fields = f.read().rsplit(")", 1)[1].split()
         except OSError:
             return None
-        return (int(fields[11]) + int(fields[12])) / self._ticks
+        return (int(fields[11]) + int(fields[12])) / self._tick
 
-    async def stop(self) -> None:
-        await self._stop(self.proc)
-
-    @staticmethod
-    async def _stop(proc: asyncio.subprocess.Process) -> None:
-        if proc.returncode is None:
-            proc.terminate()
-            try:
-                await asyncio.wait_for(proc.wait(), WAIT)
-            except asyncio.TimeoutError:
-                proc.kill()
-                await asyncio.wait_for(proc.wait(), WAIT)
-        if proc.stdout is not None:
-            await asyncio.wait_for(proc.stdout.read(), WAIT)
-
-
-# --- 1. command latency vs raw UDP echo ---------------------------------------------------
-class _EchoServer(asyncio.DatagramProtocol):
-    def connection_made(self, transport: asyncio.BaseTransport) -> None:
-        self.transport: Any = transport
-
-    def datagram_received(self, data: bytes, addr: Any) -> None:
-        self.transport.sendto(data, addr)
+    async def stop(self) -> list[dict[str, Any]]:
+        """End the child; returns each simulator's executions (opcode -> count) and
+        answered-packet count."""
+        proc = self.proc
+        assert proc.stdin is not None
+        assert proc.stdout is not None
+        proc.stdin.close()
+        try:
+            line = await asyncio.wait_for(proc.stdout.readline(), WAIT)
+            await asyncio.wait_for(proc.wait(), WAIT)
+        except asyncio.TimeoutError:
+            proc.kill()
+            await asyncio.wait_for(proc.wait(), WAIT)
+            raise SystemExit("the simulator process did not stop") from None
+        stats: list[dict[str, Any]] = json.loads(line)["stats"]
+        for s in stats:
+            s["executions"] = {int(k): v for k, v in s["executions"].items()}
+        return stats
 
 
-class _EchoClient(asyncio.DatagramProtocol):
-    """Minimal request/response over a connected UDP socket, with a bounded wait."""
+# --- what a client sent -------------------------------------------------------------------
+class SendClock:
+    """The client's clock (``time.monotonic``) that remembers the last time it returned:
+    when the client hands a packet to its transport, that is the ``now`` of the session
+    poll that produced it — the packet's send time as the session counts it."""
 
     def __init__(self) -> None:
-        self.waiter: asyncio.Future[bytes] | None = None
+        self.last = 0.0
 
-    def connection_made(self, transport: asyncio.BaseTransport) -> None:
-        self.transport: Any = transport
-
-    def datagram_received(self, data: bytes, addr: Any) -> None:
-        if self.waiter is not None and not self.waiter.done():
-            self.waiter.set_result(data)
-
-    async def round_trip(self, payload: bytes) -> float:
-        loop = asyncio.get_running_loop()
-        self.waiter = waiter = loop.create_future()
-        timer = loop.call_later(WAIT, waiter.cancel)
-        start = time.perf_counter()
-        self.transport.sendto(payload)
-        data = await waiter
-        elapsed = time.perf_counter() - start
-        timer.cancel()
-        if data != payload:
-            raise SystemExit("echo check failed: the reply differs from the request")
-        return elapsed
+    def __call__(self) -> float:
+        self.last = now = time.monotonic()
+        return now
 
 
-class _InstantGcu(asyncio.DatagramProtocol):
-    """A minimal GCU: answers every host packet with a pre-encoded GCU packet whose feedback
-    is a success for the packet's opcode (byte 69) — the client's whole path (encode, send,
-    receive, deframe, decode, match) without the simulator's model."""
+class Recorder:
+    """Wraps ``client.transport.send`` (an instance attribute shadows the method): for every
+    host packet, the session's send time (:class:`SendClock`), the time it reached the
+    transport (``time.monotonic()``) and its opcode; and the first packet's bytes per
+    opcode."""
 
-    def __init__(self, replies: dict[int, bytes]) -> None:
-        self.replies = replies
+    def __init__(self, client: GcuClient, clock: SendClock, name: str) -> None:
+        self.name = name
+        self.times: list[float] = []
+        self.handed: list[float] = []
+        self.opcodes = bytearray()
+        self.first: dict[int, bytes] = {}
+        send, monotonic, times, handed, opcodes, first = (
+            client.transport.send, time.monotonic, self.times, self.handed, self.opcodes,
+            self.first)  # fmt: skip
 
-    def connection_made(self, transport: asyncio.BaseTransport) -> None:
-        self.transport: Any = transport
+        def recorded(data: bytes) -> None:
+            handed.append(monotonic())
+            times.append(clock.last)
+            opcode = data[OPCODE_AT]
+            opcodes.append(opcode)
+            if opcode not in first:
+                first[opcode] = bytes(data)
+            send(data)
 
-    def datagram_received(self, data: bytes, addr: Any) -> None:
-        reply = self.replies.get(data[OPCODE_OFFSET]) if len(data) > OPCODE_OFFSET else None
-        if reply is not None:
-            self.transport.sendto(reply, addr)
-
-
-def instant_replies(sim: GcuSimulator, null_packet: bytes) -> dict[int, bytes]:
-    """Replies for the null command, take_photo and focus, built from a real simulator reply."""
-    telemetry = decode_gcu_packet(sim.model.handle_bytes(null_packet) or b"")
-    replies = {int(Opcode.NULL): telemetry.encode()}
-    for opcode in (Opcode.TAKE_PHOTO, Opcode.FOCUS):
-        replies[int(opcode)] = telemetry._replace(feedback=Feedback(opcode, 0)).encode()
-    return replies
+        client.transport.send = recorded  # type: ignore[method-assign]
 
 
-async def serve_minimal() -> int:
-    """``--serve-minimal``: the minimal GCU on 127.0.0.1 (ephemeral port) until SIGTERM."""
-    loop = asyncio.get_running_loop()
-    stop = asyncio.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        loop.add_signal_handler(sig, stop.set)
-    null = HostPacket(AircraftState().main_frame(None, SubFrameRequest.STANDARD), None,
-                      NullCommand()).encode()  # fmt: skip
-    replies = instant_replies(GcuSimulator(), null)
-    transport, _ = await loop.create_datagram_endpoint(
-        lambda: _InstantGcu(replies), local_addr=(LOOPBACK, 0)
-    )
-    try:
-        print("minimal GCU listening on udp://{}:{}".format(
-            *transport.get_extra_info("sockname")[:2]), flush=True)  # fmt: skip
-        await stop.wait()
-    finally:
-        transport.close()
-        await asyncio.sleep(0)
-    return 0
+def window_counts(times: Sequence[float]) -> tuple[int, float]:
+    """(most packets within any window ``[t, t + 1 s)``, shortest time spanned by
+    ``LIMIT + 1`` consecutive packets — at least 1 s when the bound held)."""
+    most, j, tightest = 0, 0, math.inf
+    for i, t in enumerate(times):
+        while times[j] <= t - WINDOW:
+            j += 1
+        most = max(most, i - j + 1)
+        if i >= LIMIT:
+            tightest = min(tightest, t - times[i - LIMIT])
+    return most, tightest
 
 
 @dataclass
-class LatencyResult:
-    series: dict[str, tuple[list[float], list[float]]]
-    """name -> (command latencies, the echo round trips interleaved with them), seconds."""
-    photo_separated: int
-    reorder_guard: float
-    sim_us_per_packet: float
-    payload: int
+class Sample:
+    """One command: submitted, first packet handed to the transport, feedback returned."""
+
+    opcode: int
+    repeat: bool
+    """Same opcode as the client's previous command."""
+    submit: float
+    first: float
+    done: float
+    packets: int
+    """Host packets sent from submit to done (any opcode)."""
+    nulls_before: int
+    """Null packets sent between submit and the first packet."""
+    copies: int
+    """Packets carrying the command, first to feedback (1: its first packet's reply ended it)."""
+    cause: str
+
+    @property
+    def latency(self) -> float:
+        return self.done - self.submit
+
+    @property
+    def wait(self) -> float:
+        return self.first - self.submit
+
+    @property
+    def wire(self) -> float:
+        return self.done - self.first
 
 
-async def _timed(call: Callable[[], Awaitable[Any]]) -> float:
-    start = time.perf_counter()
-    await call()
-    return time.perf_counter() - start
+CAUSES = ("none", "edge guard", "rate bound", "null + proof", "slot", "other")
 
 
-ISOLATED = "simulator, isolated"
-MINIMAL = "minimal GCU, isolated"
-ALTERNATING = "simulator, back to back, alternating"
-PHOTOS = "simulator, back to back, take_photo"
+def classify(rec: Recorder, k: int, submit: float, opcode: int, nulls: int,
+             guard: float) -> str:  # fmt: skip
+    """Why the first packet (index ``k``) went at that time: the latest gate it matches."""
+    t = rec.times[k]
+    if t - submit < 0.5e-3:
+        return "none"
+    if nulls:
+        return "null + proof"
+    if k >= LIMIT and submit < rec.times[k - LIMIT] + WINDOW <= t < (
+        rec.times[k - LIMIT] + WINDOW + GATE_TOLERANCE
+    ):
+        return "rate bound"
+    if k >= 1 and guard > 0 and rec.opcodes[k - 1] != opcode:
+        gate = rec.times[k - 1] + guard
+        if submit < gate and -1e-4 <= t - gate < GATE_TOLERANCE:
+            return "edge guard"
+    if k >= 1 and abs(t - rec.times[k - 1] - PERIOD) < GATE_TOLERANCE:
+        return "slot"
+    return "other"
 
 
-async def measure_latency(samples: int, b2b_samples: int, block: int) -> LatencyResult:
-    """``samples`` isolated commands (take_photo / focus alternately, each on an idle link)
-    against the simulator and against the minimal GCU, ``b2b_samples`` of each back-to-back
-    series; every command right after one echo round trip; the series take turns in rounds."""
-    loop = asyncio.get_running_loop()
-    main = AircraftState().main_frame(None, SubFrameRequest.STANDARD)
-    payload = HostPacket(main, None, TakePhoto()).encode()
-    if payload[OPCODE_OFFSET] != Opcode.TAKE_PHOTO:
-        raise SystemExit("setup check failed: the opcode is not at byte 69")
-    sim = GcuSimulator()
-    replies = instant_replies(sim, HostPacket(main, None, NullCommand()).encode())
-    handle_bytes = sim.model.handle_bytes
-    sim_time = [0.0, 0]
-
-    def timed_handle(packet: bytes) -> bytes | None:
-        start = time.perf_counter()
-        reply = handle_bytes(packet)
-        sim_time[0] += time.perf_counter() - start
-        sim_time[1] += 1
-        return reply
-
-    sim.model.handle_bytes = timed_handle  # type: ignore[method-assign]
-    transports: list[asyncio.BaseTransport] = []
-    try:
-        echo_t, _ = await loop.create_datagram_endpoint(_EchoServer, local_addr=(LOOPBACK, 0))
-        transports.append(echo_t)
-        echo_addr = echo_t.get_extra_info("sockname")[:2]
-        echo_c, echo = await loop.create_datagram_endpoint(_EchoClient, remote_addr=echo_addr)
-        transports.append(echo_c)
-        gcu_t, _ = await loop.create_datagram_endpoint(
-            lambda: _InstantGcu(replies), local_addr=(LOOPBACK, 0)
-        )
-        transports.append(gcu_t)
-        minimal_url = "udp://{}:{}".format(*gcu_t.get_extra_info("sockname")[:2])
-        async with (
-            sim.serve_udp(LOOPBACK, 0) as server,
-            connect(server.url, local_port=0, command_timeout=WAIT) as gcu,
-            connect(minimal_url, local_port=0, command_timeout=WAIT) as gcu2,
-        ):
-            guard = float(getattr(gcu.scheduler, "reorder_guard", 0.0))
-            idle = guard + 0.002
-            series: dict[str, tuple[list[float], list[float]]] = {
-                name: ([], []) for name in (ALTERNATING, PHOTOS)
-            }
-            idle_echo: list[float] = []  # one echo per idle round, shared by both series
-            series = {ISOLATED: ([], idle_echo), MINIMAL: ([], idle_echo), **series}
-            rng = random.Random(2006)
-            separated = 0
-            stats = gcu.scheduler.stats
-
-            async def sample(name: str, call: Callable[[], Awaitable[Any]]) -> None:
-                series[name][1].append(await echo.round_trip(payload))
-                series[name][0].append(await _timed(call))
-
-            for _ in range(10):  # warm-up
-                await echo.round_trip(payload)
-                for client in (gcu, gcu2):
-                    await client.focus()
-                    await client.take_photo()
-            await asyncio.sleep(idle)
-            sim_time[:] = [0.0, 0]
-            gc.collect()
-            b2b_block = max(2, block // 4 // 2 * 2)
-            while (len(series[ISOLATED][0]) < samples
-                   or len(series[PHOTOS][0]) < b2b_samples):  # fmt: skip
-                # on an idle link: the reordering guard of the previous command has passed
-                # (echo, simulator, minimal GCU) in random order, so none is always first
-                for i in range(block):
-                    await asyncio.sleep(idle)
-                    for what in rng.sample(range(3), 3):
-                        if what == 0:
-                            idle_echo.append(await echo.round_trip(payload))
-                        else:
-                            client, name = (gcu, ISOLATED) if what == 1 else (gcu2, MINIMAL)
-                            call = client.take_photo if i % 2 else client.focus
-                            series[name][0].append(await _timed(call))
-                # focus / take_photo back to back: no null separation needed
-                for i in range(b2b_block):
-                    await sample(ALTERNATING, gcu.take_photo if i % 2 else gcu.focus)
-                # take_photo after take_photo: a null must be acknowledged in between
-                for _ in range(b2b_block):
-                    waits = stats.null_waits
-                    await sample(PHOTOS, gcu.take_photo)
-                    separated += stats.null_waits != waits
-            executed = sum(sim.model.executions.values())
-            if executed < len(series[ISOLATED][0]) + 2 * len(series[PHOTOS][0]):
-                raise SystemExit(f"latency check failed: the simulator executed {executed}")
-        return LatencyResult(
-            series, separated, guard, sim_time[0] / max(1, sim_time[1]) * 1e6, len(payload)
-        )
-    finally:
-        for t in transports:
-            t.close()
-        await asyncio.sleep(0)  # let the transports release their sockets
+async def timed_command(gcu: GcuClient, rec: Recorder, command: Command,
+                        repeat: bool) -> Sample:  # fmt: skip
+    """Run ``command`` and take its :class:`Sample` from the recorder."""
+    opcode = command_code(command)
+    i0 = len(rec.times)
+    submit = time.monotonic()
+    feedback = await gcu.execute(command, timeout=WAIT)
+    done = time.monotonic()
+    if feedback.opcode != opcode:
+        raise SystemExit(f"{rec.name}: feedback {feedback} for {command}")
+    ops = rec.opcodes
+    k = next((i for i in range(i0, len(ops)) if ops[i] == opcode), None)
+    if k is None:
+        raise SystemExit(f"{rec.name}: {command} completed without a packet carrying it")
+    nulls = sum(1 for i in range(i0, k) if ops[i] == Opcode.NULL)
+    copies = sum(1 for i in range(k, len(ops)) if ops[i] == opcode)
+    cause = classify(rec, k, submit, opcode, nulls, gcu.reorder_guard)
+    return Sample(opcode, repeat, submit, rec.times[k], done, len(ops) - i0, nulls, copies,
+                  cause)
 
 
-def _lat(values: Sequence[float]) -> tuple[float, float]:
-    s = sorted(values)
-    return percentile(s, 50) * 1e6, percentile(s, 99) * 1e6
+async def open_client(url: str, name: str) -> tuple[GcuClient, Recorder]:
+    clock = SendClock()
+    options: dict[str, Any] = {"local_port": 0} if url.startswith("udp") else {}
+    gcu = connect(url, connect_timeout=WAIT, command_timeout=WAIT, clock=clock, **options)
+    rec = Recorder(gcu, clock, name)
+    await gcu.open()
+    return gcu, rec
 
 
-# --- sessions: a GcuClient, or the plain-asyncio floor ------------------------------------
-class _Counter(asyncio.DatagramProtocol):
+# --- raw asyncio peers of the client ------------------------------------------------------
+class RawStream(asyncio.Protocol):
+    """A raw asyncio TCP exchange: write a packet, collect the reply's bytes (length from
+    bytes 2-3), resolve a future. No CRC check, no decoding."""
+
     def __init__(self) -> None:
-        self.received = 0
+        self._buffer = bytearray()
+        self._waiter: asyncio.Future[bytes] | None = None
+        self.transport: Any = None
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        self.transport = transport
+
+    def data_received(self, data: bytes) -> None:
+        buf = self._buffer
+        buf += data
+        if len(buf) >= 4 and len(buf) >= buf[2] | buf[3] << 8:
+            size = buf[2] | buf[3] << 8
+            reply = bytes(buf[:size])
+            del buf[:size]
+            if self._waiter is not None and not self._waiter.done():
+                self._waiter.set_result(reply)
+
+    async def exchange(self, packet: bytes) -> float:
+        loop = asyncio.get_running_loop()
+        self._waiter = waiter = loop.create_future()
+        timer = loop.call_later(WAIT, waiter.cancel)
+        start = time.monotonic()
+        self.transport.write(packet)
+        reply = await waiter
+        elapsed = time.monotonic() - start
+        timer.cancel()
+        if reply[OPCODE_AT] != packet[OPCODE_AT]:
+            raise SystemExit("raw TCP exchange: the reply's feedback is not the packet's")
+        return elapsed
+
+
+class RawDatagram(asyncio.DatagramProtocol):
+    """A raw asyncio UDP exchange with the simulator: sendto, await the reply datagram."""
+
+    def __init__(self, dest: tuple[str, int]) -> None:
+        self.dest = dest
+        self._waiter: asyncio.Future[bytes] | None = None
+        self.transport: Any = None
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        self.transport = transport
 
     def datagram_received(self, data: bytes, addr: Any) -> None:
+        if self._waiter is not None and not self._waiter.done():
+            self._waiter.set_result(data)
+
+    async def exchange(self, packet: bytes) -> float:
+        loop = asyncio.get_running_loop()
+        self._waiter = waiter = loop.create_future()
+        timer = loop.call_later(WAIT, waiter.cancel)
+        start = time.monotonic()
+        self.transport.sendto(packet, self.dest)
+        reply = await waiter
+        elapsed = time.monotonic() - start
+        timer.cancel()
+        if reply[OPCODE_AT] != packet[OPCODE_AT]:
+            raise SystemExit("raw UDP exchange: the reply's feedback is not the packet's")
+        return elapsed
+
+
+def hostport(url: str) -> tuple[str, int]:
+    host, port = url.split("://", 1)[1].rsplit(":", 1)
+    return host, int(port)
+
+
+# --- part cpu -----------------------------------------------------------------------------
+class BareLoop:
+    """A careful hand-written 50 Hz host: its own unconnected UDP socket (like the client's:
+    the GCU answers to the broadcast address, so a host cannot connect its socket), one
+    pre-encoded packet sent on absolute deadlines (``loop.call_at``, ``deadline += period``,
+    restarting the phase only when a whole period late), replies read and counted, nothing
+    decoded. ``reader``: ``endpoint`` = asyncio's own datagram transport
+    (``create_datagram_endpoint``), ``recv_into`` = ``loop.add_reader`` + one
+    ``sock.recv_into`` of a reused buffer per readiness event."""
+
+    def __init__(self, url: str, packet: bytes, reader: str) -> None:
+        self.dest = hostport(url)
+        self.packet = packet
+        self.reader = reader
+        self.sent = self.received = 0
+        self._sock: socket.socket | None = None
+        self._transport: asyncio.DatagramTransport | None = None
+        self._timer: asyncio.TimerHandle | None = None
+        self._buffer = bytearray(65536)
+        self._send: Callable[[], None] = lambda: None
+
+    async def open(self) -> None:
+        loop = asyncio.get_running_loop()
+        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM, socket.IPPROTO_UDP)
+        sock.bind(("0.0.0.0", 0))
+        sock.setblocking(False)
+        packet, dest = self.packet, self.dest
+        if self.reader == "endpoint":
+            owner = self
+
+            class Counter(asyncio.DatagramProtocol):
+                def datagram_received(self, data: bytes, addr: Any) -> None:
+                    owner.received += 1
+
+            transport, _ = await loop.create_datagram_endpoint(Counter, sock=sock)
+            self._transport = transport
+            sendto: Callable[..., Any] = transport.sendto
+        else:
+            self._sock = sock
+            loop.add_reader(sock.fileno(), self._read)
+            sendto = sock.sendto
+        self._send = lambda: sendto(packet, dest)
+        self._deadline = loop.time()
+        self._loop = loop
+        self._tick()
+
+    def _tick(self) -> None:
+        self._send()
+        self.sent += 1
+        self._deadline += PERIOD
+        now = self._loop.time()
+        if self._deadline <= now - PERIOD:  # a whole period late: restart the phase
+            self._deadline = now
+        self._timer = self._loop.call_at(self._deadline, self._tick)
+
+    def _read(self) -> None:
+        assert self._sock is not None
+        try:
+            self._sock.recv_into(self._buffer)
+        except (BlockingIOError, InterruptedError):
+            return
         self.received += 1
 
+    def counts(self) -> tuple[int, int]:
+        return self.sent, self.received
 
-class ClientSession:
-    """One ``GcuClient`` at 50 Hz, idle (heartbeat only), its sends time-stamped."""
+    async def close(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+        if self._transport is not None:
+            self._transport.close()
+        if self._sock is not None:
+            self._loop.remove_reader(self._sock.fileno())
+            self._sock.close()
+        await asyncio.sleep(0)
+
+
+class ClientLoop:
+    """One idle ``GcuClient`` (heartbeat only) in the shape of :class:`BareLoop`."""
 
     def __init__(self, url: str) -> None:
-        self.client = connect(url, local_port=0, connect_timeout=3 * WAIT, silence_timeout=2.0)
-        self.stamps = SendStamps(self.client).stamps
+        self.client = connect(url, local_port=0, connect_timeout=WAIT)
 
     async def open(self) -> None:
         await self.client.open()
 
-    def counts(self) -> tuple[int, int, int]:
-        """(datagrams received, datagrams sent, late heartbeat ticks) so far; cheap to read
-        (``client.link`` would build a snapshot)."""
-        t: Any = self.client.transport
-        return t.rx_datagrams, t.tx_datagrams, self.client.heartbeat_late
-
-    @property
-    def up(self) -> bool:
-        return self.client.link.up
+    def counts(self) -> tuple[int, int]:
+        link = self.client.link
+        return link.packets_sent, link.packets_received
 
     async def close(self) -> None:
         await self.client.close()
 
 
-class RawSession:
-    """The floor: plain asyncio sending a pre-encoded host packet at 50 Hz from its own
-    socket, on the same monotonic-deadline loop as the client's heartbeat, counting (not
-    decoding) the replies. With ``udp=False`` it only sleeps to the deadlines (no socket)."""
-
-    PACKET = HostPacket(AircraftState().main_frame(None, SubFrameRequest.STANDARD), None,
-                        NullCommand()).encode()  # fmt: skip
-
-    def __init__(self, url: str, *, udp: bool = True) -> None:
-        host, port = url.removeprefix("udp://").rsplit(":", 1)
-        self.dest = (host, int(port))
-        self.udp = udp
-        self.stamps: list[float] = []
-        self.sent = self.late = 0
-        self._transport: asyncio.DatagramTransport | None = None
-        self._proto = _Counter()
-        self._task: asyncio.Task[None] | None = None
-
-    async def open(self) -> None:
-        if self.udp:
-            loop = asyncio.get_running_loop()
-            self._transport, _ = await loop.create_datagram_endpoint(
-                lambda: self._proto, local_addr=("0.0.0.0", 0)
-            )
-        self._task = asyncio.create_task(self._beat(self._transport))
-
-    async def _beat(self, transport: asyncio.DatagramTransport | None) -> None:
-        packet, dest, stamps = self.PACKET, self.dest, self.stamps
-        deadline = time.monotonic()
-        while True:
-            stamps.append(time.perf_counter())
-            if transport is not None:
-                transport.sendto(packet, dest)
-            self.sent += 1
-            deadline += PERIOD
-            now = time.monotonic()
-            if deadline < now:
-                self.late += 1
-                deadline = now
-            await asyncio.sleep(deadline - now)
-
-    def counts(self) -> tuple[int, int, int]:
-        return self._proto.received, self.sent, self.late
+@dataclass
+class CpuWindow:
+    cpu: float
+    """Seconds of CPU time of this process."""
+    wall: float
+    sent: int
+    received: int
+    peer_cpu: float | None
 
     @property
-    def up(self) -> bool:
-        return self._proto.received > 0 or not self.udp
-
-    async def close(self) -> None:
-        if self._task is not None:
-            self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._task
-        if self._transport is not None:
-            self._transport.close()
-            await asyncio.sleep(0)
+    def pct(self) -> float:
+        return self.cpu / self.wall * 100.0
 
 
-Session = ClientSession | RawSession
+async def cpu_window(session: ClientLoop | BareLoop, peer: Peer, warmup: float,
+                     seconds: float) -> CpuWindow:  # fmt: skip
+    await session.open()
+    try:
+        await asyncio.sleep(warmup)
+        gc.collect()
+        await asyncio.sleep(3 * PERIOD)
+        (s0, r0), p0 = session.counts(), peer.cpu_seconds()
+        c0, w0 = time.process_time(), time.monotonic()
+        await asyncio.sleep(seconds)
+        c1, w1 = time.process_time(), time.monotonic()
+        (s1, r1), p1 = session.counts(), peer.cpu_seconds()
+    finally:
+        await session.close()
+    peer_cpu = None if p0 is None or p1 is None else p1 - p0
+    return CpuWindow(c1 - c0, w1 - w0, s1 - s0, r1 - r0, peer_cpu)
+
+
+CPU_SERIES = ("GcuClient", "bare: add_reader + recv_into", "bare: create_datagram_endpoint")
+"""The client, the baseline of the target, and asyncio's stock datagram transport (which
+allocates a 256 KiB buffer per datagram: mmap/mremap/munmap on glibc) for context."""
+
+
+async def part_cpu(args: argparse.Namespace, report: Report) -> None:
+    peer = await Peer.start(["udp"])
+    url = peer.urls[0]
+    try:
+        gcu, rec = await open_client(url, "heartbeat capture")
+        await asyncio.sleep(0.2)
+        await gcu.close()
+        heartbeat = rec.first[Opcode.NULL]
+        expected = HostPacket(AircraftState().main_frame(), None, NullCommand()).encode()
+        if heartbeat != expected or heartbeat[OPCODE_AT] != Opcode.NULL:
+            raise SystemExit("setup check failed: unexpected heartbeat bytes")
+        makers: dict[str, Callable[[], ClientLoop | BareLoop]] = {
+            CPU_SERIES[0]: lambda: ClientLoop(url),
+            CPU_SERIES[1]: lambda: BareLoop(url, heartbeat, "recv_into"),
+            CPU_SERIES[2]: lambda: BareLoop(url, heartbeat, "endpoint"),
+        }
+        windows: dict[str, list[CpuWindow]] = {name: [] for name in makers}
+        rng = random.Random(2006)
+        for _ in range(args.cpu_rounds):
+            for name in rng.sample(list(makers), len(makers)):
+                windows[name].append(await cpu_window(makers[name](), peer, args.warmup,
+                                                      args.cpu_seconds))  # fmt: skip
+    finally:
+        await peer.stop()
+    report.cpu = windows
+    print(f"\ncpu: one idle 50 Hz session over UDP against a simulator in another process;"
+          f" {args.cpu_rounds} rounds of {len(windows)} windows of {args.cpu_seconds:g} s"
+          f" (after {args.warmup:g} s warm-up), in random order each round;"
+          f" heartbeat {len(heartbeat)} B")  # fmt: skip
+    client = windows[CPU_SERIES[0]]
+    for name, ws in windows.items():
+        cpu, wall = sum(w.cpu for w in ws), sum(w.wall for w in ws)
+        sent, received = sum(w.sent for w in ws), sum(w.received for w in ws)
+        peer_cpu = [w.peer_cpu for w in ws if w.peer_cpu is not None]
+        ratios = [c.cpu / c.wall / (w.cpu / w.wall) for c, w in zip(client, ws, strict=True)]
+        sim = f"; simulator {sum(peer_cpu) / wall * 100:.2f} %" if peer_cpu else ""
+        print(f"  {name:<30} CPU {cpu / wall * 100:6.3f} % of a core"
+              f" ({cpu / max(1, sent) * 1e6:5.1f} us per packet + reply);"
+              f" {sent} sent, {received} replies in {wall:.1f} s{sim}")  # fmt: skip
+        print(f"  {'':<30} per-window % {' '.join(f'{w.pct:.3f}' for w in ws)}")
+        if name != CPU_SERIES[0]:
+            pooled = (sum(c.cpu for c in client) / sum(c.wall for c in client)) / (cpu / wall)
+            print(f"  {'':<30} GcuClient / this: {pooled:.3f}x pooled; per round"
+                  f" {min(ratios):.3f}-{max(ratios):.3f}x,"
+                  f" median {statistics.median(ratios):.3f}x")  # fmt: skip
+            if name == CPU_SERIES[1]:
+                report.target(f"CPU of one idle session <= {TARGET_CPU_RATIO:g}x bare asyncio"
+                              " loop", pooled <= TARGET_CPU_RATIO,
+                              f"{pooled:.3f}x (per-round median"
+                              f" {statistics.median(ratios):.3f}x)")  # fmt: skip
+
+
+# --- part isolated ------------------------------------------------------------------------
+@dataclass
+class Isolated:
+    tcp: list[Sample] = field(default_factory=list)
+    tcp_raw: list[float] = field(default_factory=list)
+    udp_aligned: list[Sample] = field(default_factory=list)
+    udp_random: list[Sample] = field(default_factory=list)
+    udp_raw: list[float] = field(default_factory=list)
+
+
+async def part_isolated(args: argparse.Namespace, report: Report) -> None:
+    peer = await Peer.start(["tcp", "tcp", "udp", "udp", "udp"])
+    tcp_url, raw_tcp_url, aligned_url, random_url, raw_udp_url = peer.urls
+    loop = asyncio.get_running_loop()
+    res = Isolated()
+    clients: list[tuple[GcuClient, Recorder]] = []
+    raw_udp_t: asyncio.BaseTransport | None = None
+    raw_tcp_t: asyncio.BaseTransport | None = None
+    counts: dict[str, Counter[int]] = {}
+    try:
+        for url, name in ((tcp_url, "tcp"), (aligned_url, "udp, after the guard"),
+                          (random_url, "udp, random phase")):  # fmt: skip
+            clients.append(await open_client(url, name))
+            counts[name] = Counter()
+        (tcp, tcp_rec), (aligned, aligned_rec), (rnd, rnd_rec) = clients
+        raw_tcp_t, raw_tcp = await loop.create_connection(RawStream, *hostport(raw_tcp_url))
+        raw_udp_t, raw_udp = await loop.create_datagram_endpoint(
+            lambda: RawDatagram(hostport(raw_udp_url)), local_addr=("0.0.0.0", 0))
+        for i in range(6):  # warm-up; the packets the raw exchanges send come from here
+            for gcu, rec in clients:
+                await gcu.execute(ISOLATED[i % 2])
+                counts[rec.name][command_code(ISOLATED[i % 2])] += 1
+        tcp_packets = {command_code(c): tcp_rec.first[command_code(c)] for c in ISOLATED}
+        udp_packets = {command_code(c): aligned_rec.first[command_code(c)] for c in ISOLATED}
+        for packet in (*tcp_packets.values(), *udp_packets.values()):
+            await raw_tcp.exchange(packet)
+            await raw_udp.exchange(packet)
+        last = dict.fromkeys(("tcp", "aligned", "random"), time.monotonic())
+        rng = random.Random(2006)
+        guard = aligned.reorder_guard
+
+        async def spaced(key: str) -> None:
+            await asyncio.sleep(max(0.0, last[key] + SPACING - time.monotonic()))
+            await asyncio.sleep(rng.uniform(0.0, PERIOD))  # a random heartbeat phase
+
+        async def command(key: str, gcu: GcuClient, rec: Recorder, out: list[Sample],
+                          cmd: Command) -> None:  # fmt: skip
+            out.append(await timed_command(gcu, rec, cmd, False))
+            counts[rec.name][command_code(cmd)] += 1
+            last[key] = time.monotonic()
+
+        gc.collect()
+        for r in range(args.rounds):
+            cmd = ISOLATED[r % 2]
+            op = command_code(cmd)
+            for what in rng.sample(range(5), 5):
+                if what == 0:
+                    await spaced("tcp")
+                    await command("tcp", tcp, tcp_rec, res.tcp, cmd)
+                elif what == 1:
+                    await asyncio.sleep(rng.uniform(0.0, PERIOD))
+                    res.tcp_raw.append(await raw_tcp.exchange(tcp_packets[op]))
+                elif what == 2:
+                    await spaced("aligned")
+                    for _ in range(100):  # until the guard has passed since its last packet
+                        gap = aligned_rec.times[-1] + guard - time.monotonic()
+                        if gap <= 0:
+                            break
+                        await asyncio.sleep(gap)
+                    await command("aligned", aligned, aligned_rec, res.udp_aligned, cmd)
+                elif what == 3:
+                    await spaced("random")
+                    await command("random", rnd, rnd_rec, res.udp_random, cmd)
+                else:
+                    await asyncio.sleep(rng.uniform(0.0, PERIOD))
+                    res.udp_raw.append(await raw_udp.exchange(udp_packets[op]))
+    finally:
+        for gcu, _ in clients:
+            await gcu.close()
+        for t in (raw_tcp_t, raw_udp_t):
+            if t is not None:
+                t.close()
+        await asyncio.sleep(0)
+        stats = await peer.stop()
+    for (_, rec), s in zip(clients, (stats[0], stats[2], stats[3]), strict=True):
+        report.check_executions(rec.name, counts[rec.name], s["executions"])
+        report.check_rate(rec)
+    report.isolated = res
+    print(f"\nisolated: {args.rounds} rounds; per round, in random order: a TCP command, a raw"
+          f" TCP exchange, a UDP command after the guard, a UDP command at a random phase,"
+          f" a raw UDP exchange; each client >= {SPACING:g} s between commands; take_photo /"
+          f" focus alternating by round")  # fmt: skip
+    print("  series                                 latency p50 / p99 ms    wait before"
+          " the first packet p50 / p99   first packet -> feedback p50 / p99")
+    for name, samples in (("TCP GcuClient (guard 0)", res.tcp),
+                          ("UDP GcuClient, after the guard", res.udp_aligned),
+                          ("UDP GcuClient, random phase", res.udp_random)):  # fmt: skip
+        print_samples(name, samples)
+    print(f"  {'TCP raw asyncio exchange':<38} {ms(res.tcp_raw)}")
+    print(f"  {'UDP raw asyncio exchange':<38} {ms(res.udp_raw)}")
+    ratio = percentile([s.latency for s in res.tcp], 50) / percentile(res.tcp_raw, 50)
+    ratio99 = percentile([s.latency for s in res.tcp], 99) / percentile(res.tcp_raw, 99)
+    print(f"  TCP: GcuClient p50 / raw p50 = {ratio:.3f}x (p99 / p99 = {ratio99:.3f}x)")
+    udp = percentile([s.wire for s in res.udp_aligned], 50) / percentile(res.udp_raw, 50)
+    print(f"  UDP after the guard: first packet -> feedback p50 / raw p50 = {udp:.3f}x")
+    report.target(f"TCP command p50 <= {TARGET_TCP_RATIO:g}x raw asyncio exchange p50",
+                  ratio <= TARGET_TCP_RATIO, f"{ratio:.3f}x")  # fmt: skip
+
+
+def print_samples(name: str, samples: Sequence[Sample]) -> None:
+    print(f"  {name:<38} {ms([s.latency for s in samples])}    {ms([s.wait for s in samples])}"
+          f"                     {ms([s.wire for s in samples])}   ({len(samples)})")
+    parts = []
+    for cause in CAUSES:
+        waits = [s.wait for s in samples if s.cause == cause]
+        if waits:
+            parts.append(f"{cause} {len(waits)} (wait p50 {percentile(waits, 50) * 1e3:.2f}"
+                         f" ms)")  # fmt: skip
+    print(f"  {'':<38} first packet held by: {'; '.join(parts)}")
+    again = [s.wire for s in samples if s.copies > 1]
+    if again:
+        print(f"  {'':<38} sent more than once (the first reply did not end it): {len(again)},"
+              f" first packet -> feedback p50 {percentile(again, 50) * 1e3:.2f} ms")
+
+
+# --- part b2b -----------------------------------------------------------------------------
+B2B = (("UDP, mixed", "udp", "mixed"), ("UDP, same opcode", "udp", "same"),
+       ("TCP, mixed", "tcp", "mixed"), ("TCP, same opcode", "tcp", "same"))  # fmt: skip
 
 
 @dataclass
-class WindowResult:
-    """N sessions over one window."""
-
-    n: int
+class Series:
+    name: str
+    samples: list[Sample]
+    packets: int
     seconds: float
-    timings: list[Timing]
-    cpu_pct: float
-    sim_cpu_pct: float | None
-    replies: int
-    sent: int
-    late: int
-    down: int
-    ctx_switches: tuple[int, int]
-
-    @property
-    def timing(self) -> Timing:
-        return self.timings[0]
-
-    @property
-    def cpu_us_per_tick(self) -> float:
-        sends = sum(t.sends for t in self.timings)
-        return self.cpu_pct / 100.0 * self.seconds / max(1, sends) * 1e6
-
-    @property
-    def p99s(self) -> list[float]:
-        return sorted(t.p(99) for t in self.timings)
-
-    @property
-    def pooled(self) -> list[float]:
-        return sorted(j for t in self.timings for j in t.jitter_ms)
+    most: int
+    tightest: float
 
 
-async def _open_all(sessions: Sequence[Session], spread: bool) -> None:
-    """Open every session concurrently; with ``spread`` each starts after a random delay
-    within one period (seeded), so the heartbeats have random phases."""
+async def run_series(gcu: GcuClient, rec: Recorder, commands: Sequence[Command],
+                     counts: Counter[int]) -> Series:  # fmt: skip
+    samples: list[Sample] = []
+    i0, t0 = len(rec.times), time.monotonic()
+    previous: int | None = None
+    for cmd in commands:
+        op = command_code(cmd)
+        samples.append(await timed_command(gcu, rec, cmd, op == previous))
+        counts[op] += 1
+        previous = op
+    t1 = time.monotonic()
+    most, tightest = window_counts(rec.times[i0:])
+    return Series(rec.name, samples, len(rec.times) - i0, t1 - t0, most, tightest)
+
+
+async def part_b2b(args: argparse.Namespace, report: Report) -> None:
+    peer = await Peer.start([kind for _, kind, _ in B2B])
+    clients: list[tuple[GcuClient, Recorder]] = []
+    counts = [Counter[int]() for _ in B2B]
     rng = random.Random(2006)
-
-    async def open_one(session: Session, delay: float) -> None:
-        await asyncio.sleep(delay)
-        await session.open()
-
-    delays = [rng.uniform(0.0, PERIOD) if spread else 0.0 for _ in sessions]
-    results = await asyncio.gather(
-        *(open_one(c, d) for c, d in zip(sessions, delays, strict=True)), return_exceptions=True
-    )
-    errors = [r for r in results if isinstance(r, BaseException)]
-    if errors:
-        await asyncio.gather(*(c.close() for c in sessions))
-        raise SystemExit(f"{len(errors)} of {len(sessions)} sessions failed to open: {errors[0]}")
-
-
-async def measure_window(
-    sim: SimProcess, n: int, seconds: float, warmup: float, *, raw: bool, spread: bool,
-    udp: bool = True,
-) -> WindowResult:
-    """Open ``n`` sessions (``raw``: the plain-asyncio floor), wait ``warmup``, then measure
-    one window of ``seconds``: send times, CPU of this process and of the GCU process,
-    replies, packets sent, late ticks; close everything."""
-    sessions: list[Session] = [RawSession(sim.url, udp=udp) if raw else ClientSession(sim.url)
-                               for _ in range(n)]  # fmt: skip
-    await _open_all(sessions, spread)
     try:
-        await asyncio.sleep(warmup)
-        for session in sessions:
-            session.stamps.clear()
+        for url, (name, _, _) in zip(peer.urls, B2B, strict=True):
+            clients.append(await open_client(url, name))
+        await asyncio.sleep(0.5)
         gc.collect()
-        await asyncio.sleep(3 * PERIOD)  # ticks delayed by the collection go out first
-        counts0 = [session.counts() for session in sessions]
-        ru0, sim0 = resource.getrusage(resource.RUSAGE_SELF), sim.cpu_seconds()
-        cpu0, wall0 = time.process_time(), time.perf_counter()
-        await asyncio.sleep(seconds)
-        cpu1, wall1 = time.process_time(), time.perf_counter()
-        ru1, sim1 = resource.getrusage(resource.RUSAGE_SELF), sim.cpu_seconds()
-        counts1 = [session.counts() for session in sessions]
-        windows = [[t for t in session.stamps if wall0 <= t <= wall1] for session in sessions]
-        down = sum(not session.up for session in sessions)
+        jobs = []
+        for (gcu, rec), (_, _, kind), c in zip(clients, B2B, counts, strict=True):
+            cmds = ([rng.choice(MIXED) for _ in range(args.commands)] if kind == "mixed"
+                    else [SAME] * args.commands)  # fmt: skip
+            jobs.append(run_series(gcu, rec, cmds, c))
+        series: list[Series] = await asyncio.gather(*jobs)
     finally:
-        await asyncio.gather(*(session.close() for session in sessions))
-    delta = [sum(b[i] - a[i] for a, b in zip(counts0, counts1, strict=True)) for i in range(3)]
-    wall = wall1 - wall0
-    return WindowResult(
-        n=n,
-        seconds=wall,
-        timings=[timing_of(w) for w in windows],
-        cpu_pct=(cpu1 - cpu0) / wall * 100.0,
-        sim_cpu_pct=None if sim0 is None or sim1 is None else (sim1 - sim0) / wall * 100.0,
-        replies=delta[0],
-        sent=delta[1],
-        late=delta[2],
-        down=down,
-        ctx_switches=(ru1.ru_nvcsw - ru0.ru_nvcsw, ru1.ru_nivcsw - ru0.ru_nivcsw),
-    )
+        for gcu, _ in clients:
+            await gcu.close()
+        stats = await peer.stop()
+    for (_, rec), c, st in zip(clients, counts, stats, strict=True):
+        report.check_executions(rec.name, c, st["executions"])
+        report.check_rate(rec)
+    report.b2b = series
+    print(f"\nb2b: {args.commands} back-to-back commands per client, four clients at once;"
+          f" mixed = each drawn at random from {', '.join(type(c).__name__ for c in MIXED)};"
+          f" same opcode = {type(SAME).__name__} every time")  # fmt: skip
+    print("  series                                 latency p50 / p99 ms    wait before"
+          " the first packet p50 / p99   first packet -> feedback p50 / p99")
+    for s in series:
+        groups = [(s.name, s.samples)]
+        if "mixed" in s.name:
+            groups += [(f"  {s.name}, new opcode", [x for x in s.samples if not x.repeat]),
+                       (f"  {s.name}, repeated opcode", [x for x in s.samples if x.repeat])]
+        for name, samples in groups:
+            print_samples(name, samples)
+        per = s.packets / len(s.samples)
+        print(f"  {'':<38} {s.packets} host packets = {per:.3f} per command,"
+              f" {len(s.samples) / s.seconds:.1f} commands/s; most packets in any 1 s:"
+              f" {s.most} (limit {LIMIT}); shortest span of {LIMIT + 1} packets"
+              f" {s.tightest:.6f} s")  # fmt: skip
 
 
-# --- main ---------------------------------------------------------------------------------
-def _met(ok: bool) -> str:
-    return "met   " if ok else "MISSED"
+# --- report -------------------------------------------------------------------------------
+@dataclass
+class Report:
+    targets: list[tuple[str, bool, str]] = field(default_factory=list)
+    failures: list[str] = field(default_factory=list)
+    rates: list[tuple[str, int, int, float, int, float]] = field(default_factory=list)
+    cpu: dict[str, list[CpuWindow]] = field(default_factory=dict)
+    isolated: Isolated | None = None
+    b2b: list[Series] = field(default_factory=list)
 
+    def target(self, name: str, ok: bool, value: str) -> None:
+        self.targets.append((name, ok, value))
 
-def _sim_pct(value: float | None) -> str:
-    return "?" if value is None else f"{value:.1f}"
+    def check_rate(self, rec: Recorder) -> None:
+        most, tightest = window_counts(rec.times)
+        handed, _ = window_counts(rec.handed)
+        lag = max((h - t for h, t in zip(rec.handed, rec.times, strict=True)), default=0.0)
+        self.rates.append((rec.name, len(rec.times), most, tightest, handed, lag))
+        if most > LIMIT:
+            self.failures.append(f"{rec.name}: {most} host packets within 1 s at the session's"
+                                 f" send times (limit {LIMIT})")  # fmt: skip
+        if handed > LIMIT:
+            self.failures.append(f"{rec.name}: {handed} host packets within 1 s at the times"
+                                 f" they reached the transport (limit {LIMIT})")  # fmt: skip
+
+    def check_executions(self, name: str, done: Counter[int], executed: dict[int, int]) -> None:
+        if dict(done) != {k: v for k, v in executed.items() if v}:
+            self.failures.append(f"{name}: the simulator executed {executed}, the client"
+                                 f" completed {dict(done)}")  # fmt: skip
 
 
 async def run(args: argparse.Namespace) -> int:
-    targets: list[tuple[str, bool, str]] = []
-    print(f"  loop   : {type(asyncio.get_running_loop()).__name__}; loopback UDP only")
-
-    # 1. latency
-    if "1" in args.parts:
-        lat = await measure_latency(args.latency_samples, args.b2b_samples, args.block)
-        print(f"\n1. Command latency over loopback UDP (simulator in this process), each command"
-              f" right after one raw echo round trip ({lat.payload}-B payload); take_photo and"
-              f" focus; client reorder_guard {lat.reorder_guard * 1e3:g} ms")  # fmt: skip
-        for name, (cmd, echo) in lat.series.items():
-            c50, c99 = _lat(cmd)
-            e50, e99 = _lat(echo)
-            print(f"  {name:<37} {len(cmd):4d} x: p50 {c50:8.1f} us | p99 {c99:8.1f} us;"
-                  f" echo p50 {e50:6.1f} us | p99 {e99:6.1f} us; ratio {c50 / e50:6.2f}x")
-            targets.append((f"command p50 <= {TARGET_LATENCY_RATIO:g}x echo p50 ({name})",
-                            c50 / e50 <= TARGET_LATENCY_RATIO, f"{c50 / e50:.2f}x"))  # fmt: skip
-        print(f"  take_photo after take_photo waited for a null acknowledgement"
-              f" {lat.photo_separated} of {len(lat.series[PHOTOS][0])} times")  # fmt: skip
-        print(f"  simulator model time per packet, included above: {lat.sim_us_per_packet:.1f}"
-              " us mean")  # fmt: skip
-    if not set(args.parts) & set("234"):
-        return _print_targets(targets)
-
-    if set(args.parts) & set("23"):
-        sim = await SimProcess.start()
-        try:
-            await part_session(sim, args, targets)
-        finally:
-            await sim.stop()
-    if "4" in args.parts:
-        for peer in ("sim", "minimal") if args.peer == "both" else (args.peer,):
-            sim = await SimProcess.start(minimal=peer == "minimal")
-            try:
-                await part_sessions(sim, args, targets)
-            finally:
-                await sim.stop()
-    return _print_targets(targets)
-
-
-def _session_lines(label: str, s: WindowResult) -> None:
-    t = s.timing
-    print(f"  {label}: {t.sends} sends in {s.seconds:.3f} s, rate {t.rate_hz:.4f} Hz"
-          f" ({t.rate_error_pct:+.4f} %); replies {s.replies} of {s.sent} sent;"
-          f" late ticks {s.late}")  # fmt: skip
-    print(f"    jitter |interval - 20 ms|: p50 {t.p(50):.3f} ms | p99 {t.p(99):.3f} ms |"
-          f" max {t.max_ms:.3f} ms")  # fmt: skip
-    print(f"    CPU of this process {s.cpu_pct:.3f} % of one core ({s.cpu_us_per_tick:.1f} us"
-          f" per tick incl. its reply); GCU process {_sim_pct(s.sim_cpu_pct)} %;"
-          f" context switches {s.ctx_switches[0]} voluntary,"
-          f" {s.ctx_switches[1]} involuntary")  # fmt: skip
-
-
-async def part_session(sim: SimProcess, args: argparse.Namespace, targets: list[Any]) -> None:
-    print(f"\n2./3. One 50 Hz session against {sim.name} in another process ({sim.url});"
-          f" {args.warmup:g} s warm-up before each window")  # fmt: skip
-    sleep = await measure_window(sim, 1, args.baseline_seconds, args.warmup, raw=True,
-                                 spread=False, udp=False)  # fmt: skip
-    t = sleep.timing
-    print(f"  asyncio task sleeping to 50 Hz deadlines, no I/O, {args.baseline_seconds:g} s:"
-          f" CPU {sleep.cpu_pct:.3f} % of one core; jitter p99 {t.p(99):.3f} ms")  # fmt: skip
-    raw = await measure_window(sim, 1, args.baseline_seconds, args.warmup, raw=True,
-                               spread=False)  # fmt: skip
-    _session_lines(f"plain asyncio floor, {args.baseline_seconds:g} s", raw)
-    s = await measure_window(sim, 1, args.heartbeat_seconds, args.warmup, raw=False,
-                             spread=False)  # fmt: skip
-    _session_lines(f"GcuClient, {args.heartbeat_seconds:g} s", s)
-    extra = (s.cpu_pct - raw.cpu_pct) / 100.0 / RATE_HZ * 1e6
-    print(f"    GcuClient above the floor: {s.cpu_pct - raw.cpu_pct:+.3f} % of one core"
-          f" ({extra:+.1f} us per tick)")  # fmt: skip
-    t = s.timing
-    targets.append((f"heartbeat rate error <= {TARGET_RATE_ERROR_PCT:g} %",
-                    abs(t.rate_error_pct) <= TARGET_RATE_ERROR_PCT,
-                    f"{t.rate_error_pct:+.4f} %"))  # fmt: skip
-    targets.append((f"heartbeat jitter p99 <= {TARGET_JITTER_P99_MS:g} ms",
-                    t.p(99) <= TARGET_JITTER_P99_MS, f"{t.p(99):.3f} ms"))  # fmt: skip
-    targets.append((f"CPU of one session <= {TARGET_CPU_PCT:g} % of a core",
-                    s.cpu_pct <= TARGET_CPU_PCT,
-                    f"{s.cpu_pct:.3f} % (plain asyncio floor {raw.cpu_pct:.3f} %)"))  # fmt: skip
-
-
-def _step_line(label: str, r: WindowResult) -> bool:
-    p99s, pooled = r.p99s, r.pooled
-    ok = p99s[-1] <= SESSIONS_JITTER_P99_MS
-    sends = sum(t.sends for t in r.timings)
-    rate_error = (sends / (r.n * r.seconds) - RATE_HZ) / RATE_HZ * 100.0
-    print(f"  {label:>9} {r.n:4d} | {p99s[-1]:6.2f} {statistics.median(p99s):6.2f} |"
-          f" {percentile(pooled, 99):6.2f} {pooled[-1]:6.1f} | {rate_error:+8.3f} % |"
-          f" {r.cpu_pct:6.1f} {_sim_pct(r.sim_cpu_pct):>5} | {r.cpu_us_per_tick:6.1f} |"
-          f" {r.replies / max(1, r.sent):7.1%} | {r.late:5d} | {r.down:4d}"
-          f"  {'ok' if ok else 'over the limit'}")  # fmt: skip
-    return ok
-
-
-async def part_sessions(sim: SimProcess, args: argparse.Namespace, targets: list[Any]) -> None:
-    spread = args.phase == "random"
-    print(f"\n4. Concurrent 50 Hz sessions in this process against one {sim.name} endpoint in"
-          f" another process; {args.step_seconds:g} s per step after {args.warmup:g} s warm-up;"
-          f" limit: every session's jitter p99 <= {SESSIONS_JITTER_P99_MS:g} ms; sessions"
-          f" opened {PHASES[args.phase]}")  # fmt: skip
-    print("                N | jitter p99 ms | pooled ms     | rate err  |  CPU % of a core |"
-          " us per | replies | late  | down")  # fmt: skip
-    print("                  | worst median  | p99    max    | all sends | this   GCU proc  |"
-          " tick   |         | ticks |")  # fmt: skip
-    best, failed = 0, None
-    for n in args.sessions:
-        ok = False
-        for _ in range(args.repeats):  # the step passes if one of its repeats does
-            r = await measure_window(sim, n, args.step_seconds, args.warmup, raw=False,
-                                     spread=spread)  # fmt: skip
-            ok = _step_line("GcuClient", r) or ok
-        if not ok:
-            failed = n
-            break
-        best = n
-    floor_n = failed if failed is not None else args.sessions[-1]
-    r = await measure_window(sim, floor_n, args.step_seconds, args.warmup, raw=True,
-                             spread=spread)  # fmt: skip
-    _step_line("plain", r)
-    print(f"  largest N with every session's jitter p99 <= {SESSIONS_JITTER_P99_MS:g} ms in at"
-          f" least one of {args.repeats} windows: {best if best else 'none'}"
-          f" (plain: plain asyncio at N = {floor_n}, for reference)")
-    targets.append((f">= {TARGET_SESSIONS} sessions with jitter p99 <= "
-                    f"{SESSIONS_JITTER_P99_MS:g} ms ({sim.name})", best >= TARGET_SESSIONS,
-                    str(best)))  # fmt: skip
-
-
-def _print_targets(targets: Sequence[tuple[str, bool, str]]) -> int:
+    report = Report()
+    print(f"  loop   : {type(asyncio.get_running_loop()).__name__}; loopback only")
+    parts: dict[str, Callable[[argparse.Namespace, Report], Awaitable[None]]] = {
+        "cpu": part_cpu, "isolated": part_isolated, "b2b": part_b2b}  # fmt: skip
+    for name in args.parts:
+        await parts[name](args, report)
+    print(f"\nrate bound: most host packets in any 1 s window per client, at the session's"
+          f" send times (limit {LIMIT}; each client's whole life); [at the times they reached"
+          f" the transport; the longest delay from send time to transport]")  # fmt: skip
+    for name, sent, most, tightest, handed, lag in report.rates:
+        print(f"  {name:<34} {sent:6d} sent, most in 1 s {most:3d}; shortest span of"
+              f" {LIMIT + 1} packets {tightest:.6f} s [{handed} in 1 s; {lag * 1e6:.0f} us]")
     print(f"\nTargets (load average at the end: {load_average()}):")
-    for name, ok, value in targets:
-        print(f"  {_met(ok)} {name:<62} {value}")
-    return 0
+    for name, ok, value in report.targets:
+        print(f"  {'met   ' if ok else 'MISSED'} {name:<66} {value}")
+    for failure in report.failures:
+        print(f"  FAILED {failure}")
+    return 1 if report.failures else 0
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    ap.add_argument("--quick", action="store_true",
-                    help="short run (< 30 s): fewer samples, 3 s heartbeat, N = 200 only")
-    ap.add_argument("--latency-samples", type=int, default=None,
-                    help="isolated commands per latency series [1000; quick 120]")
-    ap.add_argument("--b2b-samples", type=int, default=None,
-                    help="commands per back-to-back latency series [250; quick 30]")
-    ap.add_argument("--parts", default="1234",
-                    help="which parts to run: 1 latency, 2/3 one session, 4 sessions [1234]")
-    ap.add_argument("--block", type=int, default=40,
-                    help="isolated commands per round (back-to-back: a quarter) [40]")
-    ap.add_argument("--heartbeat-seconds", type=float, default=None,
-                    help="length of the one-session window [30; quick 3]")
-    ap.add_argument("--baseline-seconds", type=float, default=None,
-                    help="length of the plain-asyncio floor window [10; quick 1.5]")
-    ap.add_argument("--step-seconds", type=float, default=None,
-                    help="length of each concurrent-sessions step [5; quick 2.5]")
-    ap.add_argument("--warmup", type=float, default=None,
-                    help="seconds before each window [1; quick 0.4]")
-    ap.add_argument("--sessions", type=lambda s: [int(x) for x in s.split(",")], default=None,
-                    help="comma-separated N to ramp through, stopping at the first over the"
-                    " limit [25,50,100,150,200,250,300,400,500; quick 200]")
-    ap.add_argument("--peer", choices=("sim", "minimal", "both"), default="both",
-                    help="GCU of the concurrent sessions: gcu-async sim, the minimal GCU of"
-                    " part 1 (isolates the client's own cost), or both [both]")
-    ap.add_argument("--repeats", type=int, default=None,
-                    help="windows per concurrent-sessions step; a step passes if one does"
-                    " [2; quick 1]")
-    ap.add_argument("--phase", choices=tuple(PHASES), default="random",
-                    help="concurrent sessions: open them each after a random delay within one"
-                    " period (random heartbeat phases) or all at once [random]")
-    ap.add_argument("--serve-minimal", action="store_true", help=argparse.SUPPRESS)
-    args = ap.parse_args(argv)  # fmt: skip
-    if args.serve_minimal:
-        return asyncio.run(serve_minimal())
+    ap.add_argument("--quick", action="store_true", help="short run (under 40 s)")
+    ap.add_argument("--parts", default="cpu,isolated,b2b",
+                    help="comma-separated parts: cpu, isolated, b2b [all]")
+    ap.add_argument("--cpu-rounds", type=int, help="rounds of CPU windows [16; quick 4]")
+    ap.add_argument("--cpu-seconds", type=float, help="length of a CPU window [1.5; quick 0.8]")
+    ap.add_argument("--warmup", type=float, help="seconds before a CPU window [0.3]")
+    ap.add_argument("--rounds", type=int, help="rounds of isolated commands [120; quick 10]")
+    ap.add_argument("--commands", type=int,
+                    help="back-to-back commands per client [1000; quick 100]")
+    ap.add_argument("--serve", help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+    if args.serve:
+        return asyncio.run(serve(args.serve.split(",")))
     quick = args.quick
-    if args.latency_samples is None:
-        args.latency_samples = 120 if quick else 1000
-    if args.b2b_samples is None:
-        args.b2b_samples = 30 if quick else 250
-    if args.heartbeat_seconds is None:
-        args.heartbeat_seconds = 3.0 if quick else 30.0
-    if args.baseline_seconds is None:
-        args.baseline_seconds = 1.5 if quick else 10.0
-    if args.step_seconds is None:
-        args.step_seconds = 2.5 if quick else 5.0
-    if args.warmup is None:
-        args.warmup = 0.4 if quick else 1.0
-    if args.repeats is None:
-        args.repeats = 1 if quick else 2
-    if args.sessions is None:
-        args.sessions = [200] if quick else [25, 50, 100, 150, 200, 250, 300, 400, 500]
-    if (args.latency_samples < 10 or args.b2b_samples < 2 or args.block < 2 or args.block % 2
-            or args.heartbeat_seconds <= 0 or args.baseline_seconds <= 0
-            or args.step_seconds <= 0 or args.warmup < 0 or min(args.sessions) < 1
-            or args.repeats < 1):
-        ap.error("need --latency-samples >= 10, --b2b-samples >= 2, an even --block >= 2,"
-                 " positive durations, N >= 1")
-
-    print("gcu_async client benchmark")
-    print(f"  python : {platform.python_implementation()} {platform.python_version()}"
-          f" ({sys.executable})")
-    print(f"  cpu    : {cpu_model()} ({platform.machine()}, {os.cpu_count()} logical CPUs);"
-          f" load average {load_average()} at the start")
+    defaults = {"cpu_rounds": (16, 4), "cpu_seconds": (1.5, 0.8), "warmup": (0.3, 0.3),
+                "rounds": (120, 10), "commands": (1000, 100)}  # fmt: skip
+    for key, (full, short) in defaults.items():
+        if getattr(args, key) is None:
+            setattr(args, key, short if quick else full)
+    args.parts = [p.strip() for p in args.parts.split(",") if p.strip()]
+    if (set(args.parts) - {"cpu", "isolated", "b2b"} or args.cpu_rounds < 1
+            or args.cpu_seconds <= 0 or args.warmup < 0 or args.rounds < 2
+            or args.commands < 2):  # fmt: skip
+        ap.error("parts: cpu, isolated, b2b; positive counts and durations")
+    print("gcu_async client benchmark" + (" (--quick)" if quick else ""))
+    for line in machine_lines():
+        print(f"  {line}")
     return asyncio.run(run(args))
 
 
