@@ -240,9 +240,14 @@ async def test_no_reply_at_open_is_link_lost() -> None:
 
 def test_rate_validation() -> None:
     a, _ = FakeGcu().client_end, None
-    for bad in (0, -1, 200.5, float("nan")):
+    for bad in (0, -1, 1.5, 200.5, float("nan")):
         with pytest.raises(ValueError, match="rate_hz"):
             GcuClient(a, rate_hz=bad)
+    # a heartbeat slower than the silence timeout would lose the link between packets
+    with pytest.raises(ValueError, match=r"silence_timeout: 0\.5 .*\[0\.5, inf\] s \(must exceed the heartbeat period"):
+        GcuClient(a, rate_hz=2.0, silence_timeout=0.5)
+    with pytest.warns(UserWarning):
+        GcuClient(a, rate_hz=2.0, silence_timeout=0.51)
     with pytest.warns(UserWarning, match="30-50 Hz"):
         GcuClient(a, rate_hz=20)
     with warnings.catch_warnings():

@@ -38,7 +38,7 @@ from gcu_async.transport import (
         ),
         ("serial:/dev/ttyS1", {"baudrate": 250000}, SerialTransport,
          "serial:///dev/ttyS1?baudrate=250000"),
-        ("serial:/dev/ttyS1", {"baudrate": "500000"}, SerialTransport,
+        ("serial:/dev/ttyS1", {"baudrate": 500000}, SerialTransport,
          "serial:///dev/ttyS1?baudrate=500000"),
     ],
 )  # fmt: skip
@@ -58,7 +58,7 @@ def test_udp_options_from_query_and_keywords() -> None:
     assert (t.local_port, t.local_host, t.broadcast, t.discovery, t.follow_peer) == (
         0, "127.0.0.1", True, True, False,
     )  # fmt: skip
-    t = open_transport("udp://127.0.0.1", follow_peer=True, discovery="on", broadcast=False)
+    t = open_transport("udp://127.0.0.1", follow_peer=True, discovery=True, broadcast=False)
     assert isinstance(t, UdpTransport)
     assert (t.local_port, t.local_host, t.broadcast, t.discovery, t.follow_peer) == (
         2338, None, False, True, True,
@@ -119,7 +119,7 @@ def test_tcp_options_from_query_and_keywords() -> None:
         ("udp://127.0.0.1?local_port=x", {}, "local_port: 'x' is not an integer"),
         ("udp://127.0.0.1?local_port=70000", {}, "local_port: 70000 is not a valid port"),
         ("udp://127.0.0.1?broadcast=maybe", {}, "broadcast: 'maybe' is not a boolean"),
-        ("udp://127.0.0.1", {"discovery": 1}, "discovery: 1 is not a boolean"),
+        ("udp://127.0.0.1", {"discovery": 1}, "discovery: 1 is not a bool (True or False)"),
         ("udp://127.0.0.1?local_host=no_such", {}, "local_host: 'no_such' is not a valid host"),
         ("udp://127.0.0.1?junk", {}, "query: 'junk' is not name=value pairs"),
         ("tcp://127.0.0.1?connect_timeout=soon", {}, "connect_timeout: 'soon' is not a number"),

@@ -11,8 +11,10 @@ from __future__ import annotations
 
 import asyncio
 import enum
+import inspect
 import logging
 import math
+import sys
 import time
 import warnings
 from collections.abc import AsyncGenerator, Callable
@@ -43,10 +45,10 @@ from gcu_async.protocol.commands import Command, command_code
 from gcu_async.protocol.enums import PodModel, opcode_name
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
-from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.protocol.host_frames import MS_PER_WEEK, ControlValues
 from gcu_async.protocol.packets import DEFAULT_VERSION
 from gcu_async.protocol.pods import POD_NAMES, pod_name, supports
-from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp
+from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp, check_tuple
 from gcu_async.session import (
     ControlKind,
     LinkDown,
@@ -59,6 +61,7 @@ from gcu_async.session import (
     TicketDone,
     TicketState,
 )
+from gcu_async.session.session import RATE_MAX_HZ, RATE_MIN_HZ
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 log = logging.getLogger("gcu_async.client")
@@ -91,14 +94,15 @@ class GcuClient(CommandMethods):
 
     Args:
         transport: any :class:`~gcu_async.transport.Transport` (not yet opened).
-        rate_hz: heartbeat rate, (0, 200] packets per second; the protocol advises 30–50 Hz
+        rate_hz: heartbeat rate, [2, 200] packets per second; the protocol advises 30–50 Hz
             (a warning outside). Host packets never exceed ``rate_hz`` + 1 in any second.
         command_timeout: default seconds a command may take on the wire, from its first
             packet to its feedback (:class:`CommandTimeout`, outcome ``UNKNOWN``).
         queue_timeout: default seconds a command may wait before its first packet
             (:class:`CommandTimeout`, outcome ``NOT_SENT``).
         connect_timeout: seconds to wait for the first reply when opening.
-        silence_timeout: seconds without a reply after which the link counts as lost.
+        silence_timeout: seconds without a reply after which the link counts as lost (more
+            than the heartbeat period).
         check_support: refuse commands the pod model does not support (Appendix 8) once the
             model is known, raising :class:`UnsupportedCommandError` without sending.
         reorder_guard: seconds between the last packet of one opcode and the first of the
@@ -124,14 +128,20 @@ class GcuClient(CommandMethods):
     ) -> None:
         if not isinstance(transport, Transport):
             raise type_error("transport", "a Transport", transport)
-        rate = check_real("rate_hz", rate_hz, 0.0, 200.0, "Hz")
-        if not RATE_ADVISED[0] <= rate <= RATE_ADVISED[1] and rate > 0:
+        rate = check_real("rate_hz", rate_hz, RATE_MIN_HZ, RATE_MAX_HZ, "Hz")
+        if not RATE_ADVISED[0] <= rate <= RATE_ADVISED[1]:
             warnings.warn(f"rate_hz={rate:g}: the protocol advises 30-50 Hz host packets",
                           stacklevel=2)  # fmt: skip
         if reorder_guard is None:
             reorder_guard = 0.0 if transport.ordered else DEFAULT_REORDER_GUARD
         if not callable(clock):
             raise type_error("clock", "a callable returning seconds", clock)
+        reading = clock()
+        if isinstance(reading, bool) or not isinstance(reading, (int, float)):
+            raise type_error("clock", f"a callable returning seconds (it returned {reading!r})",
+                             clock)  # fmt: skip
+        if not math.isfinite(reading):
+            raise ValueError(f"clock: {clock!r} returned {reading!r}, not finite seconds")
         self.transport = transport
         self.session = Session(
             rate_hz=rate_hz, reorder_guard=reorder_guard, command_timeout=command_timeout,
@@ -284,25 +294,28 @@ class GcuClient(CommandMethods):
         Raises ``TypeError`` or :class:`FieldRangeError` (nothing changes) for a bad value.
         """
         changes: dict[str, Any] = {}
-        for name, value, kind in (
-            ("attitude", attitude, Attitude),
-            ("acceleration", acceleration, NorthEastUp),
-            ("velocity", velocity, NorthEastUp),
-            ("position", position, GeoPosition),
-        ):
+        for name, value in (("attitude", attitude), ("acceleration", acceleration),
+                            ("velocity", velocity), ("position", position)):  # fmt: skip
             if value is not _UNSET:
-                changes[name] = None if value is None else _triple(name, value, kind)
-        for name, scalar in (
-            ("relative_altitude", relative_altitude),
-            ("satellites", satellites),
-            ("gnss_week", gnss_week),
-            ("gnss_ms", gnss_ms),
-        ):
+                changes[name] = None if value is None else _triple(name, value)
+        if relative_altitude is not _UNSET:
+            changes["relative_altitude"] = check_real(
+                "relative_altitude", relative_altitude, *S32_MM, "m")
+        for name, scalar, high in (("satellites", satellites, 255),
+                                   ("gnss_week", gnss_week, GNSS_WEEK_MAX),
+                                   ("gnss_ms", gnss_ms, MS_PER_WEEK - 1)):  # fmt: skip
             if scalar is not _UNSET:
-                changes[name] = scalar
+                changes[name] = check_int(name, scalar, 0, high)
         if gnss_time is not None:
             check_instance("gnss_time", gnss_time, datetime)
-            changes["gnss_week"], changes["gnss_ms"] = AircraftState.gnss_from_utc(gnss_time)
+            if gnss_week is not _UNSET or gnss_ms is not _UNSET:
+                raise ValueError("gnss_time: give either gnss_time or gnss_week/gnss_ms, "
+                                 "not both")  # fmt: skip
+            week, ms = AircraftState.gnss_from_utc(gnss_time)
+            if week > GNSS_WEEK_MAX:
+                raise ValueError(f"gnss_time: {gnss_time.isoformat()} is after the last GNSS "
+                                 f"week the packet carries ({GNSS_WEEK_MAX})")  # fmt: skip
+            changes["gnss_week"], changes["gnss_ms"] = week, ms
         state = replace(self.session.aircraft, **changes)  # validates
         self.session.set_aircraft(state)
         return state
@@ -374,7 +387,7 @@ class GcuClient(CommandMethods):
         """Iterate over replies as they arrive. The queue holds ``maxsize`` samples; when
         the consumer falls behind the oldest are dropped (counted in
         ``telemetry_dropped``). Ends when the client closes."""
-        sub = TelemetrySubscription(check_int("maxsize", maxsize, 1))
+        sub = TelemetrySubscription(check_int("maxsize", maxsize, 1, sys.maxsize))
         self._subscriptions.add(sub)
         if self._state in (ClientState.CLOSED, ClientState.CLOSING):
             sub.close()
@@ -386,17 +399,15 @@ class GcuClient(CommandMethods):
 
     def on_telemetry(self, callback: TelemetryCallback) -> Callable[[], None]:
         """Call ``callback(sample)`` for every reply; returns a function that unsubscribes."""
-        if not callable(callback):
-            raise type_error("callback", "a callable", callback)
+        _check_callback(callback)
         self._telemetry_callbacks.append(callback)
-        return lambda: self._telemetry_callbacks.remove(callback)
+        return _unsubscriber(self._telemetry_callbacks, callback)
 
     def on_link_change(self, callback: LinkCallback) -> Callable[[], None]:
         """Call ``callback(LinkEvent)`` when the link is lost or restored."""
-        if not callable(callback):
-            raise type_error("callback", "a callable", callback)
+        _check_callback(callback)
         self._link_callbacks.append(callback)
-        return lambda: self._link_callbacks.remove(callback)
+        return _unsubscriber(self._link_callbacks, callback)
 
     # -- commands --------------------------------------------------------------------------
     async def execute(
@@ -565,9 +576,55 @@ class GcuClient(CommandMethods):
                 log.exception("link callback failed")
 
 
-def _triple(name: str, value: object, kind: type[Any]) -> Any:
-    """A (a, b, c) tuple of real numbers as ``kind`` (Attitude, NorthEastUp, GeoPosition)."""
-    if isinstance(value, (str, bytes)) or not isinstance(value, (tuple, list)) or len(value) != 3:
-        raise type_error(name, f"a {kind.__name__} or a 3-tuple of numbers", value)
-    return kind(*(check_real(f"{name}.{field}", v) for field, v in
-                  zip(kind._fields, value, strict=True)))  # fmt: skip
+S16_CENTI = (-327.68, 327.67)
+"""m/s² or m/s: an S16 field in units of 0.01."""
+S32_MM = (-2147483.648, 2147483.647)
+"""Metres: an S32 field in millimetres."""
+GNSS_WEEK_MAX = 32767
+AIRCRAFT_TUPLES: dict[str, tuple[type[Any], str, tuple[tuple[float, float, bool], ...]]] = {
+    "attitude": (Attitude, "deg", ((-180.0, 180.0, True), (-90.0, 90.0, False),
+                                   (0.0, 360.0, True))),
+    "acceleration": (NorthEastUp, "m/s^2", ((*S16_CENTI, False),) * 3),
+    "velocity": (NorthEastUp, "m/s", ((*S16_CENTI, False),) * 3),
+    "position": (GeoPosition, "deg, deg, m", ((-90.0, 90.0, False), (-180.0, 180.0, False),
+                                              (*S32_MM, False))),
+}  # fmt: skip
+"""The aircraft fields given as triples: type, unit, (low, high, high open) per element (the
+ranges of host bytes 12–29 and the sub frame, NOTES §11)."""
+
+
+def _triple(name: str, value: object) -> Any:
+    """``value`` (a NamedTuple of the field's type or a plain 3-tuple) checked element by
+    element under the caller's names (``attitude.pitch``)."""
+    kind, unit, ranges = AIRCRAFT_TUPLES[name]
+    elements: tuple[Any, ...] = check_tuple(name, value, kind)
+    units = unit.split(", ") if ", " in unit else [unit] * 3
+    fields: tuple[str, ...] = kind._fields
+    return kind(*(check_real(f"{name}.{field}", v, low, high, u, high_open=open_)
+                  for field, v, (low, high, open_), u in
+                  zip(fields, elements, ranges, units, strict=True)))  # fmt: skip
+
+
+def _check_callback(callback: object) -> None:
+    """A callable that takes one positional argument (the sample or the event)."""
+    if not callable(callback):
+        raise type_error("callback", "a callable taking one argument", callback)
+    try:
+        signature = inspect.signature(callback)
+    except (TypeError, ValueError):  # some builtins have none: trust them
+        return
+    try:
+        signature.bind(None)
+    except TypeError:
+        raise type_error("callback", f"a callable taking one argument (not {signature})",
+                         callback) from None  # fmt: skip
+
+
+def _unsubscriber(callbacks: list[Any], callback: Any) -> Callable[[], None]:
+    """A function that removes ``callback`` once; calling it again does nothing."""
+
+    def unsubscribe() -> None:
+        if callback in callbacks:
+            callbacks.remove(callback)
+
+    return unsubscribe

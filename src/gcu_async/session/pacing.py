@@ -7,8 +7,11 @@ contract"). Three rules, each checked by :class:`Pacer` alone:
   fixed phase (a late packet does not shift the next slot) unless a packet is later than a
   whole period, or a command goes out early: then the phase restarts at that packet.
 - **Rate bound.** No packet is sent if it would make more than ``floor(rate_hz) + 1``
-  packets within any one-second window (a sliding window over the last sends).
-  Strictly periodic slots never use the spare packet; one early command per second does.
+  packets within any one-second window (a sliding window over the last sends, with
+  :data:`MARGIN` to spare for the time a packet takes from this decision to the wire).
+  Strictly periodic slots never use the spare packet; an early command does, and at most
+  one packet per :data:`WINDOW` goes early, so commands that follow each other cannot
+  turn into a burst that then stalls for the rest of the second.
 - **Edge guard.** A packet whose opcode differs from the previous packet's goes out no
   earlier than ``guard`` seconds after that packet, so on a link that delays packets by
   at most ``guard`` more than others, runs of one opcode reach the GCU in the order sent.
@@ -21,12 +24,16 @@ from collections import deque
 
 WINDOW = 1.0
 """Seconds over which the rate bound counts packets."""
+MARGIN = 0.005
+"""Seconds the window check keeps to spare: a packet reaches the transport a little after
+the session decided to send it."""
 
 
 class Pacer:
     """Slot schedule, sliding-window rate bound and edge guard for one session."""
 
-    __slots__ = ("_sent", "guard", "last_opcode", "last_time", "limit", "next_slot", "period")
+    __slots__ = ("_sent", "guard", "last_early", "last_opcode", "last_time", "limit",
+                 "next_slot", "period")  # fmt: skip
 
     def __init__(self, rate_hz: float, guard: float) -> None:
         self.period = 1.0 / rate_hz
@@ -37,6 +44,7 @@ class Pacer:
         self.next_slot = -math.inf
         self.last_time = -math.inf
         self.last_opcode: int | None = None
+        self.last_early = -math.inf
 
     def reset(self) -> None:
         """Forget every send (a new session starts)."""
@@ -44,11 +52,16 @@ class Pacer:
         self.next_slot = -math.inf
         self.last_time = -math.inf
         self.last_opcode = None
+        self.last_early = -math.inf
 
     def window_open_at(self) -> float:
         """Earliest time the rate bound allows another packet."""
         sent = self._sent
-        return sent[0] + WINDOW if len(sent) == self.limit else -math.inf
+        return sent[0] + (WINDOW + MARGIN) if len(sent) == self.limit else -math.inf
+
+    def early_open_at(self) -> float:
+        """Earliest time a packet may go before its slot (one per :data:`WINDOW`)."""
+        return self.last_early + WINDOW
 
     def edge_open_at(self, opcode: int) -> float:
         """Earliest time a packet with ``opcode`` may follow the previous packet."""
@@ -61,6 +74,8 @@ class Pacer:
         self._sent.append(now)
         self.last_time = now
         self.last_opcode = opcode
+        if early:
+            self.last_early = now
         if early or now >= self.next_slot + self.period:
             self.next_slot = now + self.period  # new phase: an early command, or far behind
         else:

@@ -24,7 +24,13 @@ import math
 from collections import deque
 from dataclasses import dataclass
 
-from gcu_async._checks import check_bool, check_instance, check_int, check_positive
+from gcu_async._checks import (
+    check_bool,
+    check_instance,
+    check_int,
+    check_positive,
+    check_real,
+)
 from gcu_async.errors import (
     CommandError,
     CommandFailed,
@@ -65,6 +71,8 @@ from gcu_async.session.runs import RunLedger
 from gcu_async.session.tickets import Ticket, TicketState
 
 NULL = NullCommand()
+RATE_MIN_HZ = 2.0
+"""Slowest heartbeat accepted (the protocol advises 30–50 Hz and must never stop)."""
 RATE_MAX_HZ = 200.0
 MIN_WAKE = 1e-4
 """Seconds; the smallest step :meth:`Session.next_wakeup` asks for (a floor against float
@@ -108,14 +116,15 @@ class Session:
     """One host's session with one GCU. See the module docstring and docs/client.md.
 
     Args:
-        rate_hz: heartbeat rate, (0, 200] packets per second (the protocol advises 30–50).
+        rate_hz: heartbeat rate, [2, 200] packets per second (the protocol advises 30–50).
         reorder_guard: seconds between the last packet of one opcode and the first of the
             next; must exceed how much more the link may delay one packet than another
             (0 on links that never reorder: TCP, serial).
         command_timeout: default seconds a command may spend on the wire (from its first
             packet to its feedback).
         queue_timeout: default seconds a command may wait before its first packet.
-        silence_timeout: seconds without a reply after which the link counts as lost.
+        silence_timeout: seconds without a reply after which the link counts as lost; more
+            than the heartbeat period.
         control_silence: seconds without a reply after which control values go out invalid.
         reply_window: longest round trip (GCU included) assumed possible; only used to tell
             which packets a reply may answer when no later reply settles it.
@@ -138,14 +147,18 @@ class Session:
         version: int = DEFAULT_VERSION,
         name: str = "gcu",
     ) -> None:
-        rate_hz = check_positive("rate_hz", rate_hz, unit="Hz")
-        if rate_hz > RATE_MAX_HZ:
-            raise FieldRangeError("rate_hz", rate_hz, 0, RATE_MAX_HZ, "Hz")
+        rate_hz = check_real("rate_hz", rate_hz, RATE_MIN_HZ, RATE_MAX_HZ, "Hz")
         self.rate_hz = rate_hz
         self.reorder_guard = check_positive("reorder_guard", reorder_guard, allow_zero=True)
         self.command_timeout = check_positive("command_timeout", command_timeout)
         self.queue_timeout = check_positive("queue_timeout", queue_timeout)
-        self.silence_timeout = check_positive("silence_timeout", silence_timeout)
+        period = 1.0 / rate_hz
+        beyond = "must exceed the heartbeat period 1 / rate_hz: no link without packets"
+        self.silence_timeout = check_real("silence_timeout", silence_timeout, period, math.inf,
+                                          "s", detail=beyond)  # fmt: skip
+        if self.silence_timeout == period:
+            raise FieldRangeError("silence_timeout", silence_timeout, period, math.inf, "s",
+                                  detail=beyond)  # fmt: skip
         self.control_silence = check_positive("control_silence", control_silence)
         self.reply_window = check_positive("reply_window", reply_window)
         self.version = check_int("version", version, 1, 2)
@@ -329,8 +342,8 @@ class Session:
         if not slot_due and not self._kick:
             return None
         command, start = self._next_command(now)
-        if not slot_due and start is None:
-            self._kick = False  # early only to start a command, and none can start
+        if not slot_due and (start is None or now < pacer.early_open_at()):
+            self._kick = False  # early only to start a command, once per window
             return None
         opcode = command_code(command)
         if now < pacer.window_open_at() or now < pacer.edge_open_at(opcode):
@@ -366,7 +379,7 @@ class Session:
         gate = max(pacer.window_open_at(), pacer.edge_open_at(command_code(command)))
         when = max(pacer.next_slot, gate)
         if self._kick and start is not None:  # a command may start before its slot
-            when = min(when, max(now, gate))
+            when = min(when, max(now, gate, pacer.early_open_at()))
         t = self._in_flight
         if t is not None and t.first_sent is not None:
             when = min(when, t.first_sent + t.timeout)

@@ -6,7 +6,8 @@ IPv6 literals go in brackets (``udp://[::1]:2337``). Default ports follow NOTES 
 
 Options come from the query string and/or keyword arguments of :func:`open_transport`.
 Query values are text (booleans as 1/0, true/false, yes/no, on/off; ``none`` for an unset
-bound); keyword values may be text or the native type. **Giving the same option both
+bound); keyword values must be the native type (``local_port=0``, ``broadcast=True``: text
+such as ``"false"`` is refused there, it is no bool). **Giving the same option both
 ways is an error** (ValueError), as is an unknown option, a repeated query key, a user
 name, a path, or a fragment. Options per scheme:
 
@@ -33,7 +34,8 @@ from gcu_async.transport.serial import DEFAULT_BAUDRATE, SerialTransport
 from gcu_async.transport.tcp import GCU_TCP_PORT, Backoff, TcpTransport
 from gcu_async.transport.udp import GCU_UDP_PORT, UdpTransport
 
-Converter = Callable[[str, object], object]
+Converter = Callable[[str, object, bool], object]
+"""(field, value, value is query text) → the option's value, or ValueError."""
 
 _LABEL = re.compile(r"(?!-)[A-Za-z0-9-]{1,63}(?<!-)\Z")
 _TRUE = {"1", "true", "yes", "on"}
@@ -57,51 +59,58 @@ def check_host(field: str, host: str) -> str:
     return host
 
 
-def _as_int(field: str, value: object) -> object:
-    if isinstance(value, str):
+def _as_int(field: str, value: object, text: bool) -> object:
+    if text and isinstance(value, str):
         if not re.fullmatch(r"[+-]?[0-9]+", value.strip()):
             raise ValueError(f"{field}: {value!r} is not an integer")
         return int(value)
     if isinstance(value, bool) or not isinstance(value, int):
-        raise ValueError(f"{field}: {value!r} is not an integer")
+        raise ValueError(f"{field}: {value!r} is not an integer (an int)")
     return value
 
 
-def _as_float(field: str, value: object) -> object:
-    if isinstance(value, str):
+def _as_float(field: str, value: object, text: bool) -> object:
+    if text and isinstance(value, str):
         try:
             return float(value)
         except ValueError:
             raise ValueError(f"{field}: {value!r} is not a number") from None
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"{field}: {value!r} is not a number")
-    return float(value)
+        raise ValueError(f"{field}: {value!r} is not a number (an int or float)")
+    try:
+        return float(value)
+    except OverflowError:
+        raise ValueError(f"{field}: {value!r} is too large for a number of seconds") from None
 
 
-def _as_bool(field: str, value: object) -> object:
+def _as_bool(field: str, value: object, text: bool) -> object:
     if isinstance(value, bool):
         return value
-    if isinstance(value, str) and value.strip().lower() in _TRUE | _FALSE:
+    if text and isinstance(value, str) and value.strip().lower() in _TRUE | _FALSE:
         return value.strip().lower() in _TRUE
-    raise ValueError(f"{field}: {value!r} is not a boolean (use 1/0, true/false, yes/no, on/off)")
+    if text:
+        raise ValueError(
+            f"{field}: {value!r} is not a boolean (use 1/0, true/false, yes/no, on/off)"
+        )
+    raise ValueError(f"{field}: {value!r} is not a bool (True or False)")
 
 
 def _optional(conv: Converter) -> Converter:
-    def convert(field: str, value: object) -> object:
-        if value is None or (isinstance(value, str) and value.strip().lower() == "none"):
+    def convert(field: str, value: object, text: bool) -> object:
+        if value is None or (text and isinstance(value, str) and value.strip().lower() == "none"):
             return None
-        return conv(field, value)
+        return conv(field, value, text)
 
     return convert
 
 
-def _as_host(field: str, value: object) -> object:
+def _as_host(field: str, value: object, text: bool) -> object:
     if not isinstance(value, str):
         raise ValueError(f"{field}: {value!r} is not a host name or address")
     return check_host(field, value)
 
 
-def _as_rng(field: str, value: object) -> object:
+def _as_rng(field: str, value: object, text: bool) -> object:
     if not isinstance(value, random.Random):
         raise ValueError(f"{field}: {value!r} is not a random.Random")
     return value
@@ -183,7 +192,7 @@ def _merge_options(scheme: str, query: str, kwargs: Mapping[str, object]) -> dic
     allowed = _SCHEMES[scheme]
     names = ", ".join(sorted(allowed))
     query_names = ", ".join(sorted(set(allowed) - _KEYWORD_ONLY))
-    raw: dict[str, object] = {}
+    raw: dict[str, tuple[object, bool]] = {}
     try:
         pairs = parse_qsl(query, keep_blank_values=True, strict_parsing=bool(query))
     except ValueError:
@@ -195,7 +204,7 @@ def _merge_options(scheme: str, query: str, kwargs: Mapping[str, object]) -> dic
             )
         if name in raw:
             raise ValueError(f"option: {name!r} is given twice in the query")
-        raw[name] = value
+        raw[name] = (value, True)
     for name, option in kwargs.items():
         if name not in allowed:
             raise ValueError(f"option: {name!r} is not a {scheme} option (allowed: {names})")
@@ -203,8 +212,8 @@ def _merge_options(scheme: str, query: str, kwargs: Mapping[str, object]) -> dic
             raise ValueError(
                 f"option: {name!r} is given both in the URL query and as a keyword argument"
             )
-        raw[name] = option
-    return {name: allowed[name](name, value) for name, value in raw.items()}
+        raw[name] = (option, False)
+    return {name: allowed[name](name, value, text) for name, (value, text) in raw.items()}
 
 
 def _host_port(netloc: str, default_port: int) -> tuple[str, int]:
