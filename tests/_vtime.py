@@ -118,7 +118,8 @@ class Rig:
         """``stalls``: intervals [start, end) during which the host's event loop is busy:
         replies, wake-ups and calls due inside wait for the end, then run as one batch.
         ``earliest``: the arrival bound passed with replies: "driver" (what GcuClient passes:
-        the time of its last wake-up, when it read the link empty), "arrival" (exact), or
+        when its last timer was due: a reply its event loop had not delivered by then
+        arrived later), "arrival" (exact), or
         "none" (the session assumes replies are processed as they arrive).
         ``stall_on_late_reply``: an adversarial busy loop: when a reply is held by the whole
         bound, the host loop is busy for this long from just before it arrives."""
@@ -202,6 +203,8 @@ class Rig:
                     payload()
                     self._reschedule()
             else:
+                # the driver's timer: replies it has not seen arrived after it was due
+                self._rx_bound = self.wakeup
                 self._poll()
         self.clock.advance(max(0.0, end - self.now))
 
@@ -221,7 +224,6 @@ class Rig:
     # -- internals -------------------------------------------------------------------------
     def _poll(self) -> None:
         now = self.now
-        self._rx_bound = now  # the driver reads the link empty before each wake-up's work
         data = self.session.poll(now)
         self.polls += 1
         if data is not None:

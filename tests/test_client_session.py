@@ -244,9 +244,12 @@ def test_rate_validation() -> None:
         with pytest.raises(ValueError, match="rate_hz"):
             GcuClient(a, rate_hz=bad)
     # a heartbeat slower than the silence timeout would lose the link between packets
-    with pytest.raises(ValueError, match=r"silence_timeout: 0\.5 .*\[0\.5, inf\] s \(must exceed the heartbeat period"):
+    with pytest.raises(
+        ValueError,
+        match=r"silence_timeout: 0\.5 .*\[0\.5, inf\] s \(must exceed the heartbeat period",
+    ):
         GcuClient(a, rate_hz=2.0, silence_timeout=0.5)
-    with pytest.warns(UserWarning):
+    with pytest.warns(UserWarning, match="30-50 Hz"):
         GcuClient(a, rate_hz=2.0, silence_timeout=0.51)
     with pytest.warns(UserWarning, match="30-50 Hz"):
         GcuClient(a, rate_hz=20)

@@ -65,6 +65,7 @@ from gcu_async.session.session import RATE_MAX_HZ, RATE_MIN_HZ
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 log = logging.getLogger("gcu_async.client")
+_RESOLUTION = time.get_clock_info("monotonic").resolution
 
 DEFAULT_REORDER_GUARD = 0.015
 """Seconds; the reordering guard on links that may reorder (UDP)."""
@@ -129,9 +130,6 @@ class GcuClient(CommandMethods):
         if not isinstance(transport, Transport):
             raise type_error("transport", "a Transport", transport)
         rate = check_real("rate_hz", rate_hz, RATE_MIN_HZ, RATE_MAX_HZ, "Hz")
-        if not RATE_ADVISED[0] <= rate <= RATE_ADVISED[1]:
-            warnings.warn(f"rate_hz={rate:g}: the protocol advises 30-50 Hz host packets",
-                          stacklevel=2)  # fmt: skip
         if reorder_guard is None:
             reorder_guard = 0.0 if transport.ordered else DEFAULT_REORDER_GUARD
         if not callable(clock):
@@ -150,6 +148,9 @@ class GcuClient(CommandMethods):
         )  # fmt: skip
         self.connect_timeout = check_positive("connect_timeout", connect_timeout)
         self.check_support = check_bool("check_support", check_support)
+        if not RATE_ADVISED[0] <= rate <= RATE_ADVISED[1]:
+            warnings.warn(f"rate_hz={rate:g}: the protocol advises 30-50 Hz host packets",
+                          stacklevel=2)  # fmt: skip
         self._clock = clock
         self._state = ClientState.CLOSED
         self._timer: asyncio.TimerHandle | None = None
@@ -159,11 +160,16 @@ class GcuClient(CommandMethods):
         self._telemetry_callbacks: list[TelemetryCallback] = []
         self._link_callbacks: list[LinkCallback] = []
         self._first_reply: asyncio.Future[None] | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
         self._datagram = transport.datagram
         self._rx_bound: float | None = None
-        """Replies delivered from now on arrived after this time (links that reorder):
-        when the last wake-up found the link empty. None: the transport cannot tell."""
+        """Replies delivered from now on arrived after this time (links that reorder); None:
+        the transport cannot tell (see :meth:`_arrival_bound`)."""
+        self._bound_from_loop = False
+        self._timer_when = 0.0
+        """Event-loop time the pending timer is due."""
         self.telemetry_dropped = 0
+        self.session.telemetry = False
 
     # -- configuration (read-only views of the session's) ----------------------------------
     @property
@@ -215,7 +221,7 @@ class GcuClient(CommandMethods):
                 "(close it before opening it again)"
             )
         self._state = ClientState.OPENING
-        loop = asyncio.get_running_loop()
+        self._loop = loop = asyncio.get_running_loop()
         self._first_reply = loop.create_future()
         self.transport.set_handlers(self._on_data, self._on_link_event)
         try:
@@ -224,14 +230,7 @@ class GcuClient(CommandMethods):
             self._state = ClientState.CLOSED
             raise
         self.session.open(self._clock())
-        self._rx_bound = None
-        if not self.transport.ordered:
-            now = self._clock()
-            if self.transport.read_pending():
-                self._rx_bound = now
-            else:
-                log.info("%s cannot be read on demand: reply timing assumes a responsive "
-                         "event loop (docs/client.md, \"Assumptions\")", self.transport.url)
+        self._arrival_bound(loop)
         self._pump()
         try:
             await asyncio.wait_for(asyncio.shield(self._first_reply), self.connect_timeout)
@@ -389,6 +388,7 @@ class GcuClient(CommandMethods):
         ``telemetry_dropped``). Ends when the client closes."""
         sub = TelemetrySubscription(check_int("maxsize", maxsize, 1, sys.maxsize))
         self._subscriptions.add(sub)
+        self._consumers_changed()
         if self._state in (ClientState.CLOSED, ClientState.CLOSING):
             sub.close()
         try:
@@ -396,18 +396,24 @@ class GcuClient(CommandMethods):
                 yield sample
         finally:
             self._subscriptions.discard(sub)
+            self._consumers_changed()
 
     def on_telemetry(self, callback: TelemetryCallback) -> Callable[[], None]:
         """Call ``callback(sample)`` for every reply; returns a function that unsubscribes."""
         _check_callback(callback)
         self._telemetry_callbacks.append(callback)
-        return _unsubscriber(self._telemetry_callbacks, callback)
+        self._consumers_changed()
+        return _unsubscriber(self._telemetry_callbacks, callback, self._consumers_changed)
 
     def on_link_change(self, callback: LinkCallback) -> Callable[[], None]:
         """Call ``callback(LinkEvent)`` when the link is lost or restored."""
         _check_callback(callback)
         self._link_callbacks.append(callback)
-        return _unsubscriber(self._link_callbacks, callback)
+        return _unsubscriber(self._link_callbacks, callback, None)
+
+    def _consumers_changed(self) -> None:
+        """Telemetry samples are built only while someone consumes them."""
+        self.session.telemetry = bool(self._subscriptions or self._telemetry_callbacks)
 
     # -- commands --------------------------------------------------------------------------
     async def execute(
@@ -471,14 +477,45 @@ class GcuClient(CommandMethods):
             raise UnsupportedCommandError(opcode_name(command_code(command)), pod_name(model))
 
     # -- the pump: the only place packets are sent -----------------------------------------
+    def _arrival_bound(self, loop: asyncio.AbstractEventLoop) -> None:
+        """Choose how replies get a lower bound on their arrival (links that reorder; docs/
+        client.md, "The session contract", A4). Best, for free: on a draining transport whose
+        loop keeps this client's time (the default clock), a reply not delivered by the time
+        a timer runs arrived after that loop iteration's poll returned, which was no earlier
+        than the timer was due. Else: read the link empty before each send
+        (``read_pending``). Else none: the session assumes a responsive loop."""
+        self._rx_bound = None
+        self._bound_from_loop = False
+        transport = self.transport
+        if transport.ordered:
+            return
+        now = self._clock()
+        if (transport.drains and self._clock is time.monotonic
+                and type(loop).time is asyncio.BaseEventLoop.time):  # fmt: skip
+            self._bound_from_loop = True
+            self._rx_bound = now
+        elif transport.read_pending():
+            self._rx_bound = now
+        else:
+            log.info("%s cannot be read on demand: reply timing assumes a responsive event "
+                     "loop (docs/client.md, \"The session contract\")", transport.url)
+
+    def _on_timer(self) -> None:
+        if self._bound_from_loop and not self.transport.backlog:
+            # this iteration's poll returned at >= when - resolution (asyncio runs I/O
+            # callbacks before timers): later deliveries arrived after it
+            self._rx_bound = self._timer_when - _RESOLUTION
+        self._timer, self._timer_at = None, math.inf
+        self._pump()
+
     def _pump(self) -> None:
         if self._timer is not None:  # called early (a command): this run replaces the timer
             self._timer.cancel()
-        self._timer, self._timer_at = None, math.inf
+            self._timer, self._timer_at = None, math.inf
         session = self.session
         try:
-            if self._rx_bound is not None:  # read what waits first: replies before sends
-                now = self._clock()
+            if self._rx_bound is not None and not self._bound_from_loop:
+                now = self._clock()  # read what waits first: replies before sends
                 if self.transport.read_pending():
                     self._rx_bound = now
             data = session.poll(self._clock())
@@ -502,8 +539,10 @@ class GcuClient(CommandMethods):
             return
         if self._timer is not None:
             self._timer.cancel()
-        loop = asyncio.get_running_loop()
-        self._timer = loop.call_at(loop.time() + (when - now), self._pump)
+        loop = self._loop
+        assert loop is not None
+        self._timer_when = loop.time() + (when - now)
+        self._timer = loop.call_at(self._timer_when, self._on_timer)
         self._timer_at = when
 
     # -- input from the transport ----------------------------------------------------------
@@ -511,7 +550,8 @@ class GcuClient(CommandMethods):
         self.session.receive(data, self._clock(), datagram=self._datagram,
                              arrived_after=self._rx_bound)  # fmt: skip
         self._dispatch()
-        self._schedule()
+        if self._timer is None:  # a reply never brings the next wake-up forward
+            self._schedule()
 
     def _on_link_event(self, event: LinkEvent) -> None:
         if event.kind is LinkEventKind.LOST:
@@ -523,7 +563,10 @@ class GcuClient(CommandMethods):
 
     # -- events ----------------------------------------------------------------------------
     def _dispatch(self) -> None:
-        for event in self.session.events():
+        events = self.session.events()
+        if not events:
+            return
+        for event in events:
             if isinstance(event, TelemetrySample):
                 self._telemetry(event)
             elif isinstance(event, TicketDone):
@@ -620,11 +663,15 @@ def _check_callback(callback: object) -> None:
                          callback) from None  # fmt: skip
 
 
-def _unsubscriber(callbacks: list[Any], callback: Any) -> Callable[[], None]:
-    """A function that removes ``callback`` once; calling it again does nothing."""
+def _unsubscriber(callbacks: list[Any], callback: Any,
+                  then: Callable[[], None] | None) -> Callable[[], None]:  # fmt: skip
+    """A function that removes ``callback`` once (and calls ``then``); calling it again does
+    nothing."""
 
     def unsubscribe() -> None:
         if callback in callbacks:
             callbacks.remove(callback)
+            if then is not None:
+                then()
 
     return unsubscribe

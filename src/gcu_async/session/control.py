@@ -152,11 +152,12 @@ class ControlState:
             self.values = values
         return opcode
 
-    def valid(self, reported: Mode | None, silent: bool) -> ControlValues | None:
-        """The values to send valid now, or None (send them invalid)."""
+    def valid(self, reported: int | None, silent: bool) -> ControlValues | None:
+        """The values to send valid now, or None (send them invalid). ``reported``: the mode
+        byte of the latest reply."""
         values, confirmed = self.values, self.confirmed
         if values is None or confirmed is None or self._pending or silent:
             return None
-        if reported is not REPORTED[confirmed]:
+        if reported != REPORTED[confirmed]:
             return None
         return values

@@ -22,6 +22,7 @@ import heapq
 import itertools
 import math
 from collections import deque
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from gcu_async._checks import (
@@ -44,7 +45,13 @@ from gcu_async.errors import (
 from gcu_async.protocol.aircraft import AircraftState
 from gcu_async.protocol.commands import Command, NullCommand, command_code
 from gcu_async.protocol.deframer import Deframer
-from gcu_async.protocol.enums import ExecutionStatus, Opcode, SubFrameRequest, opcode_name
+from gcu_async.protocol.enums import (
+    CameraFlags,
+    ExecutionStatus,
+    Opcode,
+    SubFrameRequest,
+    opcode_name,
+)
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
 from gcu_async.protocol.host_frames import (
@@ -54,7 +61,13 @@ from gcu_async.protocol.host_frames import (
     HostMainFrame,
     HostSubFrame,
 )
-from gcu_async.protocol.packets import DEFAULT_VERSION, HostPacket, decode_gcu_packet
+from gcu_async.protocol.packets import (
+    BASE_LENGTH,
+    DEFAULT_VERSION,
+    GCU_HEADER,
+    HostPacket,
+    decode_gcu_packet,
+)
 from gcu_async.session.control import KIND, ControlKind, ControlState
 from gcu_async.session.events import (
     Event,
@@ -71,6 +84,7 @@ from gcu_async.session.runs import RunLedger
 from gcu_async.session.tickets import Ticket, TicketState
 
 NULL = NullCommand()
+_RECORDING = int(CameraFlags.RECORDING)
 RATE_MIN_HZ = 2.0
 """Slowest heartbeat accepted (the protocol advises 30–50 Hz and must never stop)."""
 RATE_MAX_HZ = 200.0
@@ -170,6 +184,9 @@ class Session:
         self._deframer = Deframer.for_gcu_packets()
         self._health = HealthTracker()
         self.stats = SessionStats()
+        self.telemetry = True
+        """Emit a :class:`TelemetrySample` event for every reply (a driver with no
+        telemetry consumers turns this off)."""
         self._state = SessionState.CLOSED
         self._queue: deque[Ticket] = deque()
         self._deadlines: list[tuple[float, int, Ticket]] = []
@@ -223,6 +240,16 @@ class Session:
         if self._state is SessionState.CLOSED:
             return
         deframer = self._deframer
+        if (datagram and not deframer.buffered and len(data) >= BASE_LENGTH
+                and data[2] | data[3] << 8 == len(data) and data[:2] == GCU_HEADER):  # fmt: skip
+            try:  # the usual datagram: exactly one packet (the decoder checks the CRC)
+                packet = decode_gcu_packet(data)
+            except RemoteProtocolError:
+                pass  # the deframer below sorts it out and counts what it discards
+            else:
+                sub = packet.sub if type(packet.sub) is GcuSubFrame else None
+                self._on_reply(packet.main, sub, packet.feedback, now, arrived_after)
+                return
         packets = deframer.feed(data)
         if datagram and deframer.buffered:
             packets += deframer.flush()  # a datagram's leftovers never join the next one
@@ -327,9 +354,12 @@ class Session:
         return self._control.set_values(values, kind)
 
     # -- outputs ---------------------------------------------------------------------------
-    def events(self) -> list[Event]:
+    def events(self) -> Sequence[Event]:
         """Every event since the last call, in order."""
-        events, self._events = self._events, []
+        events = self._events
+        if not events:
+            return ()
+        self._events = []
         return events
 
     def poll(self, now: float) -> bytes | None:
@@ -372,9 +402,25 @@ class Session:
 
     def next_wakeup(self, now: float) -> float:
         """When :meth:`poll` must be called next (``inf`` when closed)."""
-        if self._state is SessionState.CLOSED:
+        state = self._state
+        if state is SessionState.CLOSED:
             return math.inf
         pacer = self._pacer
+        if not self._queue and self._in_flight is None:  # idle: the heartbeat, the silence
+            when = pacer.next_slot
+            gate = pacer.window_open_at()
+            if gate > when:
+                when = gate
+            if pacer.last_opcode:  # the first null after a command waits for the edge
+                gate = pacer.last_time + pacer.guard
+                if gate > when:
+                    when = gate
+            last = self._health.last_reply
+            if state is SessionState.UP and last is not None:
+                silence = last + self.silence_timeout
+                if silence < when:
+                    when = silence
+            return when if when > now + MIN_WAKE else now + MIN_WAKE
         command, start = self._next_command(now)
         gate = max(pacer.window_open_at(), pacer.edge_open_at(command_code(command)))
         when = max(pacer.next_slot, gate)
@@ -463,7 +509,10 @@ class Session:
         self._status = main
         if sub is not None:
             self._info = sub
-            self._recording.observe(sub.recording, now)
+            recording = self._recording
+            flag = bool(sub.camera_flags_raw & _RECORDING)
+            if flag is not recording.observed:
+                recording.observe(flag, now)
         if self._state is not SessionState.UP:
             restored = self._state is SessionState.DOWN
             if restored:
@@ -491,14 +540,18 @@ class Session:
                     self._finish(ticket, TicketState.FAILED, now, error)
         elif run is not None and ticket is None and run.opcode != Opcode.NULL:
             self.stats.late_feedback += 1
-        self._events.append(TelemetrySample(main, self._info, feedback, now))
-        self._advance_queue(now)
+        if self.telemetry:
+            self._events.append(TelemetrySample(main, self._info, feedback, now))
+        if self._queue:
+            self._advance_queue(now)
 
     # -- internals: timers and the queue ---------------------------------------------------
     def _timers(self, now: float) -> None:
         if (self._state is SessionState.UP
                 and self._health.silent_for(now) > self.silence_timeout):  # fmt: skip
             self._link_down(now, f"no reply for {self.silence_timeout:g} s", reset=True)
+        if not self._deadlines and self._in_flight is None:
+            return
         t = self._in_flight
         if t is not None and t.first_sent is not None and now >= t.first_sent + t.timeout:
             progress = " (last status: in progress)" if t.progress else ""
@@ -601,10 +654,13 @@ class Session:
 
     # -- internals: packets ----------------------------------------------------------------
     def _valid_values(self, now: float) -> ControlValues | None:
+        control = self._control
+        if control.values is None:
+            return None
         status = self._status
-        reported = status.mode if status is not None else None
+        reported = status.mode_raw if status is not None else None
         silent = self._health.silent_for(now) > self.control_silence
-        return self._control.valid(reported, silent)
+        return control.valid(reported, silent)
 
     def _main_frame(self, now: float) -> HostMainFrame:
         values = self._valid_values(now)

@@ -46,10 +46,13 @@ class DrainingDatagramTransport(asyncio.DatagramTransport):
         self._view = memoryview(bytearray(bufsize))
         self._closing = False
         self.max_per_event = MAX_PER_EVENT
+        self.backlog = False
+        """True when the last read stopped at :attr:`max_per_event` (or on an error) with
+        datagrams possibly left in the socket."""
         loop.add_reader(sock.fileno(), self._read_ready)  # NotImplementedError: no selector
 
     def _read_ready(self) -> None:
-        self.read_all()
+        self.backlog = not self.read_all()
 
     def read_all(self) -> bool:
         """Read and deliver every queued datagram (at most :attr:`max_per_event`); True if

@@ -94,6 +94,19 @@ class Transport(abc.ABC):
         the receiver may deframe each call on its own. False for byte streams."""
         return False
 
+    @property
+    def drains(self) -> bool:
+        """True when every readiness event delivers everything the OS holds for this
+        transport (unless :attr:`backlog`): then whatever is delivered in a later event-loop
+        iteration arrived after this iteration's poll of the OS returned."""
+        return False
+
+    @property
+    def backlog(self) -> bool:
+        """True when the last readiness event stopped before the OS queue was empty (a
+        per-event cap: see :attr:`drains`)."""
+        return False
+
     def read_pending(self) -> bool:
         """Read and deliver, right now and synchronously, everything the OS holds for this
         transport. True if it found the link empty at the end, so that whatever is

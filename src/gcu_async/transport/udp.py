@@ -267,7 +267,18 @@ class UdpTransport(Transport):
         if dtransport is None or dtransport.is_closing() or dest is None:
             raise LinkLost(f"{self.url}: transport is closed")
         self.tx_datagrams += 1
-        dtransport.sendto(bytes(data), dest)
+        dtransport.sendto(data if type(data) is bytes else bytes(data), dest)
+
+    @property
+    def drains(self) -> bool:
+        """True on the draining reader (:attr:`draining`): each readiness event reads every
+        queued datagram."""
+        return self.draining
+
+    @property
+    def backlog(self) -> bool:
+        dtransport = self._dtransport
+        return isinstance(dtransport, DrainingDatagramTransport) and dtransport.backlog
 
     def read_pending(self) -> bool:
         """Read and deliver every datagram the OS holds now; True if the socket was then
@@ -304,7 +315,12 @@ class UdpTransport(Transport):
             self.rejected_datagrams += 1
             return
         self.rx_datagrams += 1
-        call_guarded(self._on_data, data, "data")
+        try:  # call_guarded, inline: this runs for every datagram
+            self._on_data(data)
+        except Exception as exc:
+            asyncio.get_running_loop().call_exception_handler(
+                {"message": "gcu_async transport: data handler raised", "exception": exc}
+            )
 
     def _error(self, exc: Exception) -> None:
         self.send_errors += 1
