@@ -33,6 +33,7 @@ from gcu_async._checks import (
 )
 from gcu_async.client.api import CommandMethods
 from gcu_async.client.telemetry import TelemetrySubscription
+from gcu_async.client.waiting import WaitingMethods
 from gcu_async.errors import (
     CommandLinkLost,
     GcuError,
@@ -56,6 +57,7 @@ from gcu_async.session import (
     LinkUp,
     ResetLink,
     Session,
+    SessionState,
     TelemetrySample,
     Ticket,
     TicketDone,
@@ -85,7 +87,7 @@ class ClientState(enum.Enum):
     CLOSING = "closing"
 
 
-class GcuClient(CommandMethods):
+class GcuClient(CommandMethods, WaitingMethods):
     """An asyncio session with one GCU.
 
     ``async with GcuClient(transport) as gcu:`` opens the transport, starts the heartbeat,
@@ -161,6 +163,7 @@ class GcuClient(CommandMethods):
         self._link_callbacks: list[LinkCallback] = []
         self._first_reply: asyncio.Future[None] | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
+        self._closed_event: asyncio.Event | None = None
         self._datagram = transport.datagram
         self._rx_bound: float | None = None
         """Replies delivered from now on arrived after this time (links that reorder); None:
@@ -222,6 +225,7 @@ class GcuClient(CommandMethods):
             )
         self._state = ClientState.OPENING
         self._loop = loop = asyncio.get_running_loop()
+        self._closed_event = asyncio.Event()
         self._first_reply = loop.create_future()
         self.transport.set_handlers(self._on_data, self._on_link_event)
         try:
@@ -265,6 +269,8 @@ class GcuClient(CommandMethods):
             await self.transport.close()
         finally:
             self._state = ClientState.CLOSED
+            if self._closed_event is not None:
+                self._closed_event.set()
 
     # -- aircraft state and control values -------------------------------------------------
     @property
@@ -404,6 +410,19 @@ class GcuClient(CommandMethods):
         self._telemetry_callbacks.append(callback)
         self._consumers_changed()
         return _unsubscriber(self._telemetry_callbacks, callback, self._consumers_changed)
+
+    def _current_attitude(self) -> Attitude:
+        status = self.session.status
+        return status.attitude if status is not None else Attitude(0.0, 0.0, 0.0)
+
+    def _latest(self) -> TelemetrySample | None:
+        return self.session.latest
+
+    def _link_up(self) -> bool:
+        return self.session.state is SessionState.UP
+
+    def _closed(self) -> asyncio.Event | None:
+        return None if self._state is ClientState.CLOSED else self._closed_event
 
     def on_link_change(self, callback: LinkCallback) -> Callable[[], None]:
         """Call ``callback(LinkEvent)`` when the link is lost or restored."""

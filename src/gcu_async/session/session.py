@@ -196,6 +196,7 @@ class Session:
         self._events: list[Event] = []
         self._status: GcuMainFrame | None = None
         self._info: GcuSubFrame | None = None
+        self._feedback: Feedback | None = None
         self._aircraft = AircraftState()
         self._sub: HostSubFrame | None = None
         self._frames: dict[ControlValues | None, HostMainFrame] = {}
@@ -453,6 +454,14 @@ class Session:
         return self._info
 
     @property
+    def latest(self) -> TelemetrySample | None:
+        """The latest reply as a telemetry sample (None before the first)."""
+        status, feedback, at = self._status, self._feedback, self._health.last_reply
+        if status is None or feedback is None or at is None:
+            return None
+        return TelemetrySample(status, self._info, feedback, at)
+
+    @property
     def in_flight(self) -> Ticket | None:
         return self._in_flight
 
@@ -507,6 +516,7 @@ class Session:
                   now: float, earliest: float | None) -> None:  # fmt: skip
         self._health.on_reply(now)
         self._status = main
+        self._feedback = feedback
         if sub is not None:
             self._info = sub
             recording = self._recording
