@@ -34,6 +34,7 @@ from gcu_async._checks import (
 from gcu_async.client.api import CommandMethods
 from gcu_async.client.telemetry import TelemetrySubscription
 from gcu_async.client.waiting import WaitingMethods
+from gcu_async.client.wirelog import WIRE_LOG, log_packet
 from gcu_async.errors import (
     CommandLinkLost,
     GcuError,
@@ -228,6 +229,7 @@ class GcuClient(CommandMethods, WaitingMethods):
         self._closed_event = asyncio.Event()
         self._first_reply = loop.create_future()
         self.transport.set_handlers(self._on_data, self._on_link_event)
+        log.info("opening %s", self.transport.url)
         try:
             await self.transport.open()
         except BaseException:
@@ -269,6 +271,7 @@ class GcuClient(CommandMethods, WaitingMethods):
             await self.transport.close()
         finally:
             self._state = ClientState.CLOSED
+            log.info("closed %s (%s)", self.transport.url, reason)
             if self._closed_event is not None:
                 self._closed_event.set()
 
@@ -537,8 +540,12 @@ class GcuClient(CommandMethods, WaitingMethods):
                 now = self._clock()  # read what waits first: replies before sends
                 if self.transport.read_pending():
                     self._rx_bound = now
+            wire = WIRE_LOG.isEnabledFor(logging.DEBUG)  # the level may change at run time
+            session.trace = self._trace if wire else None
             data = session.poll(self._clock())
             if data is not None:
+                if wire:
+                    log_packet(self.transport.url, True, data)
                 try:
                     self.transport.send(data)
                 except (LinkLost, OSError) as exc:
@@ -565,6 +572,9 @@ class GcuClient(CommandMethods, WaitingMethods):
         self._timer_at = when
 
     # -- input from the transport ----------------------------------------------------------
+    def _trace(self, packet: bytes) -> None:
+        log_packet(self.transport.url, False, packet)
+
     def _on_data(self, data: bytes) -> None:
         self.session.receive(data, self._clock(), datagram=self._datagram,
                              arrived_after=self._rx_bound)  # fmt: skip

@@ -22,7 +22,7 @@ import heapq
 import itertools
 import math
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from gcu_async._checks import (
@@ -197,6 +197,8 @@ class Session:
         self._status: GcuMainFrame | None = None
         self._info: GcuSubFrame | None = None
         self._feedback: Feedback | None = None
+        self.trace: Callable[[bytes], None] | None = None
+        """Called with every whole packet received (before it is decoded), e.g. to log it."""
         self._aircraft = AircraftState()
         self._sub: HostSubFrame | None = None
         self._frames: dict[ControlValues | None, HostMainFrame] = {}
@@ -248,6 +250,8 @@ class Session:
             except RemoteProtocolError:
                 pass  # the deframer below sorts it out and counts what it discards
             else:
+                if self.trace is not None:
+                    self.trace(data)
                 sub = packet.sub if type(packet.sub) is GcuSubFrame else None
                 self._on_reply(packet.main, sub, packet.feedback, now, arrived_after)
                 return
@@ -255,6 +259,8 @@ class Session:
         if datagram and deframer.buffered:
             packets += deframer.flush()  # a datagram's leftovers never join the next one
         for raw in packets:
+            if self.trace is not None:
+                self.trace(raw)
             try:
                 packet = decode_gcu_packet(raw)
             except RemoteProtocolError:
