@@ -58,7 +58,7 @@ function lastUpdate() {
 function linkText(next, link, connection, note) {
   if (note) return note;
   if (next === "up") return `link up · ${link.reply_rate.toFixed(0)} replies/s`;
-  if (next === "down") return `link DOWN — no reply ${ago(link.last_reply_age)}`;
+  if (next === "down") return `link DOWN — no reply ${ago(link ? link.last_reply_age : null)}`;
   if (next === "waiting") {
     const tries = connection.attempts ? ` · attempt ${connection.attempts + 1}` : "";
     return `waiting for the GCU${tries}`;
