@@ -590,6 +590,8 @@ def _client_options(owner: str, build: Callable[[dict[str, Any]], GcuClient],
         opt(name, "real", valid=(5e-324, 1.0, 1e300),
             read=lambda rig, c, n=name: getattr(c, n) if n == "connect_timeout"
             else getattr(c.session, n), **positive)  # fmt: skip
+    opt("open_timeout", "real", optional=True, valid=(None, 5e-324, 1.0, 1e300),
+        read=lambda rig, c: c.open_timeout, **positive)
     opt("reorder_guard", "real", low=0.0, optional=True, valid=(None, 0.0, 0.015, 1e300),
         read=lambda rig, c: c.reorder_guard,
         expected=lambda v: default_guard if v is None else v)  # fmt: skip

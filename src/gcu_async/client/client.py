@@ -10,10 +10,12 @@ values, link health) lives in the session (docs/client.md, "The session contract
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import enum
 import inspect
 import logging
 import math
+import random
 import sys
 import time
 import warnings
@@ -65,6 +67,7 @@ from gcu_async.session import (
     TicketState,
 )
 from gcu_async.session.session import RATE_MAX_HZ, RATE_MIN_HZ
+from gcu_async.transport.backoff import Backoff
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 log = logging.getLogger("gcu_async.client")
@@ -77,6 +80,10 @@ _UNSET: Any = object()
 
 LinkCallback = Callable[[LinkEvent], None]
 TelemetryCallback = Callable[[TelemetrySample], None]
+
+
+OPEN_BACKOFF = Backoff(base=0.25, factor=2.0, cap=5.0, max_attempts=None, max_total=1e9)
+"""Delays between the attempts of :meth:`GcuClient.open` with ``open_timeout``."""
 
 
 class ClientState(enum.Enum):
@@ -105,6 +112,9 @@ class GcuClient(CommandMethods, WaitingMethods):
         queue_timeout: default seconds a command may wait before its first packet
             (:class:`CommandTimeout`, outcome ``NOT_SENT``).
         connect_timeout: seconds to wait for the first reply when opening.
+        open_timeout: keep retrying :meth:`open` (backoff 0.25–5 s, full jitter) until this
+            many seconds have passed, e.g. to start before the GCU is powered; each failed
+            attempt is a ``RETRYING`` link event. ``None`` (default): one attempt.
         silence_timeout: seconds without a reply after which the link counts as lost (more
             than the heartbeat period).
         check_support: refuse commands the pod model does not support (Appendix 8) once the
@@ -124,6 +134,7 @@ class GcuClient(CommandMethods, WaitingMethods):
         command_timeout: float = 2.0,
         queue_timeout: float = 30.0,
         connect_timeout: float = 3.0,
+        open_timeout: float | None = None,
         silence_timeout: float = 1.0,
         check_support: bool = False,
         reorder_guard: float | None = None,
@@ -150,6 +161,11 @@ class GcuClient(CommandMethods, WaitingMethods):
             version=check_int("version", version, 1, 2), name=transport.url,
         )  # fmt: skip
         self.connect_timeout = check_positive("connect_timeout", connect_timeout)
+        self.open_timeout = (None if open_timeout is None
+                             else check_positive("open_timeout", open_timeout))  # fmt: skip
+        self._open_abort: asyncio.Event | None = None
+        self._between_attempts = False
+        self._rng = random.Random()
         self.check_support = check_bool("check_support", check_support)
         if not RATE_ADVISED[0] <= rate <= RATE_ADVISED[1]:
             warnings.warn(f"rate_hz={rate:g}: the protocol advises 30-50 Hz host packets",
@@ -218,12 +234,55 @@ class GcuClient(CommandMethods, WaitingMethods):
 
         Raises :class:`LinkLost` if the transport cannot open or no reply comes within
         ``connect_timeout`` (everything is closed again), ``RuntimeError`` if the client is
-        not closed."""
+        not closed. With ``open_timeout``, failed attempts are retried with backoff until
+        that many seconds have passed (docs/client.md, "Lifecycle"); :meth:`close` stops
+        the retries (``LinkLost``)."""
         if self._state is not ClientState.CLOSED:
             raise RuntimeError(
                 f"GcuClient is {self._state.value}: a client is reusable but not reentrant "
                 "(close it before opening it again)"
             )
+        if self.open_timeout is None:
+            await self._open_once()
+            return
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + self.open_timeout
+        self._open_abort = abort = asyncio.Event()
+        attempts = 0
+        try:
+            while True:
+                try:
+                    await self._open_once()
+                    return
+                except LinkLost as exc:
+                    attempts += 1
+                    delay = OPEN_BACKOFF.delay(attempts - 1, self._rng)
+                    if abort.is_set():
+                        raise LinkLost(f"{self.transport.url}: closed while opening") from exc
+                    if loop.time() + delay >= deadline:
+                        raise LinkLost(
+                            f"{self.transport.url}: no GCU within open_timeout "
+                            f"{self.open_timeout:g} s ({attempts} attempts; last: {exc})"
+                        ) from exc
+                    log.info("%s: attempt %d failed (%s); next in %.2f s",
+                             self.transport.url, attempts, exc, delay)  # fmt: skip
+                    self._emit_link(LinkEvent(
+                        LinkEventKind.RETRYING,
+                        f"attempt {attempts} failed: {exc}; next in {delay:.2f} s"))  # fmt: skip
+                    self._state = ClientState.OPENING  # not reentrant while it waits
+                    self._between_attempts = True
+                    try:
+                        with contextlib.suppress(asyncio.TimeoutError):
+                            await asyncio.wait_for(abort.wait(), delay)
+                    finally:
+                        self._between_attempts = False
+                        self._state = ClientState.CLOSED
+                    if abort.is_set():
+                        raise LinkLost(f"{self.transport.url}: closed while opening") from exc
+        finally:
+            self._open_abort = None
+
+    async def _open_once(self) -> None:
         self._state = ClientState.OPENING
         self._loop = loop = asyncio.get_running_loop()
         self._closed_event = asyncio.Event()
@@ -254,8 +313,12 @@ class GcuClient(CommandMethods, WaitingMethods):
     async def close(self) -> None:
         """End pending commands (:class:`CommandLinkLost`), stop the heartbeat, end the
         telemetry iterators and close the transport. Idempotent."""
+        if self._open_abort is not None:  # open() is retrying: stop it
+            self._open_abort.set()
         if self._state in (ClientState.CLOSED, ClientState.CLOSING):
             return
+        if self._between_attempts:
+            return  # open() waits between attempts: nothing is open
         await self._shutdown("client closed")
 
     async def _shutdown(self, reason: str) -> None:
