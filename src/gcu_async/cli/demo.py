@@ -18,7 +18,6 @@ import asyncio
 import contextlib
 import math
 import os
-import signal
 import statistics
 import sys
 import time
@@ -27,7 +26,14 @@ from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from typing import Any
 
-from gcu_async.cli._exit import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
+from gcu_async.cli._exit import (
+    EXIT_FAILED,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    EXIT_USAGE,
+    Interrupted,
+    interruptible,
+)
 from gcu_async.cli.liveview import Console, LiveView
 from gcu_async.client.client import GcuClient
 from gcu_async.client.connect import connect
@@ -666,37 +672,21 @@ def summary_lines(report: Report, interrupted: bool) -> list[str]:
 async def _main(opts: DemoOptions) -> int:
     console = Console(sys.stdout, opts.live)
     report = Report()
-    work = asyncio.create_task(_session(opts, console, report), name="demo")
-    loop = asyncio.get_running_loop()
-    interrupted: list[int] = []
-
-    def interrupt(sig: int) -> None:
-        interrupted.append(sig)
-        work.cancel()
-
-    installed = []
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
-            loop.add_signal_handler(sig, interrupt, sig)
-            installed.append(sig)
+    interrupted = False
     try:
-        await work
-    except asyncio.CancelledError:
-        if not interrupted:
-            raise
+        await interruptible(_session(opts, console, report))
+    except Interrupted:
+        interrupted = True
     except BrokenPipeError:
         raise
     except (LinkLost, GcuError, OSError) as exc:
         report.error = str(exc) or type(exc).__name__
         console.finish()
         print(f"{PROG}: {report.error}", file=sys.stderr)
-    finally:
-        for sig in installed:
-            loop.remove_signal_handler(sig)
     console.finish()
     if interrupted:
         console.line("interrupted: session closed")
-    for line in summary_lines(report, bool(interrupted)):
+    for line in summary_lines(report, interrupted):
         console.line(line)
     if interrupted:
         return EXIT_INTERRUPTED
