@@ -67,6 +67,7 @@ from gcu_async.protocol import (
     command_code,
 )
 from gcu_async.protocol.aircraft import AircraftState
+from gcu_async.session.pacing import MARGIN
 from gcu_async.sim import GcuSimulator
 
 RATE_HZ = 50.0
@@ -279,9 +280,8 @@ def classify(rec: Recorder, k: int, submit: float, opcode: int, nulls: int,
         return "none"
     if nulls:
         return "null + proof"
-    if k >= LIMIT and submit < rec.times[k - LIMIT] + WINDOW <= t < (
-        rec.times[k - LIMIT] + WINDOW + GATE_TOLERANCE
-    ):
+    gate = rec.times[k - LIMIT] + WINDOW + MARGIN if k >= LIMIT else math.inf
+    if submit < gate and -1e-4 <= t - gate < GATE_TOLERANCE:
         return "rate bound"
     if k >= 1 and guard > 0 and rec.opcodes[k - 1] != opcode:
         gate = rec.times[k - 1] + guard

@@ -48,7 +48,7 @@ from hypothesis import strategies as st
 
 from gcu_async import GcuClient
 from gcu_async.client.connect import CLIENT_OPTIONS, connect
-from gcu_async.errors import CommandError, CommandFailed, FieldRangeError
+from gcu_async.errors import CommandError, CommandFailed, FieldRangeError, WaitTimeout
 from gcu_async.protocol import (
     AircraftState,
     Attitude,
@@ -271,7 +271,7 @@ for _name in ("euler_control", "angle_control", "fpv"):
     for _i, _axis in enumerate(("roll", "pitch", "yaw")):
         _euler_yaw = _name == "euler_control" and _axis == "yaw"
         method(_name, _axis, "real", low=-180.0, high=360.0 if _euler_yaw else 180.0,
-               high_open=_euler_yaw,
+               high_open=_euler_yaw, optional=_name == "euler_control",  # None: keep current
                valid=(-180.0, 359.99, 180.0, 0.01) if _euler_yaw else (-180.0, 180.0, 0.01),
                read=sent_control("angles", _i),
                expected=(lambda v: round(v - 360.0 if v >= 180.0 else v, 2)) if _euler_yaw
@@ -369,6 +369,37 @@ for _param in ("timeout", "queue_timeout"):
     add(P("execute", _param, _param, lambda rig, v, p=_param: rig.gcu.execute(Focus(), **{p: v}),
           "real", 0.0, low_open=True, optional=True, valid=(None, 1.0, 1e300),
           read=cmd("cameras"), expected=lambda v: 1))  # fmt: skip
+
+
+# -- waits (docs/client.md, "Waiting for the gimbal, the zoom and the link"): valid values
+# return at once (a predicate that holds, an unbounded tolerance, the link already up)
+_ANY = {"tolerance": 1e300}
+_PREDICATE_WRONG = (None, 5, "ready", b"", object(), True, [print])
+method("wait_for", "predicate", "part", base={"timeout": 1.0}, valid=(lambda s: True,),
+       wrong=_PREDICATE_WRONG)  # fmt: skip
+method("wait_for", "timeout", "real", low=0.0, low_open=True, base={"predicate": lambda s: True},
+       valid=(1e-3, 1.0, 1e300))  # fmt: skip
+method("wait_for", "what", "text", base={"predicate": lambda s: True},
+       valid=("", "the camera looking down"), wrong=(None, 5, b"x", ["x"], True))  # fmt: skip
+_ATTITUDE_RANGES = {"roll": (-180.0, 180.0, False), "pitch": (-90.0, 90.0, False),
+                    "yaw": (-180.0, 360.0, True)}  # fmt: skip
+for _name in ("wait_attitude", "reach_attitude"):
+    for _axis, (_low, _high, _open) in _ATTITUDE_RANGES.items():
+        _other = {"pitch": 0.0} if _axis != "pitch" else {"roll": 0.0}
+        method(_name, _axis, "real", low=_low, high=_high, high_open=_open, optional=True,
+               base={**_other, **_ANY}, valid=(_low, 0.0, 89.99 if _axis == "pitch" else 179.9))
+    method(_name, "tolerance", "real", low=0.0, low_open=True, base={"yaw": 0.0},
+           valid=(1e300,))  # fmt: skip
+    method(_name, "timeout", "real", low=0.0, low_open=True, base={"yaw": 0.0, **_ANY},
+           valid=(1e-3, 1e300))  # fmt: skip
+for _name, _high in (("wait_zoom", 6553.5), ("reach_zoom", 3276.8)):
+    method(_name, "ratio", "real", low=1.0, high=_high, base=_ANY, valid=(1.0, 2.0))
+    method(_name, "tolerance", "real", low=0.0, low_open=True, base={"ratio": 1.0},
+           valid=(1e300,))  # fmt: skip
+    method(_name, "timeout", "real", low=0.0, low_open=True, base={"ratio": 1.0, **_ANY},
+           valid=(1e-3, 1e300))  # fmt: skip
+method("wait_link", "up", "bool", base={"timeout": 0.05}, valid=(True,))
+method("wait_link", "timeout", "real", low=0.0, low_open=True, valid=(1e-3, 1e300))
 
 
 # -- aircraft state
@@ -572,6 +603,8 @@ def _client_options(owner: str, build: Callable[[dict[str, Any]], GcuClient],
         opt(name, "real", valid=(5e-324, 1.0, 1e300),
             read=lambda rig, c, n=name: getattr(c, n) if n == "connect_timeout"
             else getattr(c.session, n), **positive)  # fmt: skip
+    opt("open_timeout", "real", optional=True, valid=(None, 5e-324, 1.0, 1e300),
+        read=lambda rig, c: c.open_timeout, **positive)
     opt("reorder_guard", "real", low=0.0, optional=True, valid=(None, 0.0, 0.015, 1e300),
         read=lambda rig, c: c.reorder_guard,
         expected=lambda v: default_guard if v is None else v)  # fmt: skip
@@ -999,7 +1032,7 @@ async def _try(p: P, v: Any) -> BaseException | None:
         before = snapshot(rig)
         try:
             await attempt(rig, p.call, v)
-        except CommandError:  # sent and refused or timed out: accepted at the boundary
+        except (CommandError, WaitTimeout):  # refused, timed out: accepted at the boundary
             return None
         except (TypeError, ValueError) as exc:
             assert snapshot(rig) == before
@@ -1025,7 +1058,7 @@ def test_arbitrary_values_accepted_iff_valid(data: st.DataObject) -> None:
 # --- properties and argument-free entry points --------------------------------------------------
 PROPERTIES = sorted(n for n, v in inspect.getmembers(GcuClient) if isinstance(v, property)
                     and not n.startswith("_"))  # fmt: skip
-NO_ARGUMENTS = ("open", "close", "centre", "release_control")
+NO_ARGUMENTS = ("open", "close", "centre", "release_control", "link_events")
 
 
 async def test_properties_do_not_raise_on_an_open_client(rig: Rig) -> None:

@@ -18,7 +18,7 @@ import pytest
 
 from gcu_async import CameraFlags, GcuClient, GcuSubFrame
 from gcu_async.client.api import CommandMethods
-from gcu_async.protocol import Command, ControlValues, Feedback, command_code
+from gcu_async.protocol import Attitude, Command, ControlValues, Feedback, command_code
 from gcu_async.session import ControlKind
 
 README = Path(__file__).resolve().parents[1] / "README.md"
@@ -84,6 +84,9 @@ class Recorder(CommandMethods):
 
     def _set_control(self, control: ControlValues | None, kind: ControlKind) -> None:
         pass
+
+    def _current_attitude(self) -> Attitude:
+        return Attitude(0.0, 0.0, 0.0)
 
 
 def command_methods() -> set[str]:

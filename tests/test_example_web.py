@@ -1,27 +1,27 @@
 """The web example (examples/web) end to end: the real app under uvicorn on 127.0.0.1 (an
-ephemeral port), connected to the simulator over UDP, driven by an HTTP client (httpx), a
-WebSocket client (websockets) and, where Playwright and /usr/bin/chromium exist, a headless
-browser. Needs the ``web`` extra (starlette, uvicorn, websockets) and httpx; skips without.
+ephemeral port), connected to the simulator, driven by an HTTP client (httpx) and a
+WebSocket client (websockets); the page in a browser is tests/test_example_web_browser.py.
+Needs the ``web`` extra (starlette, uvicorn, websockets) and httpx; skips without.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import math
-import os
+import re
 import sys
 import time
-from collections.abc import AsyncIterator, Awaitable, Callable
-from dataclasses import dataclass
+from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 
 from gcu_async import GcuClient, Opcode
+from gcu_async.client import ClientState
 from gcu_async.pytest_plugin import SimHandle
+from gcu_async.sim import GcuSimulator
 
 _INSTALL = "pip install -e '.[web,test]'"
 pytest.importorskip("starlette", reason=f"the web example needs starlette: {_INSTALL}")
@@ -34,19 +34,24 @@ from websockets.asyncio.client import ClientConnection  # noqa: E402
 from websockets.asyncio.client import connect as ws_connect  # noqa: E402
 from websockets.exceptions import ConnectionClosed  # noqa: E402
 
+from _web_example import (  # noqa: E402
+    Web,
+    aircraft_heading,
+    angle_near,
+    eventually,
+    free_udp_port,
+    next_message,
+    page_button,
+    running_web,
+)
+
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:  # the examples live beside src/, not inside the package
     sys.path.insert(0, str(ROOT))
 
 from examples.web.app import create_app  # noqa: E402
 from examples.web.commands import COMMANDS  # noqa: E402
-
-CHROMIUM = "/usr/bin/chromium"
-CHROMIUM_ARGS = [
-    "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-    "--disable-component-update", "--disable-sync", "--no-first-run",
-]  # fmt: skip
-START_TIMEOUT = 5.0
+from examples.web.connection import ConnectionState  # noqa: E402
 
 
 @pytest.fixture
@@ -60,86 +65,10 @@ def web_options() -> dict[str, Any]:
     return {}
 
 
-@dataclass
-class Web:
-    """The running app and its simulator."""
-
-    sim: SimHandle
-    base_url: str
-    http: Any  # httpx.AsyncClient
-    gcu: GcuClient
-
-    @property
-    def ws_url(self) -> str:
-        return self.base_url.replace("http://", "ws://", 1) + "/ws/telemetry"
-
-    async def command(self, name: str, params: Any = None) -> Any:
-        """POST a command with a JSON body (Python's encoder: ``Infinity`` passes through);
-        returns the httpx response."""
-        body = json.dumps(params).encode()
-        headers = {"content-type": "application/json"}
-        return await self.http.post(f"/api/commands/{name}", content=body, headers=headers)
-
-    async def status(self) -> dict[str, Any]:
-        response = await self.http.get("/api/status")
-        assert response.status_code == 200, response.text
-        result: dict[str, Any] = response.json()
-        return result
-
-
-@contextlib.asynccontextmanager
-async def serve(app: Any) -> AsyncIterator[str]:
-    """Run ``app`` under uvicorn on 127.0.0.1, an ephemeral port; yield its base URL."""
-    config = uvicorn.Config(app, host="127.0.0.1", port=0, log_level="warning", lifespan="on")
-    server = uvicorn.Server(config)
-
-    async def run() -> None:
-        try:
-            await server.serve()
-        except SystemExit as exc:  # uvicorn exits when the app's startup fails
-            raise RuntimeError(f"uvicorn did not start (exit status {exc.code})") from None
-
-    task = asyncio.create_task(run())
-    deadline = time.monotonic() + START_TIMEOUT
-    while not server.started and not task.done() and time.monotonic() < deadline:
-        await asyncio.sleep(0.01)
-    if not server.started:
-        server.should_exit = True
-        await asyncio.wait_for(task, START_TIMEOUT)  # raises the startup failure, if any
-        raise RuntimeError(f"uvicorn did not start within {START_TIMEOUT} s")
-    port = server.servers[0].sockets[0].getsockname()[1]
-    try:
-        yield f"http://127.0.0.1:{port}"
-    finally:
-        server.should_exit = True
-        await asyncio.wait_for(task, START_TIMEOUT)
-
-
 @pytest.fixture
 async def web(gcu_sim: SimHandle, web_options: dict[str, Any]) -> AsyncIterator[Web]:
-    options = {"local_port": 0, **web_options}
-    app = create_app(gcu_sim.url, **options)
-    async with serve(app) as base_url, httpx.AsyncClient(base_url=base_url, timeout=5.0) as http:
-        yield Web(gcu_sim, base_url, http, app.state.gcu)
-
-
-async def eventually(
-    check: Callable[[], Awaitable[bool]], timeout: float = 4.0, what: str = "condition"
-) -> None:
-    deadline = time.monotonic() + timeout
-    while not await check():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
-        await asyncio.sleep(0.02)
-
-
-async def next_message(ws: ClientConnection, timeout: float = 2.0) -> dict[str, Any]:
-    message: dict[str, Any] = json.loads(await asyncio.wait_for(ws.recv(), timeout))
-    return message
-
-
-def angle_near(a: float, b: float, tol: float = 0.5) -> bool:
-    return abs((a - b + 180.0) % 360.0 - 180.0) < tol
+    async with running_web(gcu_sim.url, gcu_sim, **web_options) as running:
+        yield running
 
 
 # -- status and the page ------------------------------------------------------------------
@@ -156,6 +85,11 @@ async def test_status_reports_the_simulated_gimbal(web: Web) -> None:
     assert link["up"] is True
     assert link["packets_received"] > 0
     assert link["crc_errors"] == 0
+    connection = status["connection"]
+    assert (connection["state"], connection["url"]) == ("connected", web.sim.url)
+    assert connection["connects"] == 1
+    assert (connection["attempts"], connection["last_error"]) == (0, None)
+    assert status["aircraft_heading"] is None  # the app sends no aircraft state of its own
     # raw wire integers beside the units
     assert status["raw"]["main"]["mode_raw"] == status["mode_raw"]
     assert status["raw"]["sub"]["camera1_zoom_raw"] == round(status["zoom"]["camera1"] * 10)
@@ -293,6 +227,44 @@ async def test_zoom_to_moves_the_zoom_in_status(web: Web) -> None:
 
     await eventually(zoomed, what="zoom 6x")
     assert web.sim.simulator.model.state.zoom[1] == pytest.approx(6.0, abs=0.05)
+
+
+async def test_ahead_points_ahead_of_the_aircraft(web: Web) -> None:
+    """The page's "Ahead" points the camera along the aircraft's heading (angle control:
+    yaw relative to the aircraft), not north, and keeps it there when the aircraft turns."""
+    html = (await web.http.get("/")).text
+    ahead, east, down = (page_button(html, label) for label in ("Ahead", "East", "Down 45°"))
+    assert ahead == ("angle_control", {"pitch": 0, "yaw": 0})
+    model = web.sim.simulator.model
+
+    async def pointing(mode: str, pitch: float, yaw: float) -> bool:
+        s = await web.status()
+        a = s["attitude"]
+        return s["mode"] == mode and angle_near(a["pitch"], pitch) and angle_near(a["yaw"], yaw)
+
+    async with aircraft_heading(web.gcu, 120.0):
+        await eventually(lambda: _sim_heading(web, 120.0), what="the simulator got heading 120")
+        assert (await web.command(*east)).status_code == 200  # somewhere else first
+        await eventually(lambda: pointing("EULER_CONTROL", -20.0, 90.0), what="east")
+        response = await web.command(*ahead)
+        assert response.status_code == 200, response.text
+        assert response.json()["feedback"]["command"] == "ANGLE_CONTROL"
+        await eventually(lambda: pointing("ANGLE_CONTROL", 0.0, 120.0), what="ahead at 120")
+        assert angle_near(model.state.relative.yaw, 0.0)  # along the aircraft's nose
+        status = await web.status()
+        assert status["aircraft_heading"] == pytest.approx(120.0)
+        assert (await web.command(*down)).status_code == 200
+        await eventually(lambda: pointing("ANGLE_CONTROL", -45.0, 120.0), what="down ahead")
+        assert (await web.command(*ahead)).status_code == 200
+        await eventually(lambda: pointing("ANGLE_CONTROL", 0.0, 120.0), what="ahead again")
+    async with aircraft_heading(web.gcu, 200.0):  # the aircraft turns: "ahead" turns with it
+        await eventually(lambda: pointing("ANGLE_CONTROL", 0.0, 200.0), what="ahead at 200")
+    assert angle_near(model.state.relative.yaw, 0.0)
+
+
+async def _sim_heading(web: Web, heading: float) -> bool:
+    aircraft = web.sim.simulator.model.state.aircraft
+    return aircraft.ins_valid and angle_near(aircraft.attitude.yaw, heading, 0.01)
 
 
 BAD_PARAMETERS: list[tuple[str, Any, str]] = [
@@ -493,18 +465,115 @@ async def _no_subscribers(gcu: GcuClient) -> bool:
 
 
 # -- lifecycle ----------------------------------------------------------------------------
-async def test_app_does_not_start_without_a_gcu(gcu_sim: SimHandle) -> None:
-    gcu_sim.silence(10.0)
-    app = create_app(gcu_sim.url, local_port=0, connect_timeout=0.3)
-    with pytest.raises(RuntimeError, match="did not start"):
-        async with serve(app):
-            pass  # pragma: no cover
+FAST_RETRY: dict[str, Any] = {"connect_timeout": 0.3, "retry_initial": 0.1, "retry_max": 0.2}
+"""Client and retry options that make each failed start-up attempt short."""
+
+
+async def test_app_starts_before_the_gcu_and_connects_when_it_answers(gcu_sim: SimHandle) -> None:
+    gcu_sim.silence(60.0)  # the GCU is off: nothing answers
+    async with running_web(gcu_sim.url, gcu_sim, wait_connected=False, **FAST_RETRY) as web:
+        connection = web.connection
+        await eventually(lambda: _attempts_at_least(web, 2), what="two failed attempts")
+        # the app is up and says what it waits for
+        response = await web.http.get("/api/status")
+        assert response.status_code == 503
+        body = response.json()
+        assert body["kind"] == "NotConnected"
+        assert body["connection"]["state"] == "waiting"
+        assert body["connection"]["url"] == gcu_sim.url
+        assert body["connection"]["attempts"] >= 2
+        assert "no reply from the GCU within 0.3 s" in body["connection"]["last_error"]
+        assert f"waiting for the GCU at {gcu_sim.url}" in body["error"]
+        # commands are refused without sending; parameters are still checked first
+        response = await web.command("photo")
+        assert response.status_code == 503
+        assert (response.json()["kind"], response.json()["outcome"]) == ("NotConnected", "not sent")
+        assert (await web.command("zoom_to", {"ratio": "ten"})).status_code == 422
+        async with ws_connect(web.ws_url) as ws:
+            message = await next_message(ws)
+            assert message["type"] == "link"
+            assert message["connection"]["state"] == "waiting"
+            assert message["link"]["up"] is False
+            gcu_sim.silence(0)  # powered on: the same socket starts carrying telemetry
+            deadline = time.monotonic() + 5.0
+            while (message := await next_message(ws))["type"] != "telemetry":
+                assert message["connection"]["state"] == "waiting"
+                assert time.monotonic() < deadline, "no telemetry after the GCU came up"
+            assert message["connection"]["state"] == "connected"
+            assert message["link"]["up"] is True
+            assert message["pod"]["model"] == "D-90Pro(TA)"
+        assert connection.connected and connection.connects == 1
+        status = await web.status()
+        assert status["connection"]["state"] == "connected"
+        assert status["connection"]["last_error"] is None
+        assert (await web.command("photo")).status_code == 200
+        assert gcu_sim.simulator.model.executions[Opcode.TAKE_PHOTO] == 1
+
+
+async def _attempts_at_least(web: Web, n: int) -> bool:
+    return web.connection.attempts >= n
+
+
+async def test_app_waits_for_a_gcu_powered_later() -> None:
+    """Nothing listens on the GCU's port at first (loopback answers with ICMP port
+    unreachable); then a simulator starts on that port."""
+    port = free_udp_port()
+    url = f"udp://127.0.0.1:{port}"
+    async with running_web(url, None, wait_connected=False, **FAST_RETRY) as web:
+        await eventually(lambda: _attempts_at_least(web, 2), what="two failed attempts")
+        assert not web.connection.connected
+        assert (await web.http.get("/api/status")).status_code == 503
+        sim = GcuSimulator()
+        async with sim.serve_udp("127.0.0.1", port):
+            assert await web.connection.wait_connected(5.0), web.connection.snapshot()
+            status = await web.status()
+            assert status["pod"]["model"] == "D-90Pro(TA)"
+            assert status["link"]["up"] is True
+            assert (await web.command("photo")).status_code == 200
+            assert sim.model.executions[Opcode.TAKE_PHOTO] == 1
+
+
+@pytest.mark.parametrize("gcu_sim_transport", ["tcp"])
+async def test_client_is_reopened_when_its_transport_gives_up(gcu_sim: SimHandle) -> None:
+    # without reconnect, a TCP transport stays down after a loss: the app reopens the client
+    url = gcu_sim.url + "?reconnect=false"
+    async with running_web(url, gcu_sim, **FAST_RETRY) as web:
+        connection = web.connection
+        assert (connection.connects, connection.reopens) == (1, 0)
+        assert gcu_sim.kill_connection()
+
+        async def reopened() -> bool:
+            return connection.reopens == 1 and connection.connected
+
+        await eventually(reopened, timeout=5.0, what="the client reopened")
+        assert connection.connects == 2
+        assert web.gcu.transport.connected
+        assert (await web.command("photo")).status_code == 200
+        assert gcu_sim.simulator.model.executions[Opcode.TAKE_PHOTO] == 1
+
+
+async def test_app_stops_cleanly_while_waiting(gcu_sim: SimHandle) -> None:
+    gcu_sim.silence(60.0)
+    async with running_web(gcu_sim.url, gcu_sim, wait_connected=False, **FAST_RETRY) as web:
+        connection = web.connection
+        ws = await ws_connect(web.ws_url)
+        assert (await next_message(ws))["type"] == "link"
+        await eventually(lambda: _attempts_at_least(web, 1), what="a failed attempt")
+    try:  # the app stopped while waiting: the socket is told, the client is closed
+        with pytest.raises(ConnectionClosed) as info:
+            await _read_until_closed(ws)
+        assert info.value.rcvd is not None
+        assert info.value.rcvd.code in (1001, 1012), info.value.rcvd
+    finally:
+        await ws.close()
+    assert connection.state is ConnectionState.STOPPED
+    assert web.gcu.state is ClientState.CLOSED
+    assert not web.gcu.transport.connected
 
 
 async def test_app_closes_its_client_on_shutdown(gcu_sim: SimHandle) -> None:
-    app = create_app(gcu_sim.url, local_port=0)
-    async with serve(app):
-        gcu: GcuClient = app.state.gcu
+    async with running_web(gcu_sim.url, gcu_sim) as web:
+        gcu = web.gcu
         assert gcu.transport.connected
     assert not gcu.transport.connected
     received = gcu_sim.simulator.model.stats.received
@@ -513,9 +582,8 @@ async def test_app_closes_its_client_on_shutdown(gcu_sim: SimHandle) -> None:
 
 
 async def test_socket_closes_when_the_app_stops(gcu_sim: SimHandle) -> None:
-    app = create_app(gcu_sim.url, local_port=0)
-    async with serve(app) as base_url:
-        ws = await ws_connect(base_url.replace("http://", "ws://") + "/ws/telemetry")
+    async with running_web(gcu_sim.url, gcu_sim) as web:
+        ws = await ws_connect(web.ws_url)
         assert (await next_message(ws))["type"] == "telemetry"
     try:  # the server is gone: the socket ends with a "going away" / "restart" close
         with pytest.raises(ConnectionClosed) as info:
@@ -537,63 +605,25 @@ def test_create_app_rejects_a_bad_rate() -> None:
             create_app("udp://127.0.0.1:2337", telemetry_hz=hz)
 
 
-# -- the page in a browser ----------------------------------------------------------------
-async def test_page_in_headless_chromium(web: Web) -> None:
-    try:
-        from playwright.async_api import async_playwright
-    except ImportError:
-        pytest.skip("browser test needs Playwright: pip install playwright (never "
-                    "`playwright install`; it drives Debian's chromium)")  # fmt: skip
-    if not os.access(CHROMIUM, os.X_OK):
-        pytest.skip(f"browser test needs {CHROMIUM}: apt-get install chromium")
-    state = web.sim.simulator.model.state
-    async with async_playwright() as pw:
-        browser = await pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        try:
-            page = await browser.new_page(viewport={"width": 1400, "height": 800})
-            errors: list[str] = []
-            page.on("pageerror", lambda exc: errors.append(str(exc)))
-            page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-            await page.goto(web.base_url + "/")
-            # live values: mode and pod from the simulator, telemetry count rising
-            await page.wait_for_function(
-                "document.getElementById('mode').textContent === 'POINTING_FOLLOW'",
-                timeout=5000,
-            )
-            assert "D-90Pro(TA)" in (await page.text_content("#pod") or "")
-            await page.wait_for_function(
-                "Number(document.getElementById('rx').textContent) > 5", timeout=5000
-            )
-            assert "link up" in (await page.text_content("#link-text") or "")
-            # a button drives the simulator, and the page shows the result
-            await page.get_by_role("button", name="Photo").click()
-            await page.wait_for_function(
-                "document.getElementById('result').textContent.includes('TAKE_PHOTO SUCCESS')",
-                timeout=5000,
-            )
-            assert state.camera.photos == {1: 1}
-            # zoom and slew at once (the client queues the two commands)
-            await page.get_by_role("button", name="10×").click()
-            await page.get_by_role("button", name="East").click()
-            await page.wait_for_function(
-                "Number(document.getElementById('zoom').textContent) >= 9.95", timeout=5000
-            )
-            assert state.zoom[1] == pytest.approx(10.0, abs=0.05)
-            await page.wait_for_function(
-                "Math.abs(Number(document.getElementById('yaw').textContent) - 90) < 0.5"
-                " && document.getElementById('mode').textContent === 'EULER_CONTROL'",
-                timeout=5000,
-            )
-            assert state.mode.name == "EULER_CONTROL"
-            transform = await page.get_attribute("#compass-card", "transform") or ""
-            assert transform.startswith("rotate(-9")  # the compass card turned to east
-            assert errors == []  # no script errors, no failed loads (e.g. a favicon)
-            # an error shows up on the page too (fill light: the pod lacks it)
-            await page.evaluate("send('fill_light', {brightness: 10})")
-            await page.wait_for_function(
-                "document.getElementById('result').textContent.includes('HTTP 409')",
-                timeout=5000,
-            )
-            assert [e for e in errors if "status of 409" not in e] == []
-        finally:
-            await browser.close()
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"retry_initial": 0.0}, "retry_initial: 0.0 is outside the allowed range (0, inf) s"),
+        ({"retry_initial": -1}, "retry_initial: -1 is outside the allowed range"),
+        ({"retry_max": math.nan}, "retry_max: expected a finite number of seconds > 0, got nan"),
+        ({"retry_initial": "1"}, "retry_initial: expected a finite number"),
+        ({"retry_initial": 2.0, "retry_max": 1.0},
+         "retry_max: 1.0 is outside the allowed range [retry_initial = 2.0, inf) s"),
+    ],
+)  # fmt: skip
+def test_create_app_rejects_bad_retry_delays(options: dict[str, Any], message: str) -> None:
+    with pytest.raises(ValueError, match=re.escape(message)):
+        create_app("udp://127.0.0.1:2337", **options)
+
+
+def test_create_app_rejects_a_bad_url_at_once() -> None:
+    # configuration errors are not "the GCU is not there yet": they raise before serving
+    with pytest.raises(ValueError, match="ftp"):
+        create_app("ftp://127.0.0.1:2337")
+    with pytest.raises(ValueError, match="local_port: '2338' is not an integer"):
+        create_app("udp://127.0.0.1:2337", local_port="2338")

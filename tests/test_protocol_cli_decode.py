@@ -53,8 +53,10 @@ def json_lines(out: str) -> list[dict[str, Any]]:
     return [json.loads(line) for line in out.splitlines() if line.strip()]
 
 
-def assert_one_line_failure(proc: subprocess.CompletedProcess[str], reason: str) -> None:
-    assert proc.returncode == 1
+def assert_one_line_failure(proc: subprocess.CompletedProcess[str], reason: str,
+                            status: int = 1) -> None:  # fmt: skip
+    """1: nothing decodable; 2: a usage error (not hex, no such file)."""
+    assert proc.returncode == status
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1, proc.stderr
     assert lines[0].startswith("gcu-async decode: ")
@@ -188,8 +190,6 @@ def test_indent_pretty_prints() -> None:
         (["00", "11", "22", "8a", "5e"], None, "no valid packet in 5 bytes"),
         ([], "", "no valid packet in 0 bytes"),
         ([], "\n  \n", "no valid packet in 0 bytes"),
-        (["zz", "00"], None, "not hex: 'zz'"),
-        ([], "8a 5e 49 0g", "not hex: '0g'"),
         ([GCU_EXAMPLE[:-1].hex()], None, "no valid packet in 72 bytes"),
         ([(GCU_EXAMPLE[:-1] + b"\x00").hex()], None, "no valid packet in 73 bytes"),  # bad CRC
     ],
@@ -202,8 +202,19 @@ def test_no_valid_packet_exits_1_with_one_line(
     assert proc.stdout == ""
 
 
-def test_missing_file_exits_1(tmp_path: Path) -> None:
-    assert_one_line_failure(run_cli("--file", str(tmp_path / "nope.bin")), "nope.bin")
+@pytest.mark.parametrize(("args", "stdin", "reason"), [
+    (["zz", "00"], None, "not hex: 'zz'"),
+    ([], "8a 5e 49 0g", "not hex: '0g'"),
+])  # fmt: skip
+def test_input_that_is_not_hex_is_a_usage_error(args: list[str], stdin: str | None,
+                                                reason: str) -> None:  # fmt: skip
+    proc = run_cli(*args, stdin=stdin)
+    assert_one_line_failure(proc, reason, status=2)
+    assert proc.stdout == ""
+
+
+def test_missing_file_is_a_usage_error(tmp_path: Path) -> None:
+    assert_one_line_failure(run_cli("--file", str(tmp_path / "nope.bin")), "nope.bin", 2)
 
 
 def test_garbage_file_exits_1(tmp_path: Path) -> None:

@@ -19,6 +19,7 @@ import pytest
 
 from _sim_helpers import host_bytes
 from gcu_async.cli import main
+from gcu_async.cli._exit import EXIT_INTERRUPTED
 from gcu_async.errors import RemoteProtocolError
 from gcu_async.protocol import Deframer, GcuPacket, Opcode, Palette, TakePhoto, decode_gcu_packet
 from gcu_async.sim import parse_listen_url
@@ -93,7 +94,7 @@ def test_udp_sim_answers_logs_and_stops_on_sigterm(sims: list[Sim]) -> None:
     reply = _udp_request(_address(sim.url), host_bytes(TakePhoto()))
     assert (reply.feedback.opcode, reply.feedback.status) == (Opcode.TAKE_PHOTO, 0)
     status, err = sim.stop(signal.SIGTERM)
-    assert status == 0
+    assert status == EXIT_INTERRUPTED  # a signal ended it (docs/cli.md)
     assert "executed TAKE_PHOTO" in err
     assert "Traceback" not in err
 
@@ -111,7 +112,7 @@ def test_tcp_sim_with_a_pod_and_ctrl_c(sims: list[Sim]) -> None:
     reply = decode_gcu_packet(packets[0])
     assert (reply.feedback.opcode, reply.feedback.status) == (Opcode.PALETTE, 0x02)
     status, err = sim.stop(signal.SIGINT)
-    assert status == 0
+    assert status == EXIT_INTERRUPTED  # a signal ended it (docs/cli.md)
     assert "Traceback" not in err
 
 
@@ -136,7 +137,7 @@ def test_pty_sim_prints_the_device_path(sims: list[Sim]) -> None:
     finally:
         os.close(fd)
     status, err = sim.stop()
-    assert status == 0
+    assert status == EXIT_INTERRUPTED  # a signal ended it (docs/cli.md)
     assert "executed" not in err  # --quiet
 
 
@@ -153,7 +154,7 @@ def test_sigusr2_silences_and_sigusr1_kills_the_tcp_connection(sims: list[Sim]) 
         except TimeoutError:
             silenced = True
     assert silenced
-    assert udp.stop()[0] == 0
+    assert udp.stop()[0] == EXIT_INTERRUPTED  # a signal ended it (docs/cli.md)
 
     tcp = Sim("--listen", "tcp://127.0.0.1:0")
     sims.append(tcp)
@@ -165,7 +166,7 @@ def test_sigusr2_silences_and_sigusr1_kills_the_tcp_connection(sims: list[Sim]) 
         with contextlib.suppress(ConnectionResetError):  # a reset, or an orderly end
             assert s.recv(4096) == b""
     status, err = tcp.stop()
-    assert status == 0
+    assert status == EXIT_INTERRUPTED  # a signal ended it (docs/cli.md)
     assert "killing the TCP connection" in err
 
 
@@ -181,7 +182,7 @@ def test_reply_port_sends_to_the_senders_host(sims: list[Sim]) -> None:
             reply, source = listener.recvfrom(4096)
         assert source == _address(sim.url)
         assert decode_gcu_packet(reply).feedback.opcode == Opcode.TAKE_PHOTO
-    assert sim.stop()[0] == 0
+    assert sim.stop()[0] == EXIT_INTERRUPTED  # a signal ended it (docs/cli.md)
 
 
 def test_loss_one_drops_everything(sims: list[Sim]) -> None:
@@ -189,7 +190,7 @@ def test_loss_one_drops_everything(sims: list[Sim]) -> None:
     sims.append(sim)
     with pytest.raises(TimeoutError):
         _udp_request(_address(sim.url), host_bytes(TakePhoto()), timeout=0.3)
-    assert sim.stop()[0] == 0
+    assert sim.stop()[0] == EXIT_INTERRUPTED  # a signal ended it (docs/cli.md)
 
 
 BAD_OPTIONS = [
@@ -274,7 +275,7 @@ def test_reorder_hold_holds_each_reply_that_long(sims: list[Sim]) -> None:
         reply = _udp_request(_address(sim.url), host_bytes(TakePhoto()), timeout=5.0)
         assert 0.2 <= time.monotonic() - started < 5.0
         assert reply.feedback.opcode == Opcode.TAKE_PHOTO
-    assert sim.stop()[0] == 0
+    assert sim.stop()[0] == EXIT_INTERRUPTED  # a signal ended it (docs/cli.md)
 
 
 @pytest.mark.parametrize(
@@ -293,7 +294,7 @@ def test_faults_on_picks_the_direction(sims: list[Sim], direction: str, outcome:
     else:
         with pytest.raises(RemoteProtocolError):
             _udp_request(_address(sim.url), host_bytes(), timeout=2.0)
-    assert sim.stop()[0] == 0
+    assert sim.stop()[0] == EXIT_INTERRUPTED  # a signal ended it (docs/cli.md)
 
 
 def test_reply_delays_stay_within_delay_plus_hold_over_real_sockets(sims: list[Sim]) -> None:
@@ -335,7 +336,7 @@ def test_reply_delays_stay_within_delay_plus_hold_over_real_sockets(sims: list[S
     assert doubled, "--duplicate 0.5 doubled no reply in 40"
     assert all(abs(a - b) < margin for a, b in doubled)  # the copies travel together
     assert all(len(times) <= 2 for times in arrivals.values())
-    assert sim.stop()[0] == 0
+    assert sim.stop()[0] == EXIT_INTERRUPTED  # a signal ended it (docs/cli.md)
 
 
 def test_sighup_stalls_for_stall_seconds_then_answers_everything(sims: list[Sim]) -> None:
@@ -371,7 +372,7 @@ def test_sighup_stalls_for_stall_seconds_then_answers_everything(sims: list[Sim]
     assert tags == list(range(first_waiting, sent))  # all of them, in order
     assert waited >= 1.0  # the 2 s stall began at most one 0.25 s probe before
     status, err = sim.stop()
-    assert status == 0
+    assert status == EXIT_INTERRUPTED  # a signal ended it (docs/cli.md)
     assert "Traceback" not in err
 
 

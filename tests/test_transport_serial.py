@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 
 from _transport_recorder import Recorder, open_fds, other_tasks
 from gcu_async.errors import LinkLost
-from gcu_async.transport import BAUDRATES, LinkEventKind, SerialTransport
+from gcu_async.transport import BAUDRATES, Backoff, LinkEventKind, SerialTransport
 
 pytestmark = pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs a pty")
 
@@ -421,3 +421,94 @@ def test_any_send_sequence_reaches_a_stalled_reader_whole_or_not_at_all(
             p.close_all()
 
     asyncio.run(scenario())
+
+
+async def test_an_unplugged_device_is_reopened_when_it_comes_back(tmp_path: Path) -> None:
+    """Unplug: the device's far end goes away (LOST). Replug: a new device appears under the
+    same name (a udev symlink, as /dev/serial/by-id/... is): the transport reopens it,
+    reports RESTORED, and bytes flow both ways again."""
+    link = tmp_path / "ttyGCU"
+    first = Pty()
+    link.symlink_to(first.path)
+    fast = Backoff(base=0.01, cap=0.05, max_attempts=None, max_total=10.0)
+    t = SerialTransport(str(link), backoff=fast)
+    rec = Recorder(t)
+    second: Pty | None = None
+    try:
+        await t.open()
+        first.close(first.controller)  # unplugged
+        await rec.wait_events(1)
+        assert rec.kinds() == [LinkEventKind.LOST]
+        link.unlink()
+        first.close_all()
+        await asyncio.sleep(0.2)
+        assert t.reconnecting and t.reconnect_attempts >= 2  # it keeps trying, quietly
+        assert rec.kinds() == [LinkEventKind.LOST]
+        second = Pty()
+        link.symlink_to(second.path)  # plugged in again
+        await rec.wait_events(2)
+        assert rec.kinds() == [LinkEventKind.LOST, LinkEventKind.RESTORED]
+        assert t.connected and t.reconnects == 1
+        t.send(b"ping")
+        assert await second.read(4) == b"ping"
+        second.write(b"pong")
+        assert (await rec.wait_bytes(4))[-4:] == b"pong"
+    finally:
+        await t.close()
+        first.close_all()
+        if second is not None:
+            second.close_all()
+    assert other_tasks() == set()
+
+
+async def test_reopening_gives_up_after_its_bounds_and_close_stops_it(tmp_path: Path) -> None:
+    pty = Pty()
+    try:
+        t = SerialTransport(pty.path, backoff=Backoff(base=0.01, cap=0.02, max_attempts=3))
+        rec = Recorder(t)
+        await t.open()
+        pty.close(pty.controller)
+        await rec.wait_events(2)
+        assert rec.kinds() == [LinkEventKind.LOST, LinkEventKind.LOST]
+        assert rec.events[1].detail.startswith("giving up after 3 reconnect attempts")
+        assert not t.reconnecting
+        await t.close()
+        # a failed open() starts no reopening: the caller decides
+        t2 = SerialTransport(str(tmp_path / "absent"), backoff=Backoff(base=0.01, cap=0.02,
+                                                                       max_attempts=None,
+                                                                       max_total=30.0))
+        rec2 = Recorder(t2)
+        with pytest.raises(LinkLost):
+            await t2.open()
+        assert rec2.events == []
+        await t2.close()
+    finally:
+        pty.close_all()
+    assert other_tasks() == set()
+
+
+def test_reconnect_options_are_checked() -> None:
+    with pytest.raises(TypeError, match="reconnect"):
+        SerialTransport("/dev/null", reconnect=1)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="backoff"):
+        SerialTransport("/dev/null", backoff={"base": 1})  # type: ignore[arg-type]
+
+
+async def test_close_while_reopening_stops_the_task_without_an_event() -> None:
+    pty = Pty()
+    try:
+        t = SerialTransport(pty.path, backoff=Backoff(base=0.01, cap=0.02, max_attempts=None,
+                                                      max_total=30.0))  # fmt: skip
+        rec = Recorder(t)
+        await t.open()
+        pty.close(pty.controller)
+        await rec.wait_events(1)
+        await asyncio.sleep(0.1)
+        assert t.reconnecting
+        await t.close()
+        assert not t.reconnecting
+        await asyncio.sleep(0.1)
+        assert rec.kinds() == [LinkEventKind.LOST]
+    finally:
+        pty.close_all()
+    assert other_tasks() == set()

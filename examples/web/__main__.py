@@ -1,8 +1,11 @@
 """``python -m examples.web``: serve the web example with uvicorn (from the repository root).
 
-``--sim`` starts the built-in GCU simulator in the same process (UDP on 127.0.0.1, an
-ephemeral port) and connects to it; otherwise the app connects to ``--gcu`` (default
-``$GCU_URL`` or ``udp://127.0.0.1:2337``).
+``--sim`` starts the built-in GCU simulator in the same process (UDP on 127.0.0.1) and
+connects to it; otherwise the app connects to ``--gcu`` (default ``$GCU_URL`` or
+``udp://127.0.0.1:2337``). The app starts whether or not the GCU answers and connects
+when it does: ``--sim-delay 10`` powers the simulated GCU 10 s after the app, to see the
+page wait. ``--aircraft-heading DEG`` (with ``--sim`` only) feeds a parked aircraft facing
+DEG, so that "Ahead" points somewhere other than north.
 """
 
 from __future__ import annotations
@@ -11,6 +14,7 @@ import argparse
 import asyncio
 import contextlib
 import os
+import socket
 from collections.abc import AsyncIterator
 from typing import Any
 
@@ -18,6 +22,7 @@ import uvicorn
 
 from gcu_async.sim import GcuSimulator
 
+from .aircraft import check_heading, feed_parked_aircraft
 from .app import DEFAULT_GCU_URL, DEFAULT_TELEMETRY_HZ, create_app
 
 
@@ -42,6 +47,20 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "--sim", action="store_true", help="start the built-in simulator and connect to it"
     )
     parser.add_argument("--pod", default="D-90Pro(TA)", help="simulated pod model (--sim)")
+    parser.add_argument(
+        "--sim-delay",
+        type=float,
+        default=0.0,
+        metavar="SECONDS",
+        help="start the simulator this long after the app (--sim)",
+    )
+    parser.add_argument(
+        "--aircraft-heading",
+        type=float,
+        default=None,
+        metavar="DEG",
+        help="feed a parked aircraft facing DEG, [0, 360) (--sim only)",
+    )
     parser.add_argument("--host", default="127.0.0.1", help="HTTP address (default loopback)")
     parser.add_argument("--port", type=int, default=8000, help="HTTP port (default 8000)")
     parser.add_argument(
@@ -50,7 +69,34 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         default=DEFAULT_TELEMETRY_HZ,
         help="WebSocket telemetry rate bound, (0, 50] (default 20)",
     )
-    return parser.parse_args(argv)  # fmt: skip
+    args = parser.parse_args(argv)
+    if not args.sim and (args.sim_delay or args.aircraft_heading is not None):
+        parser.error("--sim-delay and --aircraft-heading need --sim (a real GCU gets the "
+                     "aircraft state from the real aircraft)")  # fmt: skip
+    if not 0.0 <= args.sim_delay < 3600.0:
+        parser.error(f"--sim-delay: {args.sim_delay!r} is outside the allowed range [0, 3600) s")
+    if args.aircraft_heading is not None:
+        try:
+            check_heading(args.aircraft_heading)
+        except ValueError as exc:
+            parser.error(f"--aircraft-heading: {exc}")
+    return args  # fmt: skip
+
+
+def _free_udp_port() -> int:
+    """A UDP port on 127.0.0.1 nobody uses right now (for a simulator started later)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        sock.bind(("127.0.0.1", 0))
+        port: int = sock.getsockname()[1]
+        return port
+
+
+async def _late_simulator(args: argparse.Namespace, port: int) -> None:
+    """The simulator, powered on ``--sim-delay`` seconds from now, until cancelled."""
+    await asyncio.sleep(args.sim_delay)
+    async with GcuSimulator(pod=args.pod).serve_udp("127.0.0.1", port) as server:
+        print(f"simulated {args.pod} powered on at {server.url}", flush=True)
+        await asyncio.Event().wait()  # until cancelled with the app
 
 
 @contextlib.asynccontextmanager
@@ -62,8 +108,19 @@ async def gcu_endpoint(args: argparse.Namespace) -> AsyncIterator[tuple[str, dic
     if not args.sim:
         yield args.gcu, options
         return
+    options.setdefault("local_port", 0)
+    if args.sim_delay:
+        port = _free_udp_port()
+        print(f"the simulated {args.pod} powers on in {args.sim_delay:g} s", flush=True)
+        task = asyncio.create_task(_late_simulator(args, port))
+        try:
+            yield f"udp://127.0.0.1:{port}", options
+        finally:
+            task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await task
+        return
     async with GcuSimulator(pod=args.pod).serve_udp("127.0.0.1", 0) as server:
-        options.setdefault("local_port", 0)
         print(f"simulated {args.pod} at {server.url}", flush=True)
         yield server.url, options
 
@@ -71,8 +128,17 @@ async def gcu_endpoint(args: argparse.Namespace) -> AsyncIterator[tuple[str, dic
 async def main(args: argparse.Namespace) -> None:
     async with gcu_endpoint(args) as (url, options):
         app = create_app(url, telemetry_hz=args.telemetry_hz, **options)
+        feed = None
+        if args.aircraft_heading is not None:
+            feed = asyncio.create_task(feed_parked_aircraft(app.state.gcu, args.aircraft_heading))
         config = uvicorn.Config(app, host=args.host, port=args.port, log_level="info")
-        await uvicorn.Server(config).serve()
+        try:
+            await uvicorn.Server(config).serve()
+        finally:
+            if feed is not None:
+                feed.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await feed
 
 
 if __name__ == "__main__":

@@ -1,20 +1,25 @@
 """A Starlette web backend for one gimbal: JSON commands, WebSocket telemetry, one page.
 
-``create_app(gcu_url, **client_options)`` builds the ASGI app. Its lifespan opens ONE
-:class:`~gcu_async.GcuClient` (``gcu_async.connect``) and closes it on shutdown; every
-request shares it. Routes:
+``create_app(gcu_url, **client_options)`` builds the ASGI app. It creates ONE
+:class:`~gcu_async.GcuClient` (``gcu_async.connect``; a bad URL or option raises at once)
+that every request shares. The app starts whether or not the GCU answers: its lifespan runs
+a :class:`~examples.web.connection.GcuConnection`, which opens the client in the background,
+retrying with backoff until the GCU answers (a GCU powered after the app), reopens it if
+its transport gives up, and closes it on shutdown. Routes:
 
 - ``GET /`` — the page (``static/index.html``), ``/static/*`` its script and style.
-- ``GET /api/status`` — mode, attitude, relative angles, rates, zoom, flags, link health.
+- ``GET /api/status`` — mode, attitude, relative angles, rates, zoom, flags, link health and
+  ``connection`` (:meth:`GcuConnection.snapshot`); 503 ``NotConnected`` (with
+  ``connection``) while the client is not open yet.
 - ``GET /api/commands`` — the commands below with their parameters.
 - ``POST /api/commands/{name}`` — run a command; JSON object body of parameters. Errors:
   404 unknown command, 400 body not JSON, 422 bad parameter (``ValueError`` /
   ``FieldRangeError``), 409 GCU answered failure (``CommandFailed``) or pod lacks the command
   (``UnsupportedCommandError``), 504 no feedback in time (``CommandTimeout``), 503 link down
-  (``LinkLost``).
+  (``LinkLost``) or client not open yet (``NotConnected``).
 - ``WS /ws/telemetry`` — JSON telemetry at most ``telemetry_hz`` times a second (newest
   sample wins: a slow browser never backs up the client), and a ``{"type": "link"}``
-  message every 0.5 s while no replies arrive.
+  message every 0.5 s while no replies arrive (link down, or still waiting for the GCU).
 """
 
 from __future__ import annotations
@@ -25,9 +30,9 @@ import json
 import logging
 import math
 import os
-from collections.abc import AsyncGenerator, AsyncIterator
+from collections.abc import AsyncIterator
 from pathlib import Path
-from typing import Any, cast
+from typing import Any
 
 from starlette.applications import Starlette
 from starlette.requests import Request
@@ -41,16 +46,15 @@ from gcu_async import (
     CommandFailed,
     CommandTimeout,
     FieldRangeError,
-    GcuClient,
     GcuError,
     LinkLost,
-    TelemetrySample,
     UnsupportedCommandError,
     connect,
 )
 from gcu_async.protocol import opcode_name
 
 from .commands import COMMANDS, parse_params
+from .connection import ConnectionState, GcuConnection, check_retry
 from .snapshot import client_state, link_json, state_json
 
 log = logging.getLogger("gcu_async.examples.web")
@@ -65,30 +69,41 @@ STATIC_DIR = Path(__file__).resolve().parent / "static"
 
 
 def create_app(
-    gcu_url: str, *, telemetry_hz: float = DEFAULT_TELEMETRY_HZ, **client_options: Any
+    gcu_url: str,
+    *,
+    telemetry_hz: float = DEFAULT_TELEMETRY_HZ,
+    retry_initial: float = 0.5,
+    retry_max: float = 5.0,
+    **client_options: Any,
 ) -> Starlette:
     """The ASGI app for the GCU at ``gcu_url``.
 
     ``client_options`` go to :func:`gcu_async.connect` (``local_port``, ``command_timeout``,
-    ``silence_timeout``, ``check_support`` …). ``telemetry_hz`` bounds the WebSocket rate,
-    (0, 50]. The client is opened when the app starts (startup fails with ``LinkLost`` if
-    the GCU does not answer within ``connect_timeout``) and closed when it stops.
+    ``connect_timeout``, ``silence_timeout``, ``check_support`` …); a bad URL or option
+    raises here. ``telemetry_hz`` bounds the WebSocket rate, (0, 50]. The app starts at once;
+    the client is opened in the background (each attempt waits ``connect_timeout`` for a
+    reply; between attempts ``retry_initial`` seconds, doubling up to ``retry_max``) and
+    closed when the app stops. ``app.state.gcu`` is the client, ``app.state.connection`` the
+    :class:`~examples.web.connection.GcuConnection` while the app runs.
     """
     if not 0 < telemetry_hz <= MAX_TELEMETRY_HZ:
         raise ValueError(f"telemetry_hz: {telemetry_hz!r} is outside the allowed range (0, 50] Hz")
+    retry_initial, retry_max = check_retry(retry_initial, retry_max)
+    gcu = connect(gcu_url, **client_options)
 
     @contextlib.asynccontextmanager
     async def lifespan(app: Starlette) -> AsyncIterator[None]:
-        async with connect(gcu_url, **client_options) as gcu:
-            log.info("connected to %s (%s)", gcu_url, gcu.pod_model)
-            app.state.gcu = gcu
+        connection = GcuConnection(gcu, retry_initial=retry_initial, retry_max=retry_max)
+        app.state.connection = connection
+        async with connection:
+            log.info("serving the GCU at %s (connecting in the background)", gcu_url)
             try:
                 yield
             finally:
                 log.info("closing the client of %s", gcu_url)
 
     async def telemetry(websocket: WebSocket) -> None:
-        await stream_telemetry(websocket, _client(websocket), 1.0 / telemetry_hz)
+        await stream_telemetry(websocket, _connection(websocket), 1.0 / telemetry_hz)
 
     routes = [
         Route("/", index, methods=["GET"]),
@@ -100,6 +115,7 @@ def create_app(
     ]
     app = Starlette(routes=routes, lifespan=lifespan)
     app.state.gcu_url = gcu_url
+    app.state.gcu = gcu
     return app
 
 
@@ -114,16 +130,24 @@ def app_from_env() -> Starlette:
     return create_app(os.environ.get("GCU_URL", DEFAULT_GCU_URL), telemetry_hz=hz, **options)
 
 
-def _client(conn: Request | WebSocket) -> GcuClient:
-    gcu: GcuClient = conn.app.state.gcu
-    return gcu
+def _connection(conn: Request | WebSocket) -> GcuConnection:
+    connection: GcuConnection = conn.app.state.connection
+    return connection
 
 
-def _error(code: int, exc: BaseException | str, **extra: Any) -> JSONResponse:
-    kind = "error" if isinstance(exc, str) else type(exc).__name__
+def _error(code: int, exc: BaseException | str, kind: str | None = None,
+           **extra: Any) -> JSONResponse:  # fmt: skip
+    if kind is None:
+        kind = "error" if isinstance(exc, str) else type(exc).__name__
     if isinstance(exc, CommandError):  # did it execute? "not sent", "unknown" or "failed"
         extra["outcome"] = exc.outcome.value
     return JSONResponse({"error": str(exc), "kind": kind, **extra}, status_code=code)
+
+
+def _not_connected(connection: GcuConnection, **extra: Any) -> JSONResponse:
+    """503 while the client is not open: what the connection is waiting for."""
+    return _error(503, connection.describe(), "NotConnected",
+                  connection=connection.snapshot(), **extra)  # fmt: skip
 
 
 def _number(x: float) -> float | None:
@@ -137,11 +161,16 @@ async def index(request: Request) -> Response:
 
 
 async def status(request: Request) -> Response:
-    """The latest state; 200 even while the link is down (``link.up`` is then false)."""
+    """The latest state; 200 even while the link is down (``link.up`` is then false), 503
+    ``NotConnected`` while the client is not open (still waiting for the GCU)."""
+    connection = _connection(request)
+    if not connection.connected:
+        return _not_connected(connection)
     try:
-        return JSONResponse(client_state(_client(request)))
-    except GcuError as exc:  # no reply yet: cannot happen once the lifespan has started
-        return _error(503, exc)
+        state = client_state(connection.gcu)
+    except GcuError:  # no reply yet: cannot happen once the client is open
+        return _not_connected(connection)
+    return JSONResponse({**state, "connection": connection.snapshot()})
 
 
 async def list_commands(request: Request) -> Response:
@@ -159,15 +188,18 @@ async def run_command(request: Request) -> Response:
         body = json.loads(raw) if raw.strip() else None
     except ValueError as exc:
         return _error(400, f"the body is not valid JSON: {exc}")
+    connection = _connection(request)
     try:
         values = parse_params(spec, body)
-        feedback = await spec.run(_client(request), values)
+        if not connection.connected:
+            return _not_connected(connection, outcome="not sent")
+        feedback = await spec.run(connection.gcu, values)
     except CommandFailed as exc:
         return _error(
             409,
             exc,
             opcode=exc.opcode,
-            command=opcode_name(exc.opcode),
+            command=None if exc.opcode is None else opcode_name(exc.opcode),
             status=exc.status,
             failed_cameras=int(exc.failed_cameras),
         )
@@ -188,10 +220,10 @@ async def run_command(request: Request) -> Response:
 
 
 # -- WebSocket ----------------------------------------------------------------------------
-async def stream_telemetry(websocket: WebSocket, gcu: GcuClient, period: float) -> None:
-    """Send telemetry until the browser leaves or the client closes (then code 1001)."""
+async def stream_telemetry(websocket: WebSocket, connection: GcuConnection, period: float) -> None:
+    """Send telemetry until the browser leaves or the app stops (then code 1001)."""
     await websocket.accept()
-    sender = asyncio.create_task(_send_telemetry(websocket, gcu, period))
+    sender = asyncio.create_task(_send_telemetry(websocket, connection, period))
     receiver = asyncio.create_task(_until_disconnect(websocket))
     try:
         done, _ = await asyncio.wait({sender, receiver}, return_when=asyncio.FIRST_COMPLETED)
@@ -205,7 +237,7 @@ async def stream_telemetry(websocket: WebSocket, gcu: GcuClient, period: float) 
         elif isinstance(result, Exception):
             log.warning("telemetry socket failed: %r", result)
     if sender in done and sender.exception() is None and receiver not in done:
-        with contextlib.suppress(Exception):  # the client closed: tell the browser
+        with contextlib.suppress(Exception):  # the app stops: tell the browser
             await websocket.close(code=1001, reason="GCU client closed")
 
 
@@ -215,12 +247,36 @@ async def _until_disconnect(websocket: WebSocket) -> None:
         pass
 
 
-async def _send_telemetry(websocket: WebSocket, gcu: GcuClient, period: float) -> None:
+def _link_message(connection: GcuConnection) -> str:
+    return json.dumps({"type": "link", "link": link_json(connection.gcu.link),
+                       "connection": connection.snapshot()})  # fmt: skip
+
+
+async def _send_telemetry(websocket: WebSocket, connection: GcuConnection, period: float) -> None:
+    """While the client is not open, a link message every 0.5 s; while it is, its telemetry.
+    Returns when the connection stops. ``seq`` counts telemetry messages on this socket."""
+    seq = 0
+    while True:
+        if not await connection.wait_connected(LINK_REPORT_SECONDS):
+            if connection.state is ConnectionState.STOPPED:
+                return
+            await websocket.send_text(_link_message(connection))
+            continue
+        seq = await _send_client_telemetry(websocket, connection, period, seq)
+        if connection.state is ConnectionState.STOPPED:
+            return
+        # the client closed under a running connection (the transport gave up): wait again
+
+
+async def _send_client_telemetry(
+    websocket: WebSocket, connection: GcuConnection, period: float, seq: int
+) -> int:
+    """Telemetry of the open client until it closes; returns the last ``seq`` sent."""
+    gcu = connection.gcu
     loop = asyncio.get_running_loop()
     # maxsize=1: the newest sample wins, a slow browser never queues up behind the client
-    stream = cast(AsyncGenerator[TelemetrySample, None], gcu.telemetry(maxsize=1))
+    stream = gcu.telemetry(maxsize=1)
     pending: asyncio.Future[Any] | None = None
-    seq = 0
     next_slot = loop.time()
     try:
         while True:
@@ -231,17 +287,18 @@ async def _send_telemetry(websocket: WebSocket, gcu: GcuClient, period: float) -
                 pending = asyncio.ensure_future(anext(stream))
             done, _ = await asyncio.wait({pending}, timeout=LINK_REPORT_SECONDS)
             if not done:  # no reply for a while: report the link, keep waiting
-                await websocket.send_text(json.dumps({"type": "link", "link": link_json(gcu.link)}))
+                await websocket.send_text(_link_message(connection))
                 continue
             try:
                 sample = pending.result()
             except StopAsyncIteration:
-                return
+                return seq
             finally:
                 pending = None
             seq += 1
-            message = state_json(sample.status, sample.info, gcu.link, sample.feedback)
-            message.update(type="telemetry", seq=seq)
+            message = state_json(sample.status, sample.info, gcu.link, sample.feedback,
+                                 aircraft=gcu.aircraft)  # fmt: skip
+            message.update(type="telemetry", seq=seq, connection=connection.snapshot())
             await websocket.send_text(json.dumps(message))
             next_slot = loop.time() + period
     finally:

@@ -7,7 +7,7 @@ from dataclasses import asdict
 from typing import Any
 
 from gcu_async import GcuClient, LinkHealth
-from gcu_async.protocol import Feedback, GcuMainFrame, GcuSubFrame, pod_name
+from gcu_async.protocol import AircraftState, Feedback, GcuMainFrame, GcuSubFrame, pod_name
 
 
 def link_json(link: LinkHealth) -> dict[str, Any]:
@@ -23,9 +23,11 @@ def state_json(
     info: GcuSubFrame | None,
     link: LinkHealth,
     feedback: Feedback | None = None,
+    aircraft: AircraftState | None = None,
 ) -> dict[str, Any]:
     """The gimbal's state from the latest main frame (bytes 5–36), sub frame (bytes 37–68,
-    ``None`` before the first) and link health.
+    ``None`` before the first) and link health; ``aircraft_heading`` is the aircraft yaw the
+    host sends (host bytes 16–17), ``None`` while it sends none.
 
     Angles in degrees, rates in °/s, zoom as a ratio; ``raw`` holds both frames' raw wire
     integers and decoded fields (``as_dict()``).
@@ -43,6 +45,7 @@ def state_json(
         "miss_distance": [status.miss_x, status.miss_y],
         "pod_status": status.as_dict()["pod_status"],
         "link": link_json(link),
+        "aircraft_heading": None,
         "pod": None,
         "zoom": None,
         "recording": None,
@@ -70,10 +73,12 @@ def state_json(
         data["raw"]["sub"] = sub
     if feedback is not None:
         data["feedback"] = feedback.as_dict()
+    if aircraft is not None and aircraft.attitude is not None:
+        data["aircraft_heading"] = aircraft.attitude.yaw
     return data
 
 
 def client_state(gcu: GcuClient) -> dict[str, Any]:
     """:func:`state_json` of a client's latest status and info."""
     info = gcu.info if gcu.pod_model is not None else None
-    return state_json(gcu.status, info, gcu.link)
+    return state_json(gcu.status, info, gcu.link, aircraft=gcu.aircraft)

@@ -15,6 +15,7 @@ from gcu_async.errors import (
     Outcome,
     RemoteProtocolError,
     UnsupportedCommandError,
+    WaitTimeout,
 )
 from gcu_async.protocol import *  # noqa: F403
 from gcu_async.protocol import __all__ as _protocol_all
@@ -25,6 +26,6 @@ __all__ = [
     "CommandError", "CommandFailed", "CommandLinkLost", "CommandTimeout", "FieldRangeError",
     "GcuClient", "GcuError", "LinkHealth", "LinkLost", "LocalProtocolError", "Outcome",
     "RemoteProtocolError", "TelemetrySample",
-    "UnsupportedCommandError", "__version__", "connect",
+    "UnsupportedCommandError", "WaitTimeout", "__version__", "connect",
     *_protocol_all,
 ]  # fmt: skip

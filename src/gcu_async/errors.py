@@ -133,6 +133,35 @@ class LinkLost(GcuError, ConnectionError):
     """The link to the GCU is down (closed, silent too long, or never came up)."""
 
 
+class WaitTimeout(GcuError, TimeoutError):
+    """A wait on the physical world (an attitude, a zoom ratio, the link) ran out of time
+    (docs/client.md, "Waiting for the gimbal, the zoom and the link"). ``what`` names the
+    awaited condition, ``timeout`` the seconds waited, ``last`` the last telemetry sample
+    seen (None if none arrived)."""
+
+    def __init__(self, what: str, timeout: float, last: object | None) -> None:
+        self.what = what
+        self.timeout = timeout
+        self.last = last
+        seen = "no telemetry arrived" if last is None else f"last seen: {_describe(last)}"
+        super().__init__(f"{what}: not reached within {timeout:g} s ({seen})")
+
+
+def _describe(sample: object) -> str:
+    """Mode, attitude and zoom of a telemetry sample, for messages (duck-typed: errors.py
+    imports nothing of the package)."""
+    parts = []
+    status = getattr(sample, "status", None)
+    if status is not None:
+        a = status.attitude
+        parts.append(f"mode {status.mode_raw:#04x}, roll {a.roll:g}, pitch {a.pitch:g}, "
+                     f"yaw {a.yaw:g} deg")  # fmt: skip
+    info = getattr(sample, "info", None)
+    if info is not None:
+        parts.append(f"zoom {info.camera1_zoom:g}x")
+    return "; ".join(parts) or repr(sample)
+
+
 class CommandLinkLost(LinkLost, CommandError):
     """A command ended because the link went down or the client closed: ``outcome`` is
     ``NOT_SENT`` if it was still queued (or the link was already down), ``UNKNOWN`` if it

@@ -39,13 +39,83 @@ function drawInstruments() {
   }
 }
 
-function renderLink(link, note) {
-  const el = $("link");
-  const up = Boolean(link && link.up);
-  el.className = up ? "link up" : "link down";
-  if (note) $("link-text").textContent = note;
-  else if (up) $("link-text").textContent = `link up · ${link.reply_rate.toFixed(0)} replies/s`;
-  else $("link-text").textContent = "link DOWN — no replies from the GCU";
+// -- link state: up (live values, commands enabled) or not (stale values, commands off) --
+// view: "connecting" (page loading), "waiting" (the app's client is not open: no GCU yet),
+// "down" (the client is open but no replies arrive), "up", "offline" (no telemetry socket).
+let view = "connecting";
+let lastTelemetry = null; // performance.now() of the last telemetry message
+
+function ago(seconds) {
+  if (seconds === null || seconds === undefined) return "no reply yet";
+  return seconds < 60 ? `${seconds.toFixed(1)} s ago` : `${Math.round(seconds / 60)} min ago`;
+}
+
+function lastUpdate() {
+  if (lastTelemetry === null) return "no values received yet";
+  return `last values ${ago((performance.now() - lastTelemetry) / 1000)}`;
+}
+
+function linkText(next, link, connection, note) {
+  if (note) return note;
+  if (next === "up") return `link up · ${link.reply_rate.toFixed(0)} replies/s`;
+  if (next === "down") return `link DOWN — no reply ${ago(link ? link.last_reply_age : null)}`;
+  if (next === "waiting") {
+    const tries = connection.attempts ? ` · attempt ${connection.attempts + 1}` : "";
+    return `waiting for the GCU${tries}`;
+  }
+  return "connecting…";
+}
+
+function noticeText(next, connection) {
+  if (next === "waiting") {
+    let text = `Waiting for the GCU at ${connection.url}: it has not answered yet`;
+    if (connection.last_error) text += ` (${connection.last_error})`;
+    if (connection.retry_in !== null) text += `; next try in ${connection.retry_in.toFixed(1)} s`;
+    return `${text}. Commands are disabled; ${lastUpdate()}.`;
+  }
+  if (next === "down") {
+    return `Link to the GCU lost: the values below are stale (${lastUpdate()}). `
+      + "Commands are disabled until replies return.";
+  }
+  if (next === "offline") {
+    return `No connection to this server: the values below are stale (${lastUpdate()}).`;
+  }
+  return "";
+}
+
+// Apply a link view. `link` and `connection` come from the server (null when unknown).
+function setView(next, link = null, connection = null, note = "") {
+  const previous = view;
+  view = next;
+  const up = next === "up";
+  document.body.dataset.link = next;
+  $("link").className = `link ${up ? "up" : next}`;
+  $("link-text").textContent = linkText(next, link, connection, note);
+  $("live").classList.toggle("stale", !up);
+  for (const tag of document.querySelectorAll(".stale-tag")) {
+    tag.textContent = lastTelemetry === null ? "no data" : "stale";
+  }
+  const notice = $("notice");
+  notice.textContent = noticeText(next, connection);
+  notice.hidden = up || next === "connecting";
+  for (const button of document.querySelectorAll("button[data-command]")) {
+    button.disabled = !up;
+  }
+  if (up && previous !== "up") {
+    // the link is back: an error from the outage no longer describes the gimbal
+    const out = $("result");
+    if (out.className === "error") {
+      out.className = "idle";
+      out.textContent = previous === "connecting" ? "ready" : "link restored — ready";
+    }
+  }
+}
+
+// A server message's link state: the client must be open and its link up.
+function applyLink(link, connection) {
+  if (connection && connection.state !== "connected") setView("waiting", link, connection);
+  else if (link && link.up) setView("up", link, connection);
+  else setView("down", link, connection);
 }
 
 function render(s) {
@@ -84,7 +154,11 @@ function render(s) {
     $("pod").textContent =
       `${s.pod.model} · hw ${s.pod.hardware_version} · fw ${s.pod.firmware_version}`;
   }
-  renderLink(s.link);
+  const heading = s.aircraft_heading;
+  $("aircraft").textContent = heading === null ? "not sent" : `${heading.toFixed(1)}°`;
+  const marker = $("aircraft-heading");
+  marker.setAttribute("visibility", heading === null ? "hidden" : "visible");
+  if (heading !== null) marker.setAttribute("transform", `rotate(${heading})`);
 }
 
 const arrivals = [];
@@ -104,11 +178,16 @@ function connect() {
   ws.onmessage = (event) => {
     const message = JSON.parse(event.data);
     countMessage();
-    if (message.type === "telemetry") render(message);
-    else if (message.type === "link") renderLink(message.link);
+    if (message.type === "telemetry") {
+      lastTelemetry = performance.now();
+      render(message);
+      applyLink(message.link, message.connection);
+    } else if (message.type === "link") {
+      applyLink(message.link, message.connection);
+    }
   };
   ws.onclose = () => {
-    renderLink(null, "telemetry socket closed — reconnecting…");
+    setView("offline", null, null, "server unreachable — reconnecting…");
     setTimeout(connect, retryMs);
     retryMs = Math.min(retryMs * 2, 5000);
   };
@@ -152,11 +231,18 @@ function wireButtons() {
 async function start() {
   drawInstruments();
   wireButtons();
+  setView("connecting");
   try {
     const response = await fetch("/api/status");
-    if (response.ok) render(await response.json());
+    const body = await response.json();
+    if (response.ok) {
+      const age = body.link.last_reply_age;
+      lastTelemetry = performance.now() - (age === null ? 0 : age * 1000);
+      render(body);
+    }
+    applyLink(body.link || null, body.connection || null);
   } catch (error) {
-    renderLink(null, `status unavailable: ${error}`);
+    setView("offline", null, null, `status unavailable: ${error}`);
   }
   connect();
 }

@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 from collections.abc import Sequence
 
 from gcu_async import __version__
 from gcu_async.cli import decode, demo, monitor, send, sim
+
+VERBOSE_HELP = ("log the library's lifecycle to stderr (INFO); -vv: every packet in and out "
+                "too (DEBUG, the gcu_async.wire logger)")  # fmt: skip
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -22,13 +26,25 @@ def build_parser() -> argparse.ArgumentParser:
     monitor.register(sub)
     sim.register(sub)
     demo.register(sub)
+    for command in sub.choices.values():
+        command.add_argument("-v", "--verbose", action="count", default=0, help=VERBOSE_HELP)
     return parser
+
+
+def configure_logging(verbose: int) -> None:
+    """``-v``: the ``gcu_async`` loggers at INFO on stderr; ``-vv``: DEBUG (every packet)."""
+    if verbose <= 0:
+        return
+    logging.basicConfig(stream=sys.stderr, level=logging.WARNING,
+                        format="%(asctime)s %(name)s %(levelname)s %(message)s")  # fmt: skip
+    logging.getLogger("gcu_async").setLevel(logging.DEBUG if verbose >= 2 else logging.INFO)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``gcu-async`` console script; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    configure_logging(args.verbose)
     status: int = args.run(args)
     return status
 

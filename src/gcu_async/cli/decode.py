@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from gcu_async.cli._exit import EXIT_FAILED, EXIT_OK, EXIT_USAGE
 from gcu_async.errors import RemoteProtocolError
 from gcu_async.protocol.deframer import Deframer
 from gcu_async.protocol.packets import (
@@ -82,9 +83,9 @@ def run(args: argparse.Namespace) -> int:
         else:
             text = " ".join(args.hex) if args.hex else sys.stdin.read()
             data = parse_hex(text)
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError) as exc:  # unreadable file, not hex: a usage error
         print(f"gcu-async decode: {exc}", file=sys.stderr)
-        return 1
+        return EXIT_USAGE
     packets, _ = decode_stream(data)
     valid = [p for p in packets if "error" not in p]
     try:
@@ -93,8 +94,8 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.flush()
     except BrokenPipeError:  # e.g. piped into `head`: the reader has all it wants
         _silence_stdout()
-        return 0 if valid else 1
+        return EXIT_OK if valid else EXIT_FAILED
     if not valid:
         print(f"gcu-async decode: no valid packet in {len(data)} bytes of input", file=sys.stderr)
-        return 1
-    return 0
+        return EXIT_FAILED
+    return EXIT_OK

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from typing import Any
 
+from gcu_async.cli._exit import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
 from gcu_async.cli.liveview import Console, LiveView
 from gcu_async.client.client import GcuClient
 from gcu_async.client.connect import connect
@@ -47,7 +48,6 @@ MAX_SPEED = 1000.0
 EXPECT_TIMEOUT = 10.0
 """Seconds an expected effect may take to show in the telemetry (physical, not scaled)."""
 CONNECT_TIMEOUT = 3.0
-EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 TRACK_BOX = (0.56, 0.40, 0.66, 0.52)
 """Image box (left, top, right, bottom fractions) the demo tracks: right of centre."""
 

@@ -5,10 +5,20 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import dataclasses
+import json
 import sys
 import time
 from typing import Any
 
+from gcu_async.cli._exit import (
+    EXIT_FAILED,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    EXIT_USAGE,
+    Interrupted,
+    interruptible,
+)
 from gcu_async.client.client import GcuClient
 from gcu_async.client.connect import connect
 from gcu_async.client.telemetry import TelemetrySample
@@ -20,12 +30,15 @@ def register(sub: Any) -> None:
         "monitor",
         help="show live telemetry of a GCU until Ctrl-C",
         description="Connects, keeps the heartbeat going, and prints one status line per "
-        "interval: mode, camera attitude, zoom, flags and link health.",
+        "interval: mode, camera attitude, zoom, flags and link health; during an outage a "
+        "line saying how long no reply came. Ctrl-C or SIGTERM ends it (exit status 130).",
     )
     p.add_argument("url", help="udp://HOST[:PORT], tcp://HOST[:PORT] or serial:///dev/…")
     p.add_argument("--interval", type=float, default=0.5, help="seconds between lines")
     p.add_argument("--count", type=int, default=0, help="stop after this many lines (0: never)")
     p.add_argument("--timeout", type=float, default=3.0, help="seconds to wait for the GCU")
+    p.add_argument("--json", action="store_true",
+                   help="one JSON object per line (the frames as `decode` shows them)")
     p.set_defaults(run=run)
 
 
@@ -58,37 +71,77 @@ def format_line(gcu: GcuClient, sample: TelemetrySample) -> str:
     return " | ".join(parts)
 
 
-async def _monitor(url: str, interval: float, count: int, timeout: float) -> int:
-    lines = 0
+def json_line(gcu: GcuClient, sample: TelemetrySample | None) -> str:
+    """One JSON object: the sample's frames as ``gcu-async decode`` shows them (``null``
+    during an outage) and the link's health."""
+    obj: dict[str, Any] = {"time": time.time(), "link": dataclasses.asdict(gcu.link)}
+    if sample is not None:
+        obj["status"] = sample.status.as_dict()
+        obj["info"] = None if sample.info is None else sample.info.as_dict()
+    else:
+        obj["status"] = obj["info"] = None
+    return json.dumps(obj)
+
+
+def down_line(gcu: GcuClient) -> str:
+    """The line printed for an interval without any reply."""
+    link = gcu.link
+    age = "no reply yet" if link.last_reply_age is None else (
+        f"no reply for {link.last_reply_age:.1f} s")  # fmt: skip
+    return (f"link {'up' if link.up else 'DOWN'}: {age} | lost {link.lost_count} "
+            f"restored {link.restored_count}")  # fmt: skip
+
+
+async def _monitor(url: str, interval: float, count: int, timeout: float,
+                   as_json: bool) -> int:  # fmt: skip
     async with connect(url, connect_timeout=timeout) as gcu:
-        next_at = 0.0
-        async for sample in gcu.telemetry():
-            now = time.monotonic()
-            if now < next_at:
-                continue
-            next_at = now + interval
-            print(format_line(gcu, sample), flush=True)
-            lines += 1
-            if count and lines >= count:
-                break
-    return 0
+        latest: list[TelemetrySample] = []
+        fresh = asyncio.Event()
+
+        def on_sample(sample: TelemetrySample) -> None:
+            latest[:] = [sample]
+            fresh.set()
+
+        unsubscribe = gcu.on_telemetry(on_sample)
+        loop = asyncio.get_running_loop()
+        lines = 0
+        try:
+            while not count or lines < count:
+                started = loop.time()
+                with contextlib.suppress(asyncio.TimeoutError):
+                    await asyncio.wait_for(fresh.wait(), interval)
+                if fresh.is_set():
+                    fresh.clear()
+                    sample = latest[0]
+                    print(json_line(gcu, sample) if as_json else format_line(gcu, sample),
+                          flush=True)  # fmt: skip
+                    await asyncio.sleep(max(0.0, started + interval - loop.time()))
+                else:  # an outage: say so every interval
+                    print(json_line(gcu, None) if as_json else down_line(gcu), flush=True)
+                lines += 1
+        finally:
+            unsubscribe()
+    return EXIT_OK
 
 
 def run(args: argparse.Namespace) -> int:
     try:
         if not args.interval > 0:
             raise ValueError(f"--interval: {args.interval!r} must be > 0")
+        if args.count < 0:
+            raise ValueError(f"--count: {args.count!r} must be >= 0")
         connect(args.url)
     except ValueError as exc:
         print(f"gcu-async monitor: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_USAGE
     try:
-        return asyncio.run(_monitor(args.url, args.interval, args.count, args.timeout))
-    except KeyboardInterrupt:
-        return 0
+        return asyncio.run(interruptible(
+            _monitor(args.url, args.interval, args.count, args.timeout, args.json)))  # fmt: skip
+    except (Interrupted, KeyboardInterrupt):  # KeyboardInterrupt: no loop signal handlers
+        return EXIT_INTERRUPTED
     except (LinkLost, GcuError, OSError) as exc:
         print(f"gcu-async monitor: {exc}", file=sys.stderr)
-        return 1
+        return EXIT_FAILED
     finally:
         with contextlib.suppress(Exception):
             sys.stdout.flush()

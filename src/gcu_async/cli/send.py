@@ -14,6 +14,14 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from gcu_async.cli._exit import (
+    EXIT_FAILED,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    EXIT_USAGE,
+    Interrupted,
+    interruptible,
+)
 from gcu_async.client.client import GcuClient
 from gcu_async.client.connect import connect
 from gcu_async.errors import CommandFailed, GcuError, LinkLost
@@ -201,29 +209,31 @@ def run(args: argparse.Namespace) -> int:
         connect(args.url)
     except ValueError as exc:
         print(f"gcu-async send: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_USAGE
     hold = args.hold if args.hold is not None else (3.0 if spec.holds else 0.0)
     if not 0 <= hold <= 3600:
         print(f"gcu-async send: --hold: {hold!r} is outside [0, 3600] s", file=sys.stderr)
-        return 2
+        return EXIT_USAGE
     try:
-        feedback, state = asyncio.run(
-            _send(args.url, spec, values, args.timeout, args.rate, hold)
-        )
+        feedback, state = asyncio.run(interruptible(
+            _send(args.url, spec, values, args.timeout, args.rate, hold)))  # fmt: skip
+    except (Interrupted, KeyboardInterrupt):  # KeyboardInterrupt: no loop signal handlers
+        print(json.dumps({"ok": False, "error": "interrupted"}))
+        return EXIT_INTERRUPTED
     except ValueError as exc:
         print(f"gcu-async send: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_USAGE
     except CommandFailed as exc:
         out = {"ok": False, "error": str(exc), "opcode": exc.opcode, "status_raw": exc.status,
                "failed_cameras": int(exc.failed_cameras)}  # fmt: skip
         print(json.dumps(out))
-        return 1
+        return EXIT_FAILED
     except (TimeoutError, LinkLost, GcuError, OSError) as exc:
         print(json.dumps({"ok": False, "error": str(exc) or type(exc).__name__}))
-        return 1
+        return EXIT_FAILED
     if feedback is None:
         print(json.dumps({"ok": True, "skipped": True}))
-        return 0
+        return EXIT_OK
     assert isinstance(feedback, Feedback)
     print(json.dumps({"ok": True, **feedback.as_dict(), **state}))
-    return 0
+    return EXIT_OK

@@ -19,6 +19,7 @@ import signal
 import sys
 from typing import Any
 
+from gcu_async.cli._exit import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_USAGE
 from gcu_async.sim.faults import FaultConfig, FaultPlan
 from gcu_async.sim.listen import ListenSpec, parse_hostport, parse_listen_url
 from gcu_async.sim.model import DEFAULT_POD, SimulatorModel
@@ -201,7 +202,7 @@ async def _serve(
         await server.start()
     except OSError as exc:
         print(f"{PROG}: cannot listen on {args_url(spec)}: {exc}", file=sys.stderr)
-        return 1
+        return EXIT_FAILED
     _install_switches(loop, sim, server, silence, stall)
     try:
         where = server.url
@@ -215,7 +216,7 @@ async def _serve(
     log.info("stopped: %d packets answered, %d repeated, %d CRC errors, %d malformed, "
              "%d bytes discarded", s.answered, s.repeated, s.crc_errors, s.malformed,
              s.bytes_discarded)  # fmt: skip
-    return 0
+    return EXIT_INTERRUPTED  # only a signal ends it
 
 
 def args_url(spec: ListenSpec) -> str:
@@ -229,7 +230,7 @@ def run(args: argparse.Namespace) -> int:
         sim, spec = _build(args)
     except _UsageError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_USAGE
     if not args.quiet:
         logging.basicConfig(
             level=logging.INFO,
@@ -239,4 +240,4 @@ def run(args: argparse.Namespace) -> int:
     try:
         return asyncio.run(_serve(sim, spec, args.silence, args.stall))
     except KeyboardInterrupt:  # platforms without loop signal handlers
-        return 0
+        return EXIT_INTERRUPTED

@@ -21,7 +21,7 @@ from gcu_async.protocol.enums import CameraMask, NightVisionMode, OsdCoordinates
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuSubFrame
 from gcu_async.protocol.host_frames import CONTROL_RATE_RAW, ControlValues
-from gcu_async.protocol.units import check_member, check_tuple
+from gcu_async.protocol.units import Attitude, check_member, check_tuple
 from gcu_async.session import ControlKind
 
 CAM1 = CameraMask.CAMERA_1
@@ -77,6 +77,10 @@ class CommandMethods(abc.ABC):
     def _set_control(self, control: ControlValues | None, kind: ControlKind) -> None:
         """New control values of ``kind`` for the current mode."""
 
+    @abc.abstractmethod
+    def _current_attitude(self) -> Attitude:
+        """The camera's latest reported attitude (zeros before the first reply)."""
+
     async def _run(self, command: c.Command, *, timeout: float | None = None,
                    control: ControlValues | None = None) -> Feedback:  # fmt: skip
         result = await self._submit(command, timeout=timeout, control=control)
@@ -99,11 +103,19 @@ class CommandMethods(abc.ABC):
 
     # -- pod: modes ------------------------------------------------------------------------
     async def euler_control(
-        self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0
-    ) -> Feedback:
-        """Euler-angle control mode (0x14) holding roll/pitch/yaw Euler angles in degrees.
-        ``yaw`` may be given in [-180, 360): [180, 360) is sent as its −180…0 equivalent.
-        The angles go out valid once the GCU confirmed the mode."""
+        self, *, roll: float | None = None, pitch: float | None = None,
+        yaw: float | None = None,
+    ) -> Feedback:  # fmt: skip
+        """Euler-angle control mode (0x14) holding roll/pitch/yaw Euler angles in degrees;
+        an angle left out keeps the camera's current one (``status.attitude``), so
+        ``euler_control(pitch=-45)`` does not swing the yaw. ``yaw`` may be given in
+        [-180, 360): [180, 360) is sent as its −180…0 equivalent. The angles go out valid
+        once the GCU confirmed the mode; :meth:`reach_attitude` also waits until the camera
+        is there."""
+        current = self._current_attitude()
+        roll = current.roll if roll is None else roll
+        pitch = current.pitch if pitch is None else pitch
+        yaw = current.yaw if yaw is None else yaw
         y = check_real("yaw", yaw, -180.0, 360.0, "deg", high_open=True)
         values = ControlValues.angles(_angle("roll", roll), _angle("pitch", pitch),
                                       y - 360.0 if y >= 180.0 else y)  # fmt: skip

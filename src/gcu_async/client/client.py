@@ -10,10 +10,12 @@ values, link health) lives in the session (docs/client.md, "The session contract
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import enum
 import inspect
 import logging
 import math
+import random
 import sys
 import time
 import warnings
@@ -32,6 +34,8 @@ from gcu_async._checks import (
 )
 from gcu_async.client.api import CommandMethods
 from gcu_async.client.telemetry import TelemetrySubscription
+from gcu_async.client.waiting import WaitingMethods
+from gcu_async.client.wirelog import WIRE_LOG, log_packet
 from gcu_async.errors import (
     CommandLinkLost,
     GcuError,
@@ -55,12 +59,14 @@ from gcu_async.session import (
     LinkUp,
     ResetLink,
     Session,
+    SessionState,
     TelemetrySample,
     Ticket,
     TicketDone,
     TicketState,
 )
 from gcu_async.session.session import RATE_MAX_HZ, RATE_MIN_HZ
+from gcu_async.transport.backoff import Backoff
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 log = logging.getLogger("gcu_async.client")
@@ -75,6 +81,10 @@ LinkCallback = Callable[[LinkEvent], None]
 TelemetryCallback = Callable[[TelemetrySample], None]
 
 
+OPEN_BACKOFF = Backoff(base=0.25, factor=2.0, cap=5.0, max_attempts=None, max_total=1e9)
+"""Delays between the attempts of :meth:`GcuClient.open` with ``open_timeout``."""
+
+
 class ClientState(enum.Enum):
     """The client's lifecycle (reusable, not reentrant)."""
 
@@ -84,7 +94,7 @@ class ClientState(enum.Enum):
     CLOSING = "closing"
 
 
-class GcuClient(CommandMethods):
+class GcuClient(CommandMethods, WaitingMethods):
     """An asyncio session with one GCU.
 
     ``async with GcuClient(transport) as gcu:`` opens the transport, starts the heartbeat,
@@ -101,6 +111,9 @@ class GcuClient(CommandMethods):
         queue_timeout: default seconds a command may wait before its first packet
             (:class:`CommandTimeout`, outcome ``NOT_SENT``).
         connect_timeout: seconds to wait for the first reply when opening.
+        open_timeout: keep retrying :meth:`open` (backoff 0.25–5 s, full jitter) until this
+            many seconds have passed, e.g. to start before the GCU is powered; each failed
+            attempt is a ``RETRYING`` link event. ``None`` (default): one attempt.
         silence_timeout: seconds without a reply after which the link counts as lost (more
             than the heartbeat period).
         check_support: refuse commands the pod model does not support (Appendix 8) once the
@@ -124,6 +137,7 @@ class GcuClient(CommandMethods):
         command_timeout: float = 2.0,
         queue_timeout: float = 30.0,
         connect_timeout: float = 3.0,
+        open_timeout: float | None = None,
         silence_timeout: float = 1.0,
         check_support: bool = False,
         reorder_guard: float | None = None,
@@ -152,6 +166,11 @@ class GcuClient(CommandMethods):
             name=transport.url,
         )  # fmt: skip
         self.connect_timeout = check_positive("connect_timeout", connect_timeout)
+        self.open_timeout = (None if open_timeout is None
+                             else check_positive("open_timeout", open_timeout))  # fmt: skip
+        self._open_abort: asyncio.Event | None = None
+        self._between_attempts = False
+        self._rng = random.Random()
         self.check_support = check_bool("check_support", check_support)
         if not RATE_ADVISED[0] <= rate <= RATE_ADVISED[1]:
             warnings.warn(f"rate_hz={rate:g}: the protocol advises 30-50 Hz host packets",
@@ -166,6 +185,7 @@ class GcuClient(CommandMethods):
         self._link_callbacks: list[LinkCallback] = []
         self._first_reply: asyncio.Future[None] | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
+        self._closed_event: asyncio.Event | None = None
         self._datagram = transport.datagram
         self._rx_bound: float | None = None
         """Replies delivered from now on arrived after this time (links that reorder); None:
@@ -219,16 +239,61 @@ class GcuClient(CommandMethods):
 
         Raises :class:`LinkLost` if the transport cannot open or no reply comes within
         ``connect_timeout`` (everything is closed again), ``RuntimeError`` if the client is
-        not closed."""
+        not closed. With ``open_timeout``, failed attempts are retried with backoff until
+        that many seconds have passed (docs/client.md, "Lifecycle"); :meth:`close` stops
+        the retries (``LinkLost``)."""
         if self._state is not ClientState.CLOSED:
             raise RuntimeError(
                 f"GcuClient is {self._state.value}: a client is reusable but not reentrant "
                 "(close it before opening it again)"
             )
+        if self.open_timeout is None:
+            await self._open_once()
+            return
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + self.open_timeout
+        self._open_abort = abort = asyncio.Event()
+        attempts = 0
+        try:
+            while True:
+                try:
+                    await self._open_once()
+                    return
+                except LinkLost as exc:
+                    attempts += 1
+                    delay = OPEN_BACKOFF.delay(attempts - 1, self._rng)
+                    if abort.is_set():
+                        raise LinkLost(f"{self.transport.url}: closed while opening") from exc
+                    if loop.time() + delay >= deadline:
+                        raise LinkLost(
+                            f"{self.transport.url}: no GCU within open_timeout "
+                            f"{self.open_timeout:g} s ({attempts} attempts; last: {exc})"
+                        ) from exc
+                    log.info("%s: attempt %d failed (%s); next in %.2f s",
+                             self.transport.url, attempts, exc, delay)  # fmt: skip
+                    self._emit_link(LinkEvent(
+                        LinkEventKind.RETRYING,
+                        f"attempt {attempts} failed: {exc}; next in {delay:.2f} s"))  # fmt: skip
+                    self._state = ClientState.OPENING  # not reentrant while it waits
+                    self._between_attempts = True
+                    try:
+                        with contextlib.suppress(asyncio.TimeoutError):
+                            await asyncio.wait_for(abort.wait(), delay)
+                    finally:
+                        self._between_attempts = False
+                        self._state = ClientState.CLOSED
+                    if abort.is_set():
+                        raise LinkLost(f"{self.transport.url}: closed while opening") from exc
+        finally:
+            self._open_abort = None
+
+    async def _open_once(self) -> None:
         self._state = ClientState.OPENING
         self._loop = loop = asyncio.get_running_loop()
+        self._closed_event = asyncio.Event()
         self._first_reply = loop.create_future()
         self.transport.set_handlers(self._on_data, self._on_link_event)
+        log.info("opening %s", self.transport.url)
         try:
             await self.transport.open()
         except BaseException:
@@ -253,8 +318,12 @@ class GcuClient(CommandMethods):
     async def close(self) -> None:
         """End pending commands (:class:`CommandLinkLost`), stop the heartbeat, end the
         telemetry iterators and close the transport. Idempotent."""
+        if self._open_abort is not None:  # open() is retrying: stop it
+            self._open_abort.set()
         if self._state in (ClientState.CLOSED, ClientState.CLOSING):
             return
+        if self._between_attempts:
+            return  # open() waits between attempts: nothing is open
         await self._shutdown("client closed")
 
     async def _shutdown(self, reason: str) -> None:
@@ -270,6 +339,9 @@ class GcuClient(CommandMethods):
             await self.transport.close()
         finally:
             self._state = ClientState.CLOSED
+            log.info("closed %s (%s)", self.transport.url, reason)
+            if self._closed_event is not None:
+                self._closed_event.set()
 
     # -- aircraft state and control values -------------------------------------------------
     @property
@@ -425,6 +497,19 @@ class GcuClient(CommandMethods):
         self._consumers_changed()
         return _unsubscriber(self._telemetry_callbacks, callback, self._consumers_changed)
 
+    def _current_attitude(self) -> Attitude:
+        status = self.session.status
+        return status.attitude if status is not None else Attitude(0.0, 0.0, 0.0)
+
+    def _latest(self) -> TelemetrySample | None:
+        return self.session.latest
+
+    def _link_up(self) -> bool:
+        return self.session.state is SessionState.UP
+
+    def _closed(self) -> asyncio.Event | None:
+        return None if self._state is ClientState.CLOSED else self._closed_event
+
     def on_link_change(self, callback: LinkCallback) -> Callable[[], None]:
         """Call ``callback(LinkEvent)`` when the link is lost or restored."""
         _check_callback(callback)
@@ -538,8 +623,12 @@ class GcuClient(CommandMethods):
                 now = self._clock()  # read what waits first: replies before sends
                 if self.transport.read_pending():
                     self._rx_bound = now
+            wire = WIRE_LOG.isEnabledFor(logging.DEBUG)  # the level may change at run time
+            session.trace = self._trace if wire else None
             data = session.poll(self._clock())
             if data is not None:
+                if wire:
+                    log_packet(self.transport.url, True, data)
                 try:
                     self.transport.send(data)
                 except (LinkLost, OSError) as exc:
@@ -566,6 +655,9 @@ class GcuClient(CommandMethods):
         self._timer_at = when
 
     # -- input from the transport ----------------------------------------------------------
+    def _trace(self, packet: bytes) -> None:
+        log_packet(self.transport.url, False, packet)
+
     def _on_data(self, data: bytes) -> None:
         self.session.receive(data, self._clock(), datagram=self._datagram,
                              arrived_after=self._rx_bound)  # fmt: skip

@@ -24,7 +24,7 @@ import heapq
 import itertools
 import math
 from collections import deque
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, fields, replace
 from typing import Any
 
@@ -213,6 +213,9 @@ class Session:
         self._events: list[Event] = []
         self._status: GcuMainFrame | None = None
         self._info: GcuSubFrame | None = None
+        self._feedback: Feedback | None = None
+        self.trace: Callable[[bytes], None] | None = None
+        """Called with every whole packet received (before it is decoded), e.g. to log it."""
         self._feed = AircraftFeed(self.aircraft_timeout, self.name)
         self._last_encoded: tuple[object, object, object, bytes] = (None, None, None, b"")
 
@@ -262,6 +265,8 @@ class Session:
             except RemoteProtocolError:
                 pass  # the deframer below sorts it out and counts what it discards
             else:
+                if self.trace is not None:
+                    self.trace(data)
                 sub = packet.sub if type(packet.sub) is GcuSubFrame else None
                 self._on_reply(packet.main, sub, packet.feedback, now, arrived_after)
                 return
@@ -269,6 +274,8 @@ class Session:
         if datagram and deframer.buffered:
             packets += deframer.flush()  # a datagram's leftovers never join the next one
         for raw in packets:
+            if self.trace is not None:
+                self.trace(raw)
             try:
                 packet = decode_gcu_packet(raw)
             except RemoteProtocolError:
@@ -492,6 +499,14 @@ class Session:
         return self._info
 
     @property
+    def latest(self) -> TelemetrySample | None:
+        """The latest reply as a telemetry sample (None before the first)."""
+        status, feedback, at = self._status, self._feedback, self._health.last_reply
+        if status is None or feedback is None or at is None:
+            return None
+        return TelemetrySample(status, self._info, feedback, at)
+
+    @property
     def in_flight(self) -> Ticket | None:
         return self._in_flight
 
@@ -546,6 +561,7 @@ class Session:
                   now: float, earliest: float | None) -> None:  # fmt: skip
         self._health.on_reply(now)
         self._status = main
+        self._feedback = feedback
         if sub is not None:
             self._info = sub
             recording = self._recording

@@ -1,5 +1,6 @@
 """Transports: serial, UDP, TCP and in-memory. Bytes in, bytes out; no protocol logic."""
 
+from gcu_async.transport.backoff import Backoff
 from gcu_async.transport.base import (
     DataHandler,
     EventHandler,
@@ -9,7 +10,7 @@ from gcu_async.transport.base import (
 )
 from gcu_async.transport.memory import MemoryTransport
 from gcu_async.transport.serial import BAUDRATES, SerialTransport
-from gcu_async.transport.tcp import Backoff, TcpTransport
+from gcu_async.transport.tcp import TcpTransport
 from gcu_async.transport.udp import UdpTransport
 from gcu_async.transport.url import open_transport
 

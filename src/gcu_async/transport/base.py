@@ -33,6 +33,9 @@ class LinkEventKind(enum.Enum):
     """A lost link is back (e.g. TCP reconnected)."""
     PEER = "peer"
     """Bytes came from a new peer address (UDP any-source discovery)."""
+    RETRYING = "retrying"
+    """An attempt of the client's :meth:`~gcu_async.client.GcuClient.open` failed and
+    another follows (``open_timeout``); the detail says why and when."""
 
 
 @dataclass(frozen=True)

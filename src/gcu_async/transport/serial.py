@@ -30,12 +30,15 @@ from __future__ import annotations
 
 import asyncio
 import os
+import random
 from urllib.parse import quote
 
 import serial_asyncio  # type: ignore[import-untyped]
 
+from gcu_async._checks import check_bool, type_error
 from gcu_async.errors import LinkLost
 from gcu_async.transport._common import call_guarded, check_reason
+from gcu_async.transport.backoff import Backoff, giving_up, retry
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 try:
@@ -97,12 +100,34 @@ class _SerialProtocol(asyncio.Protocol):
 class SerialTransport(Transport):
     """Serial link on ``device`` (e.g. ``/dev/ttyUSB0``) at ``baudrate``, 8N1."""
 
-    def __init__(self, device: str, baudrate: int = DEFAULT_BAUDRATE) -> None:
+    def __init__(
+        self,
+        device: str,
+        baudrate: int = DEFAULT_BAUDRATE,
+        *,
+        reconnect: bool = True,
+        backoff: Backoff | None = None,
+        rng: random.Random | None = None,
+    ) -> None:
         super().__init__()
         if not isinstance(device, str) or not device:
             raise ValueError(f"device: {device!r} is not a device path")
         self._device = device
         self._baudrate = check_baudrate(baudrate)
+        self._reconnect = check_bool("reconnect", reconnect)
+        if backoff is not None and not isinstance(backoff, Backoff):
+            raise type_error("backoff", "a Backoff or None", backoff)
+        self.backoff = backoff if backoff is not None else Backoff(max_attempts=None,
+                                                                   max_total=60.0)  # fmt: skip
+        """Reopening schedule after the device is lost (unplugged): by default every
+        0–2 s for up to a minute."""
+        self._rng = rng if rng is not None else random.Random()
+        self._task: asyncio.Task[None] | None = None
+        self._closing = False
+        self.reconnect_attempts = 0
+        """Attempts to reopen the device during the current (or last) outage."""
+        self.reconnects = 0
+        """Outages ended by reopening the device."""
         self._proto: _SerialProtocol | None = None
         self._stransport: asyncio.Transport | None = None
         self._fd = -1
@@ -128,11 +153,21 @@ class SerialTransport(Transport):
     def connected(self) -> bool:
         return self._stransport is not None and not self._stransport.is_closing()
 
+    @property
+    def reconnecting(self) -> bool:
+        """True while the port is lost and the background task tries to reopen it."""
+        return self._task is not None and not self._task.done() and not self.connected
+
     async def open(self) -> None:
         """Open the device (8N1). Raises :class:`LinkLost`, naming the device, if it is
-        missing or cannot be opened."""
+        missing or cannot be opened. Stops a running reopen task first."""
         if self.connected:
             return
+        self._closing = False
+        await self._stop_task()
+        await self._open_port()
+
+    async def _open_port(self, timeout: float | None = None) -> None:
         loop = asyncio.get_running_loop()
         proto = _SerialProtocol(self)
         try:
@@ -194,7 +229,10 @@ class SerialTransport(Transport):
             proto.fail(exc)
 
     async def close(self) -> None:
-        """Close the port and release its fd; returns once released. Idempotent."""
+        """Stop reopening, close the port and release its fd; returns once released.
+        Idempotent."""
+        self._closing = True
+        await self._stop_task()
         stransport, proto = self._stransport, self._proto
         self._stransport = None
         if stransport is None or proto is None:
@@ -238,3 +276,37 @@ class SerialTransport(Transport):
         reason = f": {exc}" if exc is not None else ""
         event = LinkEvent(LinkEventKind.LOST, f"serial {self._device}: port lost{reason}")
         call_guarded(self._on_event, event, "event")
+        if self._reconnect and not self._closing:
+            self._task = asyncio.get_running_loop().create_task(
+                self._reopen_loop(), name=f"gcu_async reopen {self.url}")  # fmt: skip
+
+    # -- reopening after a loss (an unplugged adapter coming back) --------------------------
+
+    async def _reopen_loop(self) -> None:
+        self.reconnect_attempts = 0
+
+        def counted(n: int) -> None:
+            self.reconnect_attempts = n
+
+        try:
+            # opening a device node takes no time worth bounding: the timeout is unused
+            last = await retry(self._open_port, self.backoff, self._rng, 1.0, counted)
+            if self._closing:
+                return
+            if last is None:
+                self.reconnects += 1
+                detail = (f"serial {self._device}: reopened after {self.reconnect_attempts} "
+                          "attempt(s)")  # fmt: skip
+                call_guarded(self._on_event, LinkEvent(LinkEventKind.RESTORED, detail), "event")
+            else:
+                call_guarded(self._on_event, giving_up(self.url, self.reconnect_attempts, last),
+                             "event")  # fmt: skip
+        finally:
+            if self._task is asyncio.current_task():
+                self._task = None
+
+    async def _stop_task(self) -> None:
+        task, self._task = self._task, None
+        if task is not None and not task.done():
+            task.cancel()
+            await asyncio.wait({task})

@@ -32,7 +32,6 @@ import contextlib
 import random
 import socket
 import struct
-from dataclasses import dataclass
 from typing import Any
 
 from gcu_async.errors import LinkLost
@@ -43,6 +42,7 @@ from gcu_async.transport._common import (
     check_reason,
     format_hostport,
 )
+from gcu_async.transport.backoff import Backoff, giving_up, retry
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 GCU_TCP_PORT = 2332
@@ -52,50 +52,6 @@ _CLOSE_GRACE = 1.0
 """Seconds :meth:`TcpTransport.close` lets unsent bytes flush before aborting."""
 _LINGER_ABORT = struct.pack("ii", 1, 0)
 """``struct linger {l_onoff=1, l_linger=0}``: close() sends an RST and drops the send queue."""
-
-
-@dataclass(frozen=True)
-class Backoff:
-    """Reconnect schedule: exponential backoff with full jitter, bounded.
-
-    ``base`` and ``cap`` are seconds, ``factor`` >= 1. At least one bound is required:
-    ``max_attempts`` (attempts per outage) and/or ``max_total`` (seconds since the loss
-    after which no new attempt starts).
-    """
-
-    base: float = 0.05
-    factor: float = 2.0
-    cap: float = 2.0
-    max_attempts: int | None = 20
-    max_total: float | None = None
-
-    def __post_init__(self) -> None:
-        check_positive("backoff_base", self.base)
-        check_positive("backoff_cap", self.cap)
-        if check_positive("backoff_factor", self.factor) < 1:
-            raise ValueError(f"backoff_factor: {self.factor!r} is out of range (allowed >= 1)")
-        if self.cap < self.base:
-            raise ValueError(
-                f"backoff_cap: {self.cap!r} is smaller than backoff_base {self.base!r}"
-            )
-        ma = self.max_attempts
-        if ma is not None and (isinstance(ma, bool) or not isinstance(ma, int) or ma < 1):
-            raise ValueError(f"max_attempts: {ma!r} is out of range (allowed: integer >= 1)")
-        if self.max_total is not None:
-            check_positive("max_total", self.max_total)
-        if ma is None and self.max_total is None:
-            raise ValueError("max_attempts, max_total: at least one must be set (got None, None)")
-
-    def ceiling(self, attempt: int) -> float:
-        """Upper bound of the delay before attempt ``attempt`` (0-based)."""
-        try:
-            return min(self.cap, self.base * self.factor**attempt)
-        except OverflowError:
-            return self.cap
-
-    def delay(self, attempt: int, rng: random.Random) -> float:
-        """Full jitter: ``rng.random() * ceiling(attempt)``."""
-        return rng.random() * self.ceiling(attempt)
 
 
 class _TcpProtocol(asyncio.Protocol):
@@ -289,32 +245,17 @@ class TcpTransport(Transport):
             await asyncio.wait({task})
 
     async def _reconnect_loop(self) -> None:
-        loop = asyncio.get_running_loop()
-        backoff = self.backoff
-        deadline = None if backoff.max_total is None else loop.time() + backoff.max_total
         self.reconnect_attempts = 0
-        last: LinkLost | None = None
+
+        def counted(n: int) -> None:
+            self.reconnect_attempts = n
+
         try:
-            while backoff.max_attempts is None or self.reconnect_attempts < backoff.max_attempts:
-                delay = backoff.delay(self.reconnect_attempts, self._rng)
-                timeout = self._connect_timeout
-                if deadline is not None:
-                    left = deadline - loop.time() - delay
-                    if left <= 0:
-                        break
-                    timeout = min(timeout, left)
-                await asyncio.sleep(delay)
-                self.reconnect_attempts += 1
-                try:
-                    await self._connect(timeout)
-                except LinkLost as exc:
-                    last = exc
-                    continue
-                return
-            n = self.reconnect_attempts
-            why = f": last error: {last}" if last is not None else f": {self.url}"
-            detail = f"giving up after {n} reconnect attempt{'s' if n != 1 else ''}{why}"
-            call_guarded(self._on_event, LinkEvent(LinkEventKind.LOST, detail), "event")
+            last = await retry(self._connect, self.backoff, self._rng, self._connect_timeout,
+                               counted)  # fmt: skip
+            if last is not None:
+                call_guarded(self._on_event, giving_up(self.url, self.reconnect_attempts, last),
+                             "event")  # fmt: skip
         finally:
             if self._task is asyncio.current_task():
                 self._task = None

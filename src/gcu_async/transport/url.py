@@ -29,9 +29,10 @@ import re
 from collections.abc import Callable, Mapping
 from urllib.parse import parse_qsl, unquote, urlsplit
 
+from gcu_async.transport.backoff import Backoff
 from gcu_async.transport.base import Transport
 from gcu_async.transport.serial import DEFAULT_BAUDRATE, SerialTransport
-from gcu_async.transport.tcp import GCU_TCP_PORT, Backoff, TcpTransport
+from gcu_async.transport.tcp import GCU_TCP_PORT, TcpTransport
 from gcu_async.transport.udp import GCU_UDP_PORT, UdpTransport
 
 Converter = Callable[[str, object, bool], object]

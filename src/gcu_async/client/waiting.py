@@ -1,0 +1,252 @@
+"""Waiting for the physical world: telemetry predicates, closed-loop moves, the link
+(docs/client.md, "Waiting for the gimbal, the zoom and the link").
+
+A command's feedback says the GCU *took* it; the gimbal then needs time to slew and the
+lens to zoom. These methods wait on telemetry for the result, always with a timeout, and
+raise :class:`~gcu_async.errors.WaitTimeout` naming what was awaited and the last value
+seen. They keep waiting through a link outage (no telemetry arrives, the timeout runs on)
+and raise :class:`~gcu_async.errors.LinkLost` when the client closes.
+"""
+
+from __future__ import annotations
+
+import abc
+import asyncio
+import contextlib
+from collections import deque
+from collections.abc import AsyncGenerator, Callable
+
+from gcu_async._checks import check_bool, check_positive, check_real, type_error
+from gcu_async.errors import LinkLost, WaitTimeout
+from gcu_async.protocol.feedback import Feedback
+from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
+from gcu_async.protocol.units import wrap_degrees_180
+from gcu_async.session import TelemetrySample
+from gcu_async.transport.base import LinkEvent
+
+Predicate = Callable[[TelemetrySample], bool]
+
+WAIT_TIMEOUT = 10.0
+"""Default seconds for a wait (a full slew of a large pod takes a few seconds)."""
+ANGLE_TOLERANCE = 0.5
+"""Default degrees between the reported and the target angle that count as there."""
+ZOOM_TOLERANCE = 0.05
+"""Default zoom-ratio difference that counts as there (the sub frame reports 0.1× steps)."""
+LINK_EVENTS_MAX = 256
+"""Link events kept for a slow ``link_events()`` consumer (the oldest go first)."""
+
+
+def angle_error(a: float, b: float) -> float:
+    """Absolute difference of two angles in degrees, the short way round (0…180)."""
+    return abs(wrap_degrees_180(a - b))
+
+
+def _attitude_targets(roll: float | None, pitch: float | None,
+                      yaw: float | None) -> dict[str, float]:  # fmt: skip
+    """The angles given, checked: roll ±180, pitch ±90, yaw [-180, 360) degrees."""
+    ranges = {"roll": (-180.0, 180.0, False), "pitch": (-90.0, 90.0, False),
+              "yaw": (-180.0, 360.0, True)}  # fmt: skip
+    given = {"roll": roll, "pitch": pitch, "yaw": yaw}
+    return {name: check_real(name, value, low, high, "deg", high_open=open_)
+            for name, value in given.items() if value is not None
+            for low, high, open_ in [ranges[name]]}  # fmt: skip
+
+
+class WaitingMethods(abc.ABC):
+    """Waits on telemetry and the link, shared by :class:`~gcu_async.client.GcuClient`."""
+
+    # -- what the client provides ----------------------------------------------------------
+    @property
+    @abc.abstractmethod
+    def status(self) -> GcuMainFrame: ...
+
+    @property
+    @abc.abstractmethod
+    def _info(self) -> GcuSubFrame | None: ...
+
+    @abc.abstractmethod
+    def _latest(self) -> TelemetrySample | None:
+        """The latest reply as a sample (None before the first)."""
+
+    @abc.abstractmethod
+    def telemetry(self, maxsize: int = 1) -> AsyncGenerator[TelemetrySample, None]: ...
+
+    @abc.abstractmethod
+    def on_link_change(self, callback: Callable[[LinkEvent], None]) -> Callable[[], None]: ...
+
+    @abc.abstractmethod
+    def _link_up(self) -> bool:
+        """True while replies arrive (the session's link state)."""
+
+    @abc.abstractmethod
+    def _closed(self) -> asyncio.Event | None:
+        """Set once the client closes; None while it is not open."""
+
+    @abc.abstractmethod
+    async def euler_control(self, *, roll: float | None = None, pitch: float | None = None,
+                            yaw: float | None = None) -> Feedback: ...  # fmt: skip
+
+    @abc.abstractmethod
+    async def zoom_to(self, ratio: float, *, cameras: int = ...) -> Feedback: ...
+
+    # -- telemetry -------------------------------------------------------------------------
+    async def wait_for(self, predicate: Predicate, *, timeout: float = WAIT_TIMEOUT,
+                       what: str = "the condition") -> TelemetrySample:  # fmt: skip
+        """Return the first telemetry sample for which ``predicate(sample)`` is true — the
+        latest reply already, if it qualifies and the link is up. ``what`` names the
+        condition in the error.
+
+        Raises :class:`~gcu_async.errors.WaitTimeout` after ``timeout`` seconds (the last
+        sample seen is its ``last``), :class:`~gcu_async.errors.LinkLost` if the client
+        closes, and whatever ``predicate`` raises."""
+        if not callable(predicate):
+            raise type_error("predicate", "a callable taking a TelemetrySample", predicate)
+        timeout = check_positive("timeout", timeout)
+        if not isinstance(what, str):
+            raise type_error("what", "a str", what)
+        if self._closed() is None:
+            raise LinkLost("the client is not open")
+        latest = self._latest()  # a reply from before an outage is no evidence of now
+        if latest is not None and self._link_up() and predicate(latest):
+            return latest
+        last: list[TelemetrySample | None] = [latest]
+
+        async def first() -> TelemetrySample:
+            async with contextlib.aclosing(self.telemetry()) as samples:
+                async for sample in samples:
+                    last[0] = sample
+                    if predicate(sample):
+                        return sample
+            raise LinkLost(f"the client closed while waiting for {what}")
+
+        try:
+            return await asyncio.wait_for(first(), timeout)
+        except asyncio.TimeoutError:
+            raise WaitTimeout(what, timeout, last[0]) from None
+
+    async def wait_attitude(self, *, roll: float | None = None, pitch: float | None = None,
+                            yaw: float | None = None, tolerance: float = ANGLE_TOLERANCE,
+                            timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
+        """Wait until the camera's reported attitude (``status.attitude``: absolute Euler
+        angles, degrees) is within ``tolerance`` degrees of every angle given; angles left
+        ``None`` are not checked. Yaw compares the short way round (359° is 2° from 1°)."""
+        given = _attitude_targets(roll, pitch, yaw)
+        tol = check_positive("tolerance", tolerance, unit="deg")
+        if not given:
+            raise ValueError("wait_attitude: give at least one of roll, pitch, yaw")
+
+        def there(sample: TelemetrySample) -> bool:
+            attitude = sample.status.attitude._asdict()
+            return all(angle_error(attitude[k], v) <= tol for k, v in given.items())
+
+        what = "attitude " + ", ".join(f"{k} {v:g}" for k, v in given.items())
+        return await self.wait_for(there, timeout=timeout, what=f"{what} (±{tol:g} deg)")
+
+    async def wait_zoom(self, ratio: float, *, tolerance: float = ZOOM_TOLERANCE,
+                        timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
+        """Wait until camera 1's reported zoom ratio (sub frame) is within ``tolerance`` of
+        ``ratio``."""
+        target = check_real("ratio", ratio, 1.0, 6553.5, "x")
+        tol = check_positive("tolerance", tolerance, unit="x")
+
+        def there(sample: TelemetrySample) -> bool:
+            info = sample.info
+            return info is not None and abs(info.camera1_zoom - target) <= tol
+
+        return await self.wait_for(there, timeout=timeout,
+                                   what=f"zoom {target:g}x (±{tol:g})")  # fmt: skip
+
+    # -- closed-loop moves -----------------------------------------------------------------
+    async def reach_attitude(self, *, roll: float | None = None, pitch: float | None = None,
+                             yaw: float | None = None, tolerance: float = ANGLE_TOLERANCE,
+                             timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
+        """Euler-angle control (:meth:`euler_control`) to the angles given — omitted ones
+        keep the current attitude — then wait until the camera is within ``tolerance``
+        degrees of all three. ``timeout`` bounds the wait after the GCU confirmed the mode
+        (the command itself has its own ``command_timeout``)."""
+        _attitude_targets(roll, pitch, yaw)  # all checked before anything is sent
+        check_positive("timeout", timeout)
+        check_positive("tolerance", tolerance, unit="deg")
+        current = self.status.attitude
+        r = current.roll if roll is None else roll
+        p = current.pitch if pitch is None else pitch
+        y = current.yaw if yaw is None else yaw
+        await self.euler_control(roll=r, pitch=p, yaw=y)
+        return await self.wait_attitude(roll=r, pitch=p, yaw=y, tolerance=tolerance,
+                                        timeout=timeout)  # fmt: skip
+
+    async def reach_zoom(self, ratio: float, *, tolerance: float = ZOOM_TOLERANCE,
+                         timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
+        """:meth:`zoom_to` ``ratio`` (camera 1), then wait until the reported zoom is within
+        ``tolerance`` of it."""
+        check_positive("timeout", timeout)
+        check_positive("tolerance", tolerance, unit="x")
+        await self.zoom_to(ratio)
+        return await self.wait_zoom(ratio, tolerance=tolerance, timeout=timeout)
+
+    # -- the link --------------------------------------------------------------------------
+    async def wait_link(self, up: bool = True, *, timeout: float = WAIT_TIMEOUT) -> None:
+        """Return once the link is up (``up=False``: down); at once if it already is.
+        :class:`~gcu_async.errors.WaitTimeout` after ``timeout`` seconds,
+        :class:`~gcu_async.errors.LinkLost` if the client closes meanwhile."""
+        want = check_bool("up", up)
+        timeout = check_positive("timeout", timeout)
+        closed = self._closed()
+        if closed is None or closed.is_set():
+            raise LinkLost("the client is not open")
+        what = "the link up" if want else "the link down"
+        changed = asyncio.Event()
+        unsubscribe = self.on_link_change(lambda event: changed.set())
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + timeout
+        try:
+            while True:
+                if closed.is_set():
+                    raise LinkLost(f"the client closed while waiting for {what}")
+                if self._link_up() is want:
+                    return
+                left = deadline - loop.time()
+                if left <= 0:
+                    raise WaitTimeout(what, timeout, self._latest())
+                changed.clear()
+                await _either(changed, closed, left)
+        finally:
+            unsubscribe()
+
+    async def link_events(self) -> AsyncGenerator[LinkEvent, None]:
+        """Iterate over link events (lost, restored, a new peer) from now on; ends when the
+        client closes. Up to 256 unread events are kept (the oldest go first)."""
+        closed = self._closed()
+        if closed is None or closed.is_set():
+            raise LinkLost("the client is not open")
+        events: deque[LinkEvent] = deque(maxlen=LINK_EVENTS_MAX)
+        ready = asyncio.Event()
+
+        def put(event: LinkEvent) -> None:
+            events.append(event)
+            ready.set()
+
+        unsubscribe = self.on_link_change(put)
+        try:
+            while True:
+                while events:
+                    yield events.popleft()
+                if closed.is_set():
+                    return
+                ready.clear()
+                await _either(ready, closed, None)
+        finally:
+            unsubscribe()
+
+
+async def _either(a: asyncio.Event, b: asyncio.Event, timeout: float | None) -> None:
+    """Wait until ``a`` or ``b`` is set, or ``timeout`` seconds pass."""
+    waiters = {asyncio.ensure_future(a.wait()), asyncio.ensure_future(b.wait())}
+    try:
+        await asyncio.wait(waiters, timeout=timeout, return_when=asyncio.FIRST_COMPLETED)
+    finally:
+        for waiter in waiters:
+            waiter.cancel()
+
+
+__all__ = ["ANGLE_TOLERANCE", "WAIT_TIMEOUT", "ZOOM_TOLERANCE", "WaitingMethods", "angle_error"]

@@ -1,0 +1,107 @@
+"""`gcu-async monitor` through the real entry point against `gcu-async sim` (another
+process): JSON lines, lines during an outage, a clean end on SIGTERM and Ctrl-C."""
+
+from __future__ import annotations
+
+import json
+import selectors
+import signal
+import subprocess
+import time
+from collections.abc import Iterator
+
+import pytest
+
+from _sim_process import CLI, SimProcess
+
+
+def read_lines(proc: subprocess.Popen[str], n: int, timeout: float) -> list[str]:
+    """The next ``n`` lines of ``proc``'s stdout (bounded)."""
+    assert proc.stdout is not None
+    lines: list[str] = []
+    deadline = time.monotonic() + timeout
+    with selectors.DefaultSelector() as sel:
+        sel.register(proc.stdout, selectors.EVENT_READ)
+        while len(lines) < n:
+            left = deadline - time.monotonic()
+            if left <= 0 or not sel.select(left):
+                raise AssertionError(f"only {len(lines)} of {n} lines: {lines}")
+            line = proc.stdout.readline()
+            if not line:
+                raise AssertionError(f"monitor ended after {lines}")
+            lines.append(line.rstrip("\n"))
+    return lines
+
+
+@pytest.fixture
+def sim() -> Iterator[SimProcess]:
+    process = SimProcess("--listen", "udp://127.0.0.1:0", "--silence", "1.5")
+    yield process
+    process.stop()
+
+
+def monitor(sim: SimProcess, *args: str) -> subprocess.Popen[str]:
+    return subprocess.Popen([*CLI, "monitor", f"{sim.url}?local_port=0", *args],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
+
+
+def test_json_lines_follow_the_decode_shape(sim: SimProcess) -> None:
+    done = subprocess.run([*CLI, "monitor", f"{sim.url}?local_port=0", "--json", "--count",
+                           "3", "--interval", "0.1"], capture_output=True, text=True,
+                          timeout=30, check=False)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    objects = [json.loads(line) for line in done.stdout.splitlines()]
+    assert len(objects) == 3
+    for obj in objects:
+        assert obj["status"]["mode"] and "attitude_deg" in obj["status"]
+        assert obj["link"]["up"] is True and obj["link"]["packets_received"] > 0
+        assert obj["info"] is None or "camera1_zoom" in json.dumps(obj["info"])
+    assert objects[0]["time"] < objects[1]["time"] < objects[2]["time"]
+
+
+@pytest.mark.parametrize("as_json", [False, True])
+def test_an_outage_prints_lines_and_sigterm_ends_it_cleanly(sim: SimProcess,
+                                                            as_json: bool) -> None:
+    proc = monitor(sim, "--interval", "0.2", *(["--json"] if as_json else []))
+    try:
+        read_lines(proc, 2, 10.0)  # live
+        sim.proc.send_signal(signal.SIGUSR2)  # the GCU goes silent for 1.5 s
+        lines = read_lines(proc, 12, 10.0)
+        if as_json:
+            objects = [json.loads(line) for line in lines]
+            quiet = [o for o in objects if o["status"] is None]
+            assert quiet and quiet[-1]["link"]["up"] is False  # silence_timeout 1 s
+            assert objects[-1]["status"] is not None  # back after the outage
+        else:
+            quiet = [line for line in lines if line.startswith("link ")]
+            assert any(line.startswith("link DOWN: no reply for ") for line in quiet), lines
+            assert not lines[-1].startswith("link ")  # telemetry again
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=10)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == 130
+    assert "Traceback" not in err, err
+
+
+def test_ctrl_c_ends_it_with_130(sim: SimProcess) -> None:
+    proc = monitor(sim, "--interval", "0.1")
+    try:
+        read_lines(proc, 1, 10.0)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=10)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == 130
+    assert "Traceback" not in err, err
+
+
+def test_a_negative_count_is_a_usage_error() -> None:
+    done = subprocess.run([*CLI, "monitor", "udp://127.0.0.1:9", "--count", "-1"],
+                          capture_output=True, text=True, timeout=30, check=False)  # fmt: skip
+    assert done.returncode == 2
+    assert done.stderr.startswith("gcu-async monitor: --count: -1")
