@@ -117,9 +117,11 @@ def host_bytes(
     subframe_request: int = 1,
     version: int = 2,
 ) -> bytes:
-    """One encoded host packet (INS valid with a level aircraft facing north by default)."""
-    main = HostMainFrame.build(control=control, attitude=attitude,
-                               subframe_request=subframe_request)  # fmt: skip
+    """One encoded host packet (INS valid with a level aircraft at rest facing north by
+    default; ``attitude=None``: INS invalid)."""
+    still = None if attitude is None else (0.0, 0.0, 0.0)  # INS valid needs all three parts
+    main = HostMainFrame.build(control=control, attitude=attitude, acceleration=still,
+                               velocity=still, subframe_request=subframe_request)  # fmt: skip
     return HostPacket(main, sub, command or NullCommand(), version).encode()
 
 

@@ -225,7 +225,8 @@ async def rate_mode(rig: Rig) -> None:
 
 
 async def ins_valid(rig: Rig) -> None:
-    rig.gcu.update_aircraft(attitude=(0.0, 0.0, 0.0), position=(22.5, 113.9, 50.0))
+    rig.gcu.update_aircraft(attitude=(0.0, 0.0, 0.0), acceleration=(0.0, 0.0, 0.0),
+                            velocity=(0.0, 0.0, 0.0), position=(22.5, 113.9, 50.0))
 
 
 async def recording(rig: Rig) -> None:
@@ -443,6 +444,14 @@ def _aircraft_read(param: str, index: int) -> Callable[[Rig, Any], Awaitable[Any
     return sent_aircraft(f"main.{attr}", index)
 
 
+_INS = ("attitude", "acceleration", "velocity")
+
+
+def _with_ins(param: str) -> dict[str, Any]:
+    """The other INS parts, at rest: the wire carries one only with all three."""
+    return {p: _ZERO3 for p in _INS if p != param} if param in _INS else {}
+
+
 for _param, (_cls, _other, _ranges) in _AIRCRAFT_TUPLES.items():
     _base = (22.5, 113.9, 50.0) if _param == "position" else _ZERO3
     add(P("update_aircraft", _param, _param,
@@ -454,7 +463,7 @@ for _param, (_cls, _other, _ranges) in _AIRCRAFT_TUPLES.items():
         _top = round(_hi - _step, 2) if _open else _hi
         add(P("update_aircraft", f"{_param}.{_e}", f"{_param}.{_e}",
               lambda rig, v, p=_param, e=_e, c=_cls, b=_base: rig.gcu.update_aircraft(
-                  **{p: with_element(b, c._fields, e, v)}),
+                  **{p: with_element(b, c._fields, e, v)}, **_with_ins(p)),
               "real", _lo, _hi, _open, step=_step, valid=(_lo, _top),
               read=_aircraft_read(_param, _i)))  # fmt: skip
 add(P("update_aircraft", "relative_altitude", "relative_altitude",
@@ -498,10 +507,12 @@ async def _read_state(rig: Rig, result: Any) -> Any:
     return packet.main.aircraft_attitude, packet.sub.position if packet.sub else None
 
 
-_STATE = AircraftState(attitude=(1.0, -2.0, 3.0), position=(10.0, 20.0, 30.0))
+_STATE = AircraftState(attitude=(1.0, -2.0, 3.0), acceleration=_ZERO3, velocity=_ZERO3,
+                       position=(10.0, 20.0, 30.0))  # fmt: skip
 add(P("set_aircraft", "state", "state", lambda rig, v: rig.gcu.set_aircraft(v), "part",
       valid=(AircraftState(), _STATE), read=_read_state,
-      expected=lambda s: (s.attitude or Attitude(0.0, 0.0, 0.0), s.position),
+      expected=lambda s: (s.attitude if s.ins_complete else Attitude(0.0, 0.0, 0.0),
+                          s.position),
       wrong=(None, AircraftState, {}, (), HostMainFrame(), SimAircraftState(), "state",
              object(), [AircraftState()], _STATE.main_frame())))  # fmt: skip
 
@@ -586,6 +597,8 @@ def _client_options(owner: str, build: Callable[[dict[str, Any]], GcuClient],
         read=lambda rig, c: c.rate_hz)
     opt("silence_timeout", "real", low=0.02, low_open=True, valid=(0.0200001, 1.0, 1e300),
         read=lambda rig, c: c.session.silence_timeout)
+    opt("aircraft_timeout", "real", low=0.0, low_open=True, high=10.0,
+        valid=(5e-324, 0.02, 1.0, 10.0), read=lambda rig, c: c.aircraft_timeout)
     for name in ("command_timeout", "queue_timeout", "connect_timeout"):
         opt(name, "real", valid=(5e-324, 1.0, 1e300),
             read=lambda rig, c, n=name: getattr(c, n) if n == "connect_timeout"
@@ -940,7 +953,7 @@ async def test_issue_regressions(rig: Rig, name: str, call: Callable[[GcuClient]
     assert (await rig.probe()).main.control == ControlValues.angles(pitch=-30.0)
     assert rig.model.stats.malformed == 0
     # every later update still works (set_aircraft(None) used to poison them)
-    rig.gcu.update_aircraft(attitude=(1.0, 2.0, 3.0))
+    rig.gcu.update_aircraft(attitude=(1.0, 2.0, 3.0), acceleration=_ZERO3, velocity=_ZERO3)
     assert (await rig.probe()).main.aircraft_attitude == Attitude(1.0, 2.0, 3.0)
 
 

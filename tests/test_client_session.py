@@ -55,18 +55,29 @@ async def test_aircraft_state_never_invented(fake: FakeGcu) -> None:
         n = len(fake.packets)
         await until(lambda: len(fake.packets) > n + 1)
         p = last(fake)
+        assert not p.main.ins_valid  # no acceleration yet: nothing claimed, zeros sent
+        assert p.main.aircraft_attitude == (0.0, 0.0, 0.0)
+        assert p.main.velocity == (0.0, 0.0, 0.0)
+        assert not gcu.ins_valid
+        gcu.update_aircraft(acceleration=(0.0, 0.0, 0.0))
+        assert gcu.ins_valid
+        n = len(fake.packets)
+        await until(lambda: len(fake.packets) > n + 1)
+        p = last(fake)
         assert p.main.ins_valid
         assert p.main.aircraft_attitude == (1.5, -2.0, 350.0)
         assert p.main.velocity == (1.0, 2.0, -0.5)
         assert p.sub is None  # no position given: no sub frame
-        gcu.update_aircraft(position=(47.3977418, 8.5455938, 488.0), relative_altitude=30.0)
+        gcu.update_aircraft(attitude=(1.5, -2.0, 350.0), velocity=(1.0, 2.0, -0.5),
+                            acceleration=(0.0, 0.0, 0.0),  # still current: given again
+                            position=(47.3977418, 8.5455938, 488.0), relative_altitude=30.0)
         n = len(fake.packets)
         await until(lambda: len(fake.packets) > n + 1)
         sub = last(fake).sub
         assert isinstance(sub, HostSubFrame)
         assert sub.latitude_raw == 473977418
         assert sub.relative_altitude == 30.0
-        assert last(fake).main.ins_valid  # partial update kept the attitude
+        assert last(fake).main.ins_valid
         gcu.update_aircraft(attitude=None)
         n = len(fake.packets)
         await until(lambda: len(fake.packets) > n + 1)
@@ -266,7 +277,8 @@ def test_rate_validation() -> None:
 def test_built_frames_hold_plain_integers() -> None:
     from gcu_async.protocol import ControlValues, HostMainFrame
 
-    frame = HostMainFrame.build(control=ControlValues.angles(pitch=-10), attitude=(0, 0, 0))
+    frame = HostMainFrame.build(control=ControlValues.angles(pitch=-10), attitude=(0, 0, 0),
+                                acceleration=(0, 0, 0), velocity=(0, 0, 0))
     assert type(frame.flags_raw) is int
     assert frame.flags_raw == 0x05
 

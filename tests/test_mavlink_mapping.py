@@ -30,15 +30,27 @@ from gcu_async.mavlink import (
     acceleration_from_specific_force,
     acceleration_from_velocity_change,
     convert_attitude,
+    convert_local_velocity,
     convert_position,
     convert_relative_altitude,
     convert_satellites,
     convert_system_time,
     convert_velocity,
 )
-from gcu_async.protocol.units import Attitude
+from gcu_async.protocol.units import Attitude, NorthEastUp
 
 G = STANDARD_GRAVITY
+STILL = NorthEastUp(0.0, 0.0, 0.0)
+LEVEL = Attitude(0.0, 0.0, 0.0)
+
+
+def ins_frame(attitude: Attitude = LEVEL, acceleration: NorthEastUp = STILL,
+              velocity: NorthEastUp = STILL) -> Any:  # fmt: skip
+    """A main frame with all three INS parts (the only way they go on the wire)."""
+    frame = AircraftState(attitude=attitude, acceleration=acceleration,
+                          velocity=velocity).main_frame()  # fmt: skip
+    assert frame.ins_valid
+    return frame
 
 
 # -- message factories (real pymavlink objects) -------------------------------------------
@@ -136,7 +148,7 @@ def test_attitude_radians_to_wrapped_degrees(
 ) -> None:
     att = convert_attitude(attitude_msg(*rad))
     assert att == pytest.approx(expected_deg, abs=1e-9)
-    frame = AircraftState(attitude=att).main_frame()  # every result fits the wire field
+    frame = ins_frame(att)  # every result fits the wire field
     assert frame.aircraft_attitude == pytest.approx(expected_deg, abs=1e-9)
 
 
@@ -145,7 +157,7 @@ def test_attitude_over_the_wire_float32() -> None:
     (msg,) = over_the_wire(attitude_msg(math.radians(-11.32), math.radians(9.33), -math.pi / 2))
     assert msg.yaw != -math.pi / 2  # really went through float32
     att = convert_attitude(msg)
-    main = AircraftState(attitude=att).main_frame()
+    main = ins_frame(att)
     assert (main.aircraft_roll_raw, main.aircraft_pitch_raw, main.aircraft_yaw_raw) == (
         -1132, 933, 27000,
     )  # fmt: skip
@@ -197,7 +209,7 @@ def test_imu_at_rest_pitched_30_is_zero() -> None:
     # nose up 30°: f_body = Rᵀ(0, 0, −g) = (g·sin30, 0, −g·cos30) = (+500, 0, −866) mG
     accel = acceleration_from_imu(scaled_imu_msg(500, 0, -866), Attitude(0, 30, 0), scale=MILLI_G)
     assert accel == approx_neu(0, 0, 0, tol=1e-3)  # int16 mG rounding: |error| < 0.0003
-    assert AircraftState(acceleration=accel).main_frame().acceleration == (0, 0, 0)
+    assert ins_frame(acceleration=accel).acceleration == (0, 0, 0)
 
 
 def test_imu_at_rest_any_attitude_is_zero() -> None:
@@ -269,6 +281,57 @@ def test_mapper_fields_stay_none_until_their_message() -> None:
     assert s.attitude == pytest.approx((0, 0, 270))
     assert (s.acceleration, s.velocity, s.position) == (None, None, None)
     assert mapper.used_types == {"ATTITUDE"}
+    assert not s.main_frame().ins_valid  # an attitude alone is not INS data
+
+
+def test_local_position_velocity_conversion() -> None:
+    # vz +0.5 m/s DOWN → up −0.5 m/s
+    assert convert_local_velocity(local_position_msg(1000, 1.0, -2.0, 0.5)) == approx_neu(
+        1.0, -2.0, -0.5)  # fmt: skip
+
+
+def test_mapper_gives_all_three_ins_parts_without_a_global_position() -> None:
+    # no GNSS (indoor, PX4 without a global origin): LOCAL_POSITION_NED gives the velocity
+    # it differentiates, so attitude + two samples make the INS data complete
+    mapper = MavlinkAircraftState()
+    mapper.update(attitude_msg(yaw=math.pi / 2))
+    assert mapper.update(local_position_msg(1000, 1.0, 0.0, 0.5)) is True
+    assert mapper.changes == {"velocity": approx_neu(1.0, 0.0, -0.5)}
+    assert not mapper.state.main_frame().ins_valid  # no acceleration from one sample
+    assert mapper.update(local_position_msg(1100, 1.3, -0.2, 0.3)) is True
+    assert set(mapper.changes) == {"velocity", "acceleration"}
+    state = mapper.state
+    assert state.position is None
+    main = decode_host_packet(HostPacket(state.main_frame()).encode()).main
+    assert main.ins_valid
+    assert (main.vel_north_raw, main.vel_east_raw, main.vel_up_raw) == (130, -20, -30)
+    assert (main.accel_north_raw, main.accel_east_raw, main.accel_up_raw) == (300, -200, 200)
+    assert main.aircraft_yaw_raw == 9000
+
+
+def test_mapper_velocity_from_the_latest_of_both_messages() -> None:
+    mapper = MavlinkAircraftState(acceleration_source="HIGHRES_IMU")
+    mapper.update(global_position_msg(vx=250, vy=-120, vz=150))
+    assert mapper.state.velocity == approx_neu(2.5, -1.2, -1.5)
+    assert mapper.update(local_position_msg(1000, 2.6, -1.1, 1.4)) is True  # velocity only
+    assert mapper.changes == {"velocity": approx_neu(2.6, -1.1, -1.4)}
+    assert mapper.state.acceleration is None  # not the acceleration source
+    mapper.update(global_position_msg(vx=240, vy=-130, vz=160))
+    assert mapper.state.velocity == approx_neu(2.4, -1.3, -1.6)
+
+
+def test_mapper_changes_name_what_the_last_message_gave() -> None:
+    mapper = MavlinkAircraftState()
+    assert mapper.changes == {}
+    mapper.update(attitude_msg())
+    assert set(mapper.changes) == {"attitude"}
+    mapper.update(global_position_msg())
+    assert set(mapper.changes) == {"position", "relative_altitude", "velocity"}
+    changes = mapper.changes
+    changes.clear()  # a copy: the mapper keeps its own
+    assert set(mapper.changes) == {"position", "relative_altitude", "velocity"}
+    assert mapper.update(mavlink2.MAVLink_heartbeat_message(2, 3, 0, 0, 4, 3)) is False
+    assert set(mapper.changes) == {"position", "relative_altitude", "velocity"}  # unused
 
 
 def test_mapper_velocity_source_needs_two_samples() -> None:
@@ -284,7 +347,8 @@ def test_mapper_imu_source_needs_attitude_first() -> None:
     mapper = MavlinkAircraftState(acceleration_source="SCALED_IMU")
     assert mapper.update(scaled_imu_msg(500, 0, -866)) is False  # cannot rotate yet
     assert mapper.state.acceleration is None
-    assert mapper.update(local_position_msg(1000, 1.0, 0.0, 0.5)) is False
+    assert mapper.update(local_position_msg(1000, 1.0, 0.0, 0.5)) is True  # velocity only
+    assert mapper.state.acceleration is None
     mapper.update(attitude_msg(pitch=math.radians(30)))
     assert mapper.update(scaled_imu_msg(500, 0, -866)) is True
     assert mapper.state.acceleration == approx_neu(0, 0, 0, tol=1e-3)
@@ -306,9 +370,11 @@ def test_mapper_raw_imu_needs_explicit_scale() -> None:
 def test_mapper_no_acceleration_source() -> None:
     mapper = MavlinkAircraftState(acceleration_source=None)
     mapper.update(attitude_msg())
-    assert mapper.update(local_position_msg(1000, 0, 0, 0)) is False
+    assert mapper.update(local_position_msg(1000, 0, 0, 0)) is True  # velocity only
+    assert mapper.update(local_position_msg(1100, 1, 0, 0)) is True
     assert mapper.update(highres_imu_msg(0, 0, -G)) is False
     assert mapper.state.acceleration is None
+    assert not mapper.state.main_frame().ins_valid  # without acceleration: never INS valid
 
 
 def test_mapper_raises_out_of_range_and_keeps_state() -> None:
@@ -344,7 +410,8 @@ def test_full_stream_over_the_wire_into_a_host_packet() -> None:
     assert main.ins_valid
     assert main.aircraft_attitude == pytest.approx((-11.32, 9.33, 270.0))
     assert (main.accel_north_raw, main.accel_east_raw, main.accel_up_raw) == (300, -200, 200)
-    assert (main.vel_north_raw, main.vel_east_raw, main.vel_up_raw) == (250, -120, -150)
+    # velocity from the last of GLOBAL_POSITION_INT and LOCAL_POSITION_NED
+    assert (main.vel_north_raw, main.vel_east_raw, main.vel_up_raw) == (130, -20, -30)
     assert isinstance(sub, HostSubFrame)
     assert (sub.latitude_raw, sub.longitude_raw, sub.altitude_raw) == (473977418, 85455939, 488120)
     assert sub.relative_altitude_raw == 15250

@@ -96,7 +96,8 @@ def check_host_example(obj: dict[str, Any]) -> None:
     assert main["aircraft_attitude_raw"] == [-1132, 101, 24000]
     assert main["control_raw"] == [0, 100, -100]
     assert (sub["latitude_raw"], sub["longitude_raw"]) == (380300822, 1709175332)
-    assert sub["gnss_time_utc"] == "2023-09-07T01:58:38+00:00"
+    assert sub["gnss_time_utc"] == "2023-09-07T01:58:20+00:00"  # GPS time: 18 leap seconds
+    assert sub["gnss_time_document_rule"] == "2023-09-07T01:58:38+00:00"  # the document's
 
 
 def test_hex_on_the_command_line() -> None:

@@ -4,7 +4,7 @@ be built from the document's physical values."""
 
 from __future__ import annotations
 
-from datetime import datetime, timezone
+from datetime import datetime, timedelta, timezone
 
 import pytest
 
@@ -125,7 +125,10 @@ def test_host_example_sub_frame_and_command() -> None:
     assert s.gnss_week == 2278
     assert s.relative_altitude_raw == 12120
     assert s.relative_altitude == 12.12
-    assert s.gnss_time() == datetime(2023, 9, 7, 1, 58, 38, tzinfo=timezone.utc)
+    # the document pairs this week + ms with UTC by its own rule (no leap seconds)
+    example_utc = datetime(2023, 9, 7, 1, 58, 38, tzinfo=timezone.utc)
+    assert s.gnss_time(apply_leap_seconds=False) == example_utc
+    assert s.gnss_time() == example_utc - timedelta(seconds=18)  # GPS time: 18 s in 2023
     assert p.command == NullCommand()
     assert HOST_EXAMPLE[69] == 0x00
 
@@ -163,6 +166,7 @@ def test_host_example_sub_frame_built_from_gnss_datetime() -> None:
         satellites=19,
         gnss_time=datetime(2023, 9, 7, 1, 58, 38, tzinfo=timezone.utc),
         relative_altitude=12.12,
+        apply_leap_seconds=False,  # the document's rule, as its example
     )
     assert sub == decode_host_packet(HOST_EXAMPLE).sub
 

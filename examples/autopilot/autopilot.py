@@ -8,8 +8,9 @@ device …) goes through :class:`gcu_async.mavlink.MavlinkAircraftState` — ATT
 GLOBAL_POSITION_INT, LOCAL_POSITION_NED (or an IMU message) for gravity-free acceleration,
 GPS_RAW_INT, SYSTEM_TIME — and the resulting aircraft state replaces the one the client's
 50 Hz heartbeat carries (host main frame bytes 11–29, sub frame bytes 38–60). Once
-attitude and position are known, the camera is told to gaze at ``--target`` (0x15); the
-command is retried until the GCU accepts it, and again after the link to the GCU comes back.
+attitude, acceleration, velocity and position are known, the camera is told to gaze at
+``--target`` (0x15); the command is retried until the GCU accepts it, and again after the
+link to the GCU comes back.
 A status line is logged every ``--status-interval`` seconds. Runs until Ctrl-C / SIGTERM
 or ``--duration`` seconds; exits 0 if the camera was pointed, 1 if not.
 
@@ -122,9 +123,10 @@ class Autopilot:
 
     @property
     def ready(self) -> bool:
-        """Attitude and position known: the GCU has what gazing needs (INS valid)."""
+        """Attitude, acceleration, velocity and position known: the GCU has what gazing
+        needs (INS valid takes all three INS parts)."""
         state = self.mapper.state
-        return state.attitude is not None and state.position is not None
+        return state.ins_complete and state.position is not None
 
     def on_message(self, msg: Any) -> None:
         """One MAVLink message: update the mapping, then the heartbeat's aircraft state."""

@@ -10,16 +10,22 @@ MAVLink message               AircraftState field
 ATTITUDE                      attitude: rad → °, roll [-180, 180), yaw [0, 360)
 GLOBAL_POSITION_INT           position (1e-7 °, mm MSL), relative_altitude (mm),
                               velocity (cm/s NED → m/s N/E/U: up = −vz)
-LOCAL_POSITION_NED            acceleration = Δvelocity/Δtime_boot_ms (up = −Δvz/Δt)
+LOCAL_POSITION_NED            velocity (m/s NED → N/E/U); acceleration (its default
+                              source) = Δvelocity/Δtime_boot_ms (up = −Δvz/Δt)
 SCALED_IMU[2,3]/HIGHRES_IMU   acceleration = R·f + (0, 0, g) in NED, then up = −down
   /RAW_IMU
 GPS_RAW_INT                   satellites (255 = unknown → 0)
 SYSTEM_TIME                   gnss_week, gnss_ms (GPS time: leap seconds applied)
 ============================  =====================================================
 
-Acceleration must exclude gravity (NOTES §11: zero at rest or in straight, constant-speed
-flight; an autopilot driver that sent raw accelerometer output made the gimbal drift), so it
-comes from exactly one source chosen when the mapper is built.
+Acceleration must exclude gravity (docs/protocol-notes.md, "10. Aircraft acceleration
+excludes gravity": zero at rest or in straight, constant-speed flight; an autopilot driver
+that sent raw accelerometer output made the gimbal drift), so it comes from exactly one
+source chosen when the mapper is built. Velocity comes from whichever of GLOBAL_POSITION_INT
+and LOCAL_POSITION_NED arrived last (both carry the estimator's north/east/down velocity), so
+a vehicle without a global position still gives all three INS parts: the packets mark the
+INS data valid only when attitude, acceleration and velocity are all known
+(docs/client.md, "Aircraft data: what the packets claim").
 
 Out-of-range values are **raised, not clamped or dropped**: :meth:`MavlinkAircraftState.update`
 lets :class:`~gcu_async.errors.FieldRangeError` (e.g. an acceleration beyond the S16 field's
@@ -57,6 +63,7 @@ __all__ = [
     "acceleration_from_specific_force",
     "acceleration_from_velocity_change",
     "convert_attitude",
+    "convert_local_velocity",
     "convert_position",
     "convert_relative_altitude",
     "convert_satellites",
@@ -162,6 +169,11 @@ def convert_velocity(msg: GlobalPositionIntMsg) -> NorthEastUp:
     return NorthEastUp(msg.vx / 100, msg.vy / 100, -msg.vz / 100)
 
 
+def convert_local_velocity(msg: LocalPositionNedMsg) -> NorthEastUp:
+    """LOCAL_POSITION_NED vx/vy/vz (m/s, north/east/**down**) → m/s north/east/up."""
+    return NorthEastUp(float(msg.vx), float(msg.vy), -float(msg.vz))
+
+
 def acceleration_from_velocity_change(
     previous: LocalPositionNedMsg, current: LocalPositionNedMsg, *, max_interval: float = 1.0
 ) -> NorthEastUp | None:
@@ -256,12 +268,21 @@ class MavlinkAircraftState:
         self._max_interval = max_interval
         self._previous_local: _VelocitySample | None = None
         self._state = AircraftState()
+        self._changes: dict[str, Any] = {}
         self._used: set[str] = set()
 
     @property
     def state(self) -> AircraftState:
         """The current state (fields without a source message yet are ``None`` / 0)."""
         return self._state
+
+    @property
+    def changes(self) -> dict[str, Any]:
+        """The fields the last message used gave (a new dict each time): pass them on with
+        ``gcu.update_aircraft(**mapper.changes)`` so that each part counts as current only
+        while its own message keeps arriving (``gcu.set_aircraft(mapper.state)`` counts the
+        whole state as current at every message)."""
+        return dict(self._changes)
 
     @property
     def used_types(self) -> frozenset[str]:
@@ -272,15 +293,16 @@ class MavlinkAircraftState:
         """Apply one message; True if it was used. Raises FieldRangeError (or ValueError for
         a SYSTEM_TIME before 1980) and keeps the previous state when a value cannot be sent."""
         kind = msg.get_type()
-        changes = self._changes(kind, msg)
+        changes = self._changes_of(kind, msg)
         if changes is None:
             return False
         if changes:
             self._state = replace(self._state, **changes)
+        self._changes = changes
         self._used.add(kind)
         return True
 
-    def _changes(self, kind: str, msg: Any) -> dict[str, Any] | None:
+    def _changes_of(self, kind: str, msg: Any) -> dict[str, Any] | None:
         if kind == "ATTITUDE":
             return {"attitude": convert_attitude(msg)}
         if kind == "GLOBAL_POSITION_INT":
@@ -294,9 +316,10 @@ class MavlinkAircraftState:
         if kind == "SYSTEM_TIME":
             gnss = convert_system_time(msg)
             return None if gnss is None else {"gnss_week": gnss[0], "gnss_ms": gnss[1]}
-        if kind != self._accel_source:
-            return None
         if kind == "LOCAL_POSITION_NED":
+            changes: dict[str, Any] = {"velocity": convert_local_velocity(msg)}
+            if self._accel_source != kind:
+                return changes
             previous = self._previous_local
             self._previous_local = _VelocitySample(msg.time_boot_ms, msg.vx, msg.vy, msg.vz)
             accel = (
@@ -306,7 +329,11 @@ class MavlinkAircraftState:
                     previous, msg, max_interval=self._max_interval
                 )
             )
-            return {} if accel is None else {"acceleration": accel}
+            if accel is not None:
+                changes["acceleration"] = accel
+            return changes
+        if kind != self._accel_source:
+            return None
         attitude = self._state.attitude
         if attitude is None or self._imu_scale is None:
             return None  # no attitude yet: the body-frame force cannot be rotated

@@ -20,7 +20,6 @@ import sys
 import time
 import warnings
 from collections.abc import AsyncGenerator, Callable
-from dataclasses import replace
 from datetime import datetime
 from types import TracebackType
 from typing import Any
@@ -122,6 +121,10 @@ class GcuClient(CommandMethods, WaitingMethods):
         reorder_guard: seconds between the last packet of one opcode and the first of the
             next; must exceed how much more the link may delay one packet than another.
             Default: 0 on ordered transports (TCP, serial), 15 ms otherwise (UDP).
+        aircraft_timeout: seconds an aircraft part given with :meth:`update_aircraft` or
+            :meth:`set_aircraft` stays current, (0, 10]; after it the packets stop claiming
+            it (INS-valid cleared, no sub frame) until the next update (docs/client.md,
+            "Aircraft data: what the packets claim").
         version: protocol version byte to send (2; some field devices expect 1).
         clock: monotonic time source (seconds).
     """
@@ -138,6 +141,7 @@ class GcuClient(CommandMethods, WaitingMethods):
         silence_timeout: float = 1.0,
         check_support: bool = False,
         reorder_guard: float | None = None,
+        aircraft_timeout: float = 1.0,
         version: int = DEFAULT_VERSION,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
@@ -158,7 +162,8 @@ class GcuClient(CommandMethods, WaitingMethods):
         self.session = Session(
             rate_hz=rate_hz, reorder_guard=reorder_guard, command_timeout=command_timeout,
             queue_timeout=queue_timeout, silence_timeout=silence_timeout,
-            version=check_int("version", version, 1, 2), name=transport.url,
+            aircraft_timeout=aircraft_timeout, version=check_int("version", version, 1, 2),
+            name=transport.url,
         )  # fmt: skip
         self.connect_timeout = check_positive("connect_timeout", connect_timeout)
         self.open_timeout = (None if open_timeout is None
@@ -341,8 +346,19 @@ class GcuClient(CommandMethods, WaitingMethods):
     # -- aircraft state and control values -------------------------------------------------
     @property
     def aircraft(self) -> AircraftState:
-        """The aircraft state sent in every packet."""
+        """The aircraft state as last given (what goes out: :attr:`ins_valid`)."""
         return self.session.aircraft
+
+    @property
+    def aircraft_timeout(self) -> float:
+        return self.session.aircraft_timeout
+
+    @property
+    def ins_valid(self) -> bool:
+        """True if the next packet sets the INS-valid bit: attitude, acceleration and
+        velocity all given, each within ``aircraft_timeout`` (docs/client.md, "Aircraft
+        data: what the packets claim")."""
+        return self.session.ins_valid(self._clock())
 
     def update_aircraft(
         self,
@@ -361,6 +377,11 @@ class GcuClient(CommandMethods, WaitingMethods):
         value, ``None`` clears one. Units: degrees (attitude, yaw in [0, 360)), m/s² north/
         east/up without gravity, m/s north/east/up, (latitude °, longitude °, altitude m MSL),
         metres. ``gnss_time`` (aware UTC) sets week + ms with leap seconds applied.
+
+        The parts given count as measured now: INS-valid goes out only while attitude,
+        acceleration and velocity have all been given within ``aircraft_timeout``, the sub
+        frame only while the position has; GNSS time advances with the clock between
+        updates (docs/client.md, "Aircraft data: what the packets claim").
 
         Raises ``TypeError`` or :class:`FieldRangeError` (nothing changes) for a bad value.
         """
@@ -387,13 +408,12 @@ class GcuClient(CommandMethods, WaitingMethods):
                 raise ValueError(f"gnss_time: {gnss_time.isoformat()} is after the last GNSS "
                                  f"week the packet carries ({GNSS_WEEK_MAX})")  # fmt: skip
             changes["gnss_week"], changes["gnss_ms"] = week, ms
-        state = replace(self.session.aircraft, **changes)  # validates
-        self.session.set_aircraft(state)
-        return state
+        return self.session.update_aircraft(changes, self._clock())
 
     def set_aircraft(self, state: AircraftState) -> None:
-        """Replace the whole aircraft state (an :class:`AircraftState`)."""
-        self.session.set_aircraft(state)
+        """Replace the whole aircraft state (an :class:`AircraftState`); every part it gives
+        counts as measured now (see :meth:`update_aircraft`)."""
+        self.session.set_aircraft(state, self._clock())
 
     @property
     def control(self) -> ControlValues | None:

@@ -1,9 +1,13 @@
-"""GNSS week + milliseconds ↔ UTC (Appendix 6).
+"""GNSS week + milliseconds ↔ UTC (Appendix 6; docs/protocol-notes.md, "8. GNSS time and
+leap seconds").
 
-The document's functions count from the GPS epoch 1980-01-06 00:00:00 and ignore leap
-seconds (GPS time runs 18 s ahead of UTC since 2017-01-01). ``apply_leap_seconds=True``
-applies the published table below, which is complete up to the time of writing
-(no leap second has been inserted since 2017-01-01).
+The week and milliseconds a GNSS receiver reports count GPS time, which runs 18 s ahead of
+UTC since 2017-01-01. Both directions apply the published table below by default
+(``apply_leap_seconds=True``), so a UTC time encoded with :func:`utc_to_gps` decodes with
+:func:`gps_to_utc` to the same UTC time, and the client, the MAVLink mapping and the
+decoders all agree. ``apply_leap_seconds=False`` is the document's Appendix 6 rule (GPS time
+taken as UTC, no leap seconds). The table is complete up to the time of writing (no leap
+second has been inserted since 2017-01-01).
 """
 
 from __future__ import annotations
@@ -42,10 +46,12 @@ def gps_minus_utc(utc: datetime) -> int:
     return offset
 
 
-def gps_to_utc(week: int, ms: int, *, apply_leap_seconds: bool = False) -> datetime:
-    """UTC datetime for GNSS ``week`` and milliseconds of week ``ms``.
-
-    With ``apply_leap_seconds=False`` this is the document's rule (GPS time taken as UTC).
+def gps_to_utc(week: int, ms: int, *, apply_leap_seconds: bool = True) -> datetime:
+    """UTC datetime for GNSS ``week`` and milliseconds of week ``ms`` (GPS time: leap seconds
+    applied; ``apply_leap_seconds=False`` is the document's rule, GPS time taken as UTC).
+    Inverse of :func:`utc_to_gps` with the same ``apply_leap_seconds``; a GPS instant inside
+    an inserted leap second (UTC 23:59:60, which ``datetime`` cannot hold) maps to the UTC
+    second after it, as the second after it does.
     ``week`` is an ``int`` in the wire's S16 range and ``ms`` in its U32 range (decoded
     frames may carry any of those; ``ms`` past the week's end runs into the next week).
     """
@@ -68,8 +74,9 @@ def _aware(field: str, utc: object) -> None:
         raise ValueError(f"{field}: {utc!r} is naive; pass an aware datetime (tz=timezone.utc)")
 
 
-def utc_to_gps(utc: datetime, *, apply_leap_seconds: bool = False) -> tuple[int, int]:
-    """(week, milliseconds of week) for an aware ``utc`` datetime.
+def utc_to_gps(utc: datetime, *, apply_leap_seconds: bool = True) -> tuple[int, int]:
+    """(week, milliseconds of week) for an aware ``utc`` datetime: GPS time, leap seconds
+    applied (``apply_leap_seconds=False``: the document's rule, UTC taken as GPS time).
 
     Raises ``TypeError`` for anything but a ``datetime`` (or a non-bool
     ``apply_leap_seconds``), ``ValueError`` for a naive datetime (its time zone would be a

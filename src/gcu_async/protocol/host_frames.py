@@ -156,16 +156,19 @@ class HostMainFrame(NamedTuple):
         subframe_request: int = SubFrameRequest.STANDARD,
     ) -> HostMainFrame:
         """Build from engineering units. ``control=None`` sends the control values invalid
-        (B2 = 0); ``attitude=None`` marks the INS data invalid (B0 = 0) and sends zeros.
-        ``control`` is checked with :meth:`ControlValues.check`; the tuples are checked
-        element by element (``aircraft roll``, ``aircraft velocity up``, …)."""
+        (B2 = 0). The INS-valid bit (B0) is set only when ``attitude``, ``acceleration`` and
+        ``velocity`` are all given: a part left ``None`` is sent as zeros, and zeros are
+        never marked valid (docs/protocol-notes.md, "10. Aircraft acceleration excludes
+        gravity"). ``control`` is checked with :meth:`ControlValues.check`; the tuples are
+        checked element by element (``aircraft roll``, ``aircraft velocity up``, …)."""
         flags = 0
         c = ControlValues.check(control) if control is not None else ControlValues()
         if control is not None:
             flags |= HostFlags.CONTROL_VALID
+        if attitude is not None and acceleration is not None and velocity is not None:
+            flags |= HostFlags.INS_VALID
         roll = pitch = yaw = 0
         if attitude is not None:
-            flags |= HostFlags.INS_VALID
             a_roll, a_pitch, a_yaw = check_tuple("attitude", attitude, Attitude)
             roll = quantize("aircraft roll", a_roll, 100, -18000, 18000, "deg", high_open=True)
             pitch = quantize("aircraft pitch", a_pitch, 100, -9000, 9000, "deg")
@@ -311,11 +314,13 @@ class HostSubFrame(NamedTuple):
         gnss_ms: int = 0,
         gnss_time: datetime | None = None,
         relative_altitude: float = 0.0,
-        apply_leap_seconds: bool = False,
+        apply_leap_seconds: bool = True,
     ) -> HostSubFrame:
         """Build from degrees and metres. ``gnss_time`` (an aware UTC datetime) replaces
-        ``gnss_week``/``gnss_ms`` (giving both is a ``ValueError``); see
-        :mod:`gcu_async.protocol.gpstime` for leap seconds."""
+        ``gnss_week``/``gnss_ms`` (giving both is a ``ValueError``), converted to GPS time
+        with leap seconds applied unless ``apply_leap_seconds=False`` (the document's rule);
+        :meth:`gnss_time` reads it back with the same default (see
+        :mod:`gcu_async.protocol.gpstime`)."""
         lon = quantize("longitude", longitude, 1e7, -1_800_000_000, 1_800_000_000, "deg")
         lat = quantize("latitude", latitude, 1e7, -900_000_000, 900_000_000, "deg")
         alt = quantize("altitude", altitude, 1000, -(2**31), 2**31 - 1, "m")
@@ -355,8 +360,10 @@ class HostSubFrame(NamedTuple):
     def position(self) -> GeoPosition:
         return GeoPosition(self.latitude, self.longitude, self.altitude)
 
-    def gnss_time(self, *, apply_leap_seconds: bool = False) -> datetime:
-        """GNSS week + ms as a UTC datetime (the document's rule ignores leap seconds)."""
+    def gnss_time(self, *, apply_leap_seconds: bool = True) -> datetime:
+        """GNSS week + ms (GPS time) as a UTC datetime: leap seconds removed, as
+        :meth:`build` and the client added them (``apply_leap_seconds=False``: the
+        document's rule, which ignores them)."""
         from gcu_async.protocol.gpstime import gps_to_utc
 
         return gps_to_utc(self.gnss_week, self.gnss_ms, apply_leap_seconds=apply_leap_seconds)
@@ -395,6 +402,7 @@ class HostSubFrame(NamedTuple):
             "gnss_week": self.gnss_week,
             "gnss_ms": self.gnss_ms,
             "gnss_time_utc": self.gnss_time().isoformat(),
+            "gnss_time_document_rule": self.gnss_time(apply_leap_seconds=False).isoformat(),
             "relative_altitude_m": self.relative_altitude,
             "relative_altitude_raw": self.relative_altitude_raw,
         }

@@ -2,7 +2,8 @@
 
 Inputs: bytes received (:meth:`Session.receive`), the time (every call takes ``now``), API
 calls (:meth:`Session.submit`, :meth:`Session.cancel`, :meth:`Session.set_aircraft`,
-:meth:`Session.set_control`, :meth:`Session.open`, :meth:`Session.close`) and transport news
+:meth:`Session.update_aircraft`, :meth:`Session.set_control`, :meth:`Session.open`,
+:meth:`Session.close`) and transport news
 (:meth:`Session.connection_lost`). Outputs: the packet to send now (:meth:`Session.poll`),
 when to call :meth:`Session.poll` next (:meth:`Session.next_wakeup`) and events
 (:meth:`Session.events`). No asyncio, no sockets, no clock of its own: a driver (the
@@ -11,8 +12,9 @@ asyncio :class:`~gcu_async.client.GcuClient`, or a virtual-time test harness) do
 The contract it keeps, with its assumptions, is in docs/client.md ("The session
 contract"); the rules behind it live in :mod:`~gcu_async.session.pacing` (when a packet may
 go), :mod:`~gcu_async.session.runs` (what a reply proves, when an opcode may start),
-:mod:`~gcu_async.session.control` (which control values go out valid) and
-:mod:`~gcu_async.session.recording` (state-checked record toggles).
+:mod:`~gcu_async.session.control` (which control values go out valid),
+:mod:`~gcu_async.session.recording` (state-checked record toggles) and
+:mod:`~gcu_async.session.feed` (which aircraft data goes out valid, GNSS time).
 """
 
 from __future__ import annotations
@@ -22,8 +24,9 @@ import heapq
 import itertools
 import math
 from collections import deque
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, fields, replace
+from typing import Any
 
 from gcu_async._checks import (
     check_bool,
@@ -31,6 +34,7 @@ from gcu_async._checks import (
     check_int,
     check_positive,
     check_real,
+    type_error,
 )
 from gcu_async.errors import (
     CommandError,
@@ -49,7 +53,6 @@ from gcu_async.protocol.enums import (
     CameraFlags,
     ExecutionStatus,
     Opcode,
-    SubFrameRequest,
     opcode_name,
 )
 from gcu_async.protocol.feedback import Feedback
@@ -77,6 +80,7 @@ from gcu_async.session.events import (
     TelemetrySample,
     TicketDone,
 )
+from gcu_async.session.feed import TIMEOUT_MAX, AircraftFeed
 from gcu_async.session.health import HealthTracker, LinkHealth
 from gcu_async.session.pacing import Pacer
 from gcu_async.session.recording import RecordingBelief
@@ -124,6 +128,10 @@ class SessionStats:
     """Null packets sent because the next command had to wait for proof of separation."""
     early_packets: int = 0
     """Commands sent before their heartbeat slot (the phase moved instead)."""
+    aircraft_stale: int = 0
+    """Episodes in which packets withheld aircraft data because it was older than
+    ``aircraft_timeout`` (one per run of such packets; docs/client.md, "Aircraft data:
+    what the packets claim")."""
 
 
 class Session:
@@ -143,6 +151,9 @@ class Session:
         reply_window: longest round trip (GCU included) assumed possible; only used to tell
             which packets a reply may answer when no later reply settles it.
         record_settle: seconds a camera may take to report a record toggle in its flags.
+        aircraft_timeout: seconds an aircraft part (attitude, acceleration, velocity,
+            position) stays current after it was given, (0, 10]; then the packets stop
+            claiming it (:mod:`~gcu_async.session.feed`).
         version: protocol version byte to send (2; some devices expect 1).
         name: how errors name the link (e.g. its URL).
     """
@@ -158,6 +169,7 @@ class Session:
         control_silence: float = 0.2,
         reply_window: float = 1.0,
         record_settle: float = 1.0,
+        aircraft_timeout: float = 1.0,
         version: int = DEFAULT_VERSION,
         name: str = "gcu",
     ) -> None:
@@ -177,6 +189,11 @@ class Session:
         self.reply_window = check_positive("reply_window", reply_window)
         self.version = check_int("version", version, 1, 2)
         self.name = check_instance("name", name, str)
+        self.aircraft_timeout = check_real("aircraft_timeout", aircraft_timeout, 0.0,
+                                           TIMEOUT_MAX, "s")  # fmt: skip
+        if self.aircraft_timeout == 0.0:
+            raise FieldRangeError("aircraft_timeout", aircraft_timeout, 0.0, TIMEOUT_MAX, "s",
+                                  detail="must be greater than 0")  # fmt: skip
         self._pacer = Pacer(rate_hz, self.reorder_guard)
         self._ledger = RunLedger(self.reorder_guard, self.reply_window)
         self._control = ControlState()
@@ -199,9 +216,7 @@ class Session:
         self._feedback: Feedback | None = None
         self.trace: Callable[[bytes], None] | None = None
         """Called with every whole packet received (before it is decoded), e.g. to log it."""
-        self._aircraft = AircraftState()
-        self._sub: HostSubFrame | None = None
-        self._frames: dict[ControlValues | None, HostMainFrame] = {}
+        self._feed = AircraftFeed(self.aircraft_timeout, self.name)
         self._last_encoded: tuple[object, object, object, bytes] = (None, None, None, b"")
 
     # -- lifecycle -------------------------------------------------------------------------
@@ -337,16 +352,37 @@ class Session:
         self.stats.cancelled += 1
         self._end(ticket, now, "cancelled by the caller", CommandError)
 
-    def set_aircraft(self, state: AircraftState) -> None:
-        """Replace the aircraft state carried by every packet from the next one on."""
+    def set_aircraft(self, state: AircraftState, now: float) -> None:
+        """Replace the aircraft state carried by the packets from the next one on: every part
+        it gives counts as measured at ``now`` (docs/client.md, "Aircraft data: what the
+        packets claim")."""
         check_instance("state", state, AircraftState)
-        self._aircraft = state
-        self._sub = state.sub_frame()
-        self._frames.clear()
+        self._feed.set(state, now, _AIRCRAFT_FIELDS)
+
+    def update_aircraft(self, changes: Mapping[str, Any], now: float) -> AircraftState:
+        """Change the named fields of the aircraft state (the others keep their value and
+        the time they were given); the parts named count as measured at ``now``. Raises
+        ``TypeError``/``ValueError`` (nothing changes) for an unknown field or a bad value;
+        returns the new state."""
+        if not isinstance(changes, Mapping):
+            raise type_error("changes", "a mapping of AircraftState fields", changes)
+        unknown = sorted(str(k) for k in changes if k not in _AIRCRAFT_FIELDS)
+        if unknown:
+            raise TypeError(f"changes: {', '.join(unknown)}: not AircraftState fields "
+                            f"({', '.join(_AIRCRAFT_FIELDS)})")  # fmt: skip
+        state = replace(self._feed.state, **changes)  # validates
+        self._feed.set(state, now, changes)
+        return state
 
     @property
     def aircraft(self) -> AircraftState:
-        return self._aircraft
+        """The aircraft state as last given (see :meth:`ins_valid` for what goes out)."""
+        return self._feed.state
+
+    def ins_valid(self, now: float) -> bool:
+        """True if a packet sent at ``now`` would set the INS-valid bit: attitude,
+        acceleration and velocity all given, each within ``aircraft_timeout``."""
+        return self._feed.ins_valid(now)
 
     def set_control(self, values: ControlValues | None,
                     kind: ControlKind | None = None) -> int | None:  # fmt: skip
@@ -405,7 +441,10 @@ class Session:
             self.stats.early_packets += 1
         pacer.record(now, opcode, early=not slot_due)
         self._health.packets_sent += 1
-        return self._encode(self._main_frame(now), command)
+        if self._feed.check(now):
+            self.stats.aircraft_stale += 1
+        main, sub = self._feed.frames(self._valid_values(now), now)
+        return self._encode(main, sub, command)
 
     def next_wakeup(self, now: float) -> float:
         """When :meth:`poll` must be called next (``inf`` when closed)."""
@@ -678,20 +717,10 @@ class Session:
         silent = self._health.silent_for(now) > self.control_silence
         return control.valid(reported, silent)
 
-    def _main_frame(self, now: float) -> HostMainFrame:
-        values = self._valid_values(now)
-        frame = self._frames.get(values)
-        if frame is None:
-            if len(self._frames) > 8:
-                self._frames.clear()
-            frame = self._aircraft.main_frame(values, SubFrameRequest.STANDARD)
-            self._frames[values] = frame
-        return frame
-
-    def _encode(self, main: HostMainFrame, command: Command) -> bytes:
+    def _encode(self, main: HostMainFrame, sub: HostSubFrame | None, command: Command) -> bytes:
         """The packet's bytes; the previous packet's are reused when it had the very same
         (immutable) parts, as every heartbeat of an idle session has."""
-        sub, last = self._sub, self._last_encoded
+        last = self._last_encoded
         if last[0] is main and last[1] is sub and last[2] is command:
             return last[3]
         data = HostPacket(main, sub, command, self.version).encode()
@@ -710,5 +739,7 @@ class Session:
         if kind is ControlKind.NONE and opcode is not None:
             raise ValueError(f"control: {opcode_name(opcode)} takes no control values")
 
+
+_AIRCRAFT_FIELDS = tuple(f.name for f in fields(AircraftState))
 
 __all__ = ["Session", "SessionState", "SessionStats"]

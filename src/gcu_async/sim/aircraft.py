@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from gcu_async.protocol.host_frames import HostMainFrame, HostSubFrame
-from gcu_async.protocol.units import Attitude, GeoPosition
+from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp
 
 DEFAULT_HEIGHT_M = 100.0
 """Simulator assumption: height above flat ground when the host sends no relative altitude."""
@@ -13,27 +13,54 @@ DEFAULT_HEIGHT_M = 100.0
 
 @dataclass
 class AircraftState:
-    """Aircraft attitude (host bytes 12–17) and GNSS position (host sub frame 38–60)."""
+    """Aircraft attitude, acceleration, velocity (host bytes 11–29) and GNSS data (host sub
+    frame 38–60), as the host packets report them."""
 
     attitude: Attitude = Attitude(0.0, 0.0, 0.0)
     """Last attitude received with the INS-valid flag (B0 of byte 11) set."""
+    acceleration: NorthEastUp = NorthEastUp(0.0, 0.0, 0.0)
+    """Last acceleration (N/E/U, gravity excluded) received with INS valid."""
+    velocity: NorthEastUp = NorthEastUp(0.0, 0.0, 0.0)
+    """Last velocity (N/E/U) received with INS valid."""
     ins_valid: bool = False
     """B0 of byte 11 in the latest host packet."""
+    packets: int = 0
+    """Host packets taken."""
+    ins_valid_packets: int = 0
+    """Host packets that had INS valid."""
+    ins_changes: int = 0
+    """Times the INS-valid flag changed from one host packet to the next."""
+    has_sub_frame: bool = False
+    """The latest host packet carried a sub frame 0x01 (position, GNSS time)."""
     position: GeoPosition | None = None
     """Last position from a host sub frame 0x01; ``None`` until one arrives."""
     relative_altitude: float = 0.0
     """Host sub frame bytes 57–60 (m above the take-off point, 0 = not sent)."""
     satellites: int = 0
+    gnss_week: int = 0
+    """Host sub frame bytes 55–56 of the last sub frame."""
+    gnss_ms: int = 0
+    """Host sub frame bytes 51–54 of the last sub frame."""
 
     def update(self, main: HostMainFrame, sub: object) -> None:
         """Take the aircraft data of one host packet."""
-        self.ins_valid = main.ins_valid
-        if self.ins_valid:
+        valid = main.ins_valid
+        if self.packets and valid is not self.ins_valid:
+            self.ins_changes += 1
+        self.packets += 1
+        self.ins_valid = valid
+        if valid:
+            self.ins_valid_packets += 1
             self.attitude = main.aircraft_attitude
+            self.acceleration = main.acceleration
+            self.velocity = main.velocity
+        self.has_sub_frame = isinstance(sub, HostSubFrame)
         if isinstance(sub, HostSubFrame):
             self.position = sub.position
             self.relative_altitude = sub.relative_altitude
             self.satellites = sub.satellites
+            self.gnss_week = sub.gnss_week
+            self.gnss_ms = sub.gnss_ms
 
     @property
     def height(self) -> float:
