@@ -7,7 +7,7 @@ BIN := $(VENV)/bin
 EXTRAS := test,bench,mavlink,web,docs
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: demo test lint docs browser bench clean
+.PHONY: demo test lint docs browser iproute2 bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -35,7 +35,18 @@ browser:
 	    >/dev/null) || echo "chromium could not be installed: the browser test will skip"; \
 	fi
 
-test: lint docs browser
+# The network-topology tests (tests/test_netns_*.py) build two hosts in network namespaces
+# with iproute2's `ip`, as root. In CI (CI=true, root, apt available) it is installed when
+# missing; elsewhere, or without root, those tests skip and say why.
+iproute2:
+	@if ! command -v ip >/dev/null && [ "$${CI:-}" = "true" ] && [ "$$(id -u)" = 0 ] \
+	    && command -v apt-get >/dev/null; then \
+	  echo "installing iproute2 for the network-namespace tests"; \
+	  (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq iproute2 \
+	    >/dev/null) || echo "iproute2 could not be installed: the netns tests will skip"; \
+	fi
+
+test: lint docs browser iproute2
 	$(BIN)/python -m pytest
 
 bench: $(STAMP)

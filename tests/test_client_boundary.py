@@ -671,6 +671,9 @@ topt(UDP_URL, "local_host", "host", valid=("127.0.0.1", "0.0.0.0", "localhost"),
 for _name in ("broadcast", "discovery", "follow_peer"):
     topt(UDP_URL, _name, "bool", valid=(True, False), wrong=_TEXT_WRONG,
          query=_BOOL_TEXT, query_valid=("1", "0", "true", "no", "on"))  # fmt: skip
+topt(UDP_URL, "reuse_port", "bool", optional=True, valid=(True, False, None), wrong=_TEXT_WRONG,
+     query=tuple(t for t in _BOOL_TEXT if t != "none"),
+     query_valid=("1", "0", "none"))  # fmt: skip
 topt(TCP_URL, "reconnect", "bool", valid=(True, False), wrong=_TEXT_WRONG,
      query=_BOOL_TEXT, query_valid=("yes", "off"))  # fmt: skip
 topt(TCP_URL, "connect_timeout", "query-only", query=_FLOAT_TEXT, query_valid=("0.5", "10"))

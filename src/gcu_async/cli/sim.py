@@ -27,6 +27,8 @@ from gcu_async.sim.serialport import SerialServer
 from gcu_async.sim.server import SimServer
 from gcu_async.sim.simulator import GcuSimulator
 from gcu_async.sim.tcp import TcpServer
+from gcu_async.sim.udp import HOST_UDP_PORT, interface_broadcast
+from gcu_async.transport._common import format_hostport
 
 PROG = "gcu-async sim"
 DEFAULT_LISTEN = "udp://127.0.0.1:2337"
@@ -68,7 +70,9 @@ def register(sub: Any) -> None:
                    help=f"pod model, Appendix 7 name or code (default {DEFAULT_POD})")  # fmt: skip
     p.add_argument("--reply-to", metavar="HOST:PORT",
                    help="UDP: send every reply here (e.g. the broadcast address, port 2338) "
-                   "instead of to the sender")  # fmt: skip
+                   "instead of to the sender; 'broadcast[:PORT]' (Linux): the broadcast "
+                   "address of the listen address's interface, port 2338 unless given, as "
+                   "a real GCU does")  # fmt: skip
     p.add_argument("--reply-port", type=int, metavar="PORT",
                    help="UDP: reply to the sender's host at this port (e.g. 2338)")  # fmt: skip
     p.add_argument("--silence", type=float, default=5.0, metavar="SECONDS",
@@ -116,7 +120,7 @@ def _build(args: argparse.Namespace) -> tuple[GcuSimulator, ListenSpec]:
                 raise ValueError("--reply-to and --reply-port: give at most one")
             reply_to = None
             if args.reply_to is not None:
-                reply_to = parse_hostport(args.reply_to, what="--reply-to")
+                reply_to = _reply_to(args.reply_to, spec.host)
             if args.reply_port is not None and not 1 <= args.reply_port <= 65535:
                 raise ValueError(f"--reply-port: {args.reply_port} is outside 1-65535")
             spec = ListenSpec(spec.kind, spec.host, spec.port, reply_to=reply_to,
@@ -152,6 +156,20 @@ def _build(args: argparse.Namespace) -> tuple[GcuSimulator, ListenSpec]:
     except ValueError as exc:
         raise _UsageError(str(exc)) from None
     return GcuSimulator(model, faults=plan), spec
+
+
+def _reply_to(text: str, listen_host: str) -> tuple[str, int]:
+    """``--reply-to``: ``HOST:PORT``, or ``broadcast[:PORT]`` resolved for the listen host."""
+    name, _, port = text.partition(":")
+    if name != "broadcast":
+        return parse_hostport(text, what="--reply-to")
+    if port and not (port.isdigit() and 1 <= int(port) <= 65535):
+        raise ValueError(f"--reply-to {text!r}: port must be a number in 1-65535")
+    try:
+        host = interface_broadcast(listen_host)
+    except ValueError as exc:
+        raise ValueError(f"--reply-to broadcast: {exc}") from None
+    return host, int(port) if port else HOST_UDP_PORT
 
 
 def _install_switches(
@@ -208,6 +226,8 @@ async def _serve(
         where = server.url
         if isinstance(server, SerialServer) and spec.kind == "pty":
             where += f" (pty: open {server.device_path})"
+        if spec.reply_to is not None:
+            where += f" (replies to {format_hostport(*spec.reply_to)})"
         print(f"{PROG}: {sim.model.profile.name} listening on {where}", flush=True)
         await stop.wait()
     finally:

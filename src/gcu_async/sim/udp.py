@@ -4,12 +4,18 @@ Replies go to the sender's address; or to the sender's host at a fixed ``reply_p
 emulators in the field do: port 2338); or to a fixed ``reply_to`` address — the real GCU
 sends to the LAN broadcast address, port 2338 (NOTES §9, §13); broadcast is allowed on the
 socket when ``reply_to`` is set. Replies leave from the bound port.
+:func:`interface_broadcast` finds the broadcast address of the interface that owns the
+listen address (``gcu-async sim --reply-to broadcast``).
 """
 
 from __future__ import annotations
 
 import asyncio
+import ipaddress
 import logging
+import socket
+import struct
+import sys
 from typing import TYPE_CHECKING, Any
 
 from gcu_async.sim.exchange import Exchange
@@ -24,6 +30,46 @@ log = logging.getLogger("gcu_async.sim")
 
 GCU_UDP_PORT = 2337
 HOST_UDP_PORT = 2338
+
+
+_SIOCGIFADDR = 0x8915  # Linux ioctls: an interface's (primary) IPv4 address,
+_SIOCGIFBRDADDR = 0x8919  # and its broadcast address
+
+
+def interface_broadcast(address: str) -> str:
+    """The IPv4 broadcast address of the interface whose primary address is ``address``
+    (10.213.0.255 for 10.213.0.1/24): where a real GCU on that subnet sends its replies.
+
+    Linux only (``ioctl`` SIOCGIFADDR/SIOCGIFBRDADDR). Raises ``ValueError`` naming the
+    address when it is not an IPv4 address, not any interface's address, or that interface
+    has no broadcast address, and on other platforms."""
+    try:
+        ip = ipaddress.IPv4Address(address)
+    except ValueError:
+        raise ValueError(f"{address!r} is not an IPv4 address") from None
+    if ip.is_unspecified:
+        raise ValueError(f"{address} is no one interface's address: listen on the GCU's own")
+    if not sys.platform.startswith("linux"):
+        raise ValueError(f"finding the broadcast address of {address} needs Linux: give it")
+    import fcntl  # POSIX only
+
+    def ioctl_address(sock: socket.socket, request: int, name: str) -> str | None:
+        ifreq = struct.pack("16s24x", name.encode()[:15])
+        try:
+            result = fcntl.ioctl(sock.fileno(), request, ifreq)
+        except OSError:  # no IPv4 address, or no broadcast address
+            return None
+        return socket.inet_ntoa(result[20:24])
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        for _, name in socket.if_nameindex():
+            if ioctl_address(sock, _SIOCGIFADDR, name) != str(ip):
+                continue
+            broadcast = ioctl_address(sock, _SIOCGIFBRDADDR, name)
+            if broadcast is None or broadcast == "0.0.0.0":
+                raise ValueError(f"{address}: interface {name} has no broadcast address")
+            return broadcast
+    raise ValueError(f"{address} is not the (primary) address of any interface")
 
 
 class _Protocol(asyncio.DatagramProtocol):

@@ -16,6 +16,16 @@ Source filtering
     Note: a GCU answers from its own unicast address, so when ``host`` is a broadcast
     address use ``discovery=True`` or nothing will be accepted.
 
+Sharing the port
+    With a fixed ``local_port`` (2338 by default) the socket sets SO_REUSEPORT where the
+    platform has it (Linux, macOS, BSD; not Windows), so several processes of the *same
+    user* can listen on 2338 at once (an application and ``gcu-async monitor``): every
+    broadcast datagram reaches all of them. A *unicast* datagram to that port reaches only
+    one of them (Linux picks by a hash of the addresses), so sharing suits a real GCU, which
+    broadcasts, not an emulator that answers by unicast. ``reuse_port=False`` binds
+    exclusively. With ``local_port=0`` it is not set: the kernel could then hand two sockets
+    the same ephemeral port. See docs/transports.md, "Network topology".
+
 Reading
     Every readiness event reads *all* queued datagrams (up to 10,000 per event, so one
     socket cannot starve the loop), each delivered by its own ``on_data`` call
@@ -69,6 +79,18 @@ def is_broadcast_address(host: str) -> bool:
     return isinstance(ip, ipaddress.IPv4Address) and ip.packed[3] == 255
 
 
+def _reuse_port(requested: bool | None, local_port: int) -> bool:
+    """Resolve ``reuse_port``: None means "when the port is fixed and the platform can"."""
+    available = hasattr(socket, "SO_REUSEPORT")
+    if requested is None:
+        return available and local_port != 0
+    if not isinstance(requested, bool):
+        raise ValueError(f"reuse_port: {requested!r} is not True, False or None")
+    if requested and not available:
+        raise ValueError("reuse_port: True is not possible here (the platform has no SO_REUSEPORT)")
+    return requested
+
+
 async def _endpoint(
     loop: asyncio.AbstractEventLoop, sock: socket.socket, proto: _UdpProtocol
 ) -> asyncio.DatagramTransport:
@@ -106,8 +128,9 @@ class UdpTransport(Transport):
     ``local_host`` defaults to the wildcard address of the remote's address family;
     ``local_port`` 0 picks an ephemeral port (see :attr:`local_address`). ``broadcast``
     sets SO_BROADCAST; ``None`` (default) sets it when ``host`` looks like a broadcast
-    address (see :func:`is_broadcast_address`). ``discovery`` and ``follow_peer``: see the
-    module docstring.
+    address (see :func:`is_broadcast_address`). ``reuse_port`` sets SO_REUSEPORT; ``None``
+    (default) sets it when ``local_port`` is not 0 and the platform has it. ``discovery``,
+    ``follow_peer`` and ``reuse_port``: see the module docstring.
     """
 
     def __init__(
@@ -120,6 +143,7 @@ class UdpTransport(Transport):
         broadcast: bool | None = None,
         discovery: bool = False,
         follow_peer: bool = False,
+        reuse_port: bool | None = None,
     ) -> None:
         super().__init__()
         if not isinstance(host, str) or not host:
@@ -131,6 +155,7 @@ class UdpTransport(Transport):
         self._broadcast = is_broadcast_address(host) if broadcast is None else bool(broadcast)
         self._discovery = bool(discovery)
         self._follow_peer = bool(follow_peer)
+        self._reuse_port = _reuse_port(reuse_port, self._local_port)
         self._proto: _UdpProtocol | None = None
         self._dtransport: asyncio.DatagramTransport | None = None
         self._remote: tuple[str, int] | None = None
@@ -175,6 +200,12 @@ class UdpTransport(Transport):
     def broadcast(self) -> bool:
         """Whether SO_BROADCAST is (to be) set on the socket."""
         return self._broadcast
+
+    @property
+    def reuse_port(self) -> bool:
+        """Whether SO_REUSEPORT is (to be) set: other sockets of this user may then bind
+        the same local port, and broadcasts reach all of them."""
+        return self._reuse_port
 
     @property
     def discovery(self) -> bool:
@@ -241,6 +272,8 @@ class UdpTransport(Transport):
         try:
             if self._broadcast:
                 sock.setsockopt(socket.SOL_SOCKET, socket.SO_BROADCAST, 1)
+            if self._reuse_port:
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEPORT, 1)
             sock.bind((local_host, self._local_port))
             sock.setblocking(False)
             proto = _UdpProtocol(self)

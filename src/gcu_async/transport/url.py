@@ -12,7 +12,8 @@ ways is an error** (ValueError), as is an unknown option, a repeated query key, 
 name, a path, or a fragment. Options per scheme:
 
 - udp: ``local_port`` (default 2338, 0 = ephemeral), ``local_host``, ``broadcast``,
-  ``discovery``, ``follow_peer`` (see :class:`~gcu_async.transport.udp.UdpTransport`)
+  ``discovery``, ``follow_peer``, ``reuse_port`` (see
+  :class:`~gcu_async.transport.udp.UdpTransport`)
 - tcp: ``connect_timeout`` (s), ``reconnect``, ``backoff_base`` (s), ``backoff_factor``,
   ``backoff_cap`` (s), ``max_attempts`` (or none), ``max_total`` (s, or none); keyword only:
   ``rng`` (a :class:`random.Random`)
@@ -123,6 +124,7 @@ _UDP_OPTIONS: dict[str, Converter] = {
     "broadcast": _as_bool,
     "discovery": _as_bool,
     "follow_peer": _as_bool,
+    "reuse_port": _optional(_as_bool),
 }
 _TCP_OPTIONS: dict[str, Converter] = {
     "connect_timeout": _as_float,
