@@ -22,7 +22,7 @@ import logging
 import os
 import time
 from pathlib import Path
-from typing import Any, BinaryIO
+from typing import IO, Any
 
 from gcu_async._checks import type_error
 from gcu_async.capture import _deps
@@ -56,7 +56,7 @@ class PacketCapture:
         _deps.require()
         self._users = 0
         self._sections = 0
-        self._file: BinaryIO | None = None
+        self._file: IO[bytes] | None = None
         self._writer: Any = None
         self._shb: Any = None
         self._serial_ifaces: dict[str, int] = {}
