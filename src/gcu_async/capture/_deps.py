@@ -37,7 +37,7 @@ def dpkt() -> Any:
         import dpkt.sll
         import dpkt.sll2
         import dpkt.tcp
-        import dpkt.udp  # noqa: F401
+        import dpkt.udp
     except ImportError as exc:
         raise _missing(exc) from exc
     return module
@@ -47,7 +47,7 @@ def pcapng() -> Any:
     """The ``pcapng`` package (python-pcapng) with its ``blocks`` module loaded."""
     try:
         import pcapng as module
-        import pcapng.blocks  # noqa: F401
+        import pcapng.blocks  # loads pcapng.blocks
     except ImportError as exc:
         raise _missing(exc) from exc
     return module

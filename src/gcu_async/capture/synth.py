@@ -58,9 +58,8 @@ class TcpFlow:
     def _segment(self, from_client: bool, flags: int, payload: bytes = b"") -> bytes:
         dpkt = _deps.dpkt()
         src, dst = (self.client, self.server) if from_client else (self.server, self.client)
-        seq, ack = (
-            (self.client_seq, self.server_seq) if from_client else (self.server_seq, self.client_seq)
-        )
+        ours, theirs = self.client_seq, self.server_seq
+        seq, ack = (ours, theirs) if from_client else (theirs, ours)
         tcp = dpkt.tcp.TCP(sport=src[1], dport=dst[1], seq=seq % 2**32, ack=ack % 2**32,
                            flags=flags, win=_WINDOW, data=payload)  # fmt: skip
         if not flags & ACK:

@@ -7,7 +7,7 @@ import sys
 from collections.abc import Sequence
 
 from gcu_async import __version__
-from gcu_async.cli import decode, demo, monitor, send, sim
+from gcu_async.cli import decode, demo, monitor, send, sim, wireshark
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -22,6 +22,7 @@ def build_parser() -> argparse.ArgumentParser:
     monitor.register(sub)
     sim.register(sub)
     demo.register(sub)
+    wireshark.register(sub)
     return parser
 
 

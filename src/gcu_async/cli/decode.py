@@ -31,9 +31,12 @@ def register(sub: Any) -> None:
         "arguments or, with none, from stdin; whitespace, 0x prefixes and commas are ignored.",
     )
     p.add_argument("hex", nargs="*", help="hex bytes (default: read stdin)")
-    p.add_argument("--file", type=Path,
-                   help="decode this file instead of hex: a pcap or pcapng capture (UDP, TCP, "
-                   "gcu_async's serial link type; needs the 'capture' extra) or raw bytes")  # fmt: skip
+    p.add_argument(
+        "--file",
+        type=Path,
+        help="decode this file instead of hex: a pcap or pcapng capture (UDP, TCP, gcu_async's "
+        "serial link type; needs the 'capture' extra) or raw bytes",
+    )
     p.add_argument("--indent", type=int, default=None, help="pretty-print JSON with this indent")
     p.set_defaults(run=run)
 

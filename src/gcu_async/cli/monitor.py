@@ -7,8 +7,10 @@ import asyncio
 import contextlib
 import sys
 import time
+from pathlib import Path
 from typing import Any
 
+from gcu_async.capture import CaptureUnavailable, PacketCapture, as_capture
 from gcu_async.client.client import GcuClient
 from gcu_async.client.connect import connect
 from gcu_async.client.telemetry import TelemetrySample
@@ -26,6 +28,9 @@ def register(sub: Any) -> None:
     p.add_argument("--interval", type=float, default=0.5, help="seconds between lines")
     p.add_argument("--count", type=int, default=0, help="stop after this many lines (0: never)")
     p.add_argument("--timeout", type=float, default=3.0, help="seconds to wait for the GCU")
+    p.add_argument("--capture", type=Path, metavar="FILE",
+                   help="write the packets exchanged to FILE (pcapng; open it in Wireshark "
+                   "with the dissector: gcu-async wireshark --install)")  # fmt: skip
     p.set_defaults(run=run)
 
 
@@ -58,9 +63,11 @@ def format_line(gcu: GcuClient, sample: TelemetrySample) -> str:
     return " | ".join(parts)
 
 
-async def _monitor(url: str, interval: float, count: int, timeout: float) -> int:
+async def _monitor(
+    url: str, interval: float, count: int, timeout: float, capture: PacketCapture | None = None
+) -> int:
     lines = 0
-    async with connect(url, connect_timeout=timeout) as gcu:
+    async with connect(url, connect_timeout=timeout, capture=capture) as gcu:
         next_at = 0.0
         async for sample in gcu.telemetry():
             now = time.monotonic()
@@ -79,11 +86,12 @@ def run(args: argparse.Namespace) -> int:
         if not args.interval > 0:
             raise ValueError(f"--interval: {args.interval!r} must be > 0")
         connect(args.url)
-    except ValueError as exc:
+        capture = as_capture(args.capture)
+    except (ValueError, CaptureUnavailable) as exc:
         print(f"gcu-async monitor: {exc}", file=sys.stderr)
         return 2
     try:
-        return asyncio.run(_monitor(args.url, args.interval, args.count, args.timeout))
+        return asyncio.run(_monitor(args.url, args.interval, args.count, args.timeout, capture))
     except KeyboardInterrupt:
         return 0
     except (LinkLost, GcuError, OSError) as exc:
