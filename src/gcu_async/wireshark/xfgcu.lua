@@ -627,12 +627,13 @@ local function add_reserved(tree, range)
   end
 end
 
-local function add_cameras(tree, abbr, range, value, label)
+-- a camera mask; its bit tree only when the value is the byte at `range` (bits = true)
+local function add_cameras(tree, abbr, range, value, label, bits)
   local names = names_of(CAMERAS, value)
   local text = string.format("%s: 0x%02x", label, value)
   if #names > 0 then text = text .. " (" .. table.concat(names, ", "):lower() .. ")" end
   local item = tree:add(F[abbr], range, value, text)
-  add_bits(item, CAMERAS, range, false)
+  if bits then add_bits(item, CAMERAS, range, false) end
   return item
 end
 
@@ -643,7 +644,7 @@ local P = "host.command.params."
 
 local function p_mask(ctx, off)
   local v = ctx.r(off, 1):uint()
-  add_cameras(ctx.tree, P .. "cameras", ctx.r(off, 1), v, "Cameras")
+  add_cameras(ctx.tree, P .. "cameras", ctx.r(off, 1), v, "Cameras", true)
     :add(F["host.command.params_raw"], ctx.r(off, 1), v, "Raw: " .. int_text(v))
   if v == 0 then ctx.err("cameras: 0 is outside [1, 255] (camera mask)") end
 end
@@ -998,15 +999,15 @@ local function gcu_feedback(ctx, tree, len)
   end
   t:add(F["gcu.feedback.status"], status and r(70, 1) or r(69, 1), result,
     "Result: " .. result):set_generated()
-  local failed = (ZOOM_OPCODES[op] and status and status ~= 0) and status or 0
-  add_cameras(t, "gcu.feedback.failed_cameras", status and r(70, 1) or r(69, 1), failed,
-    "Failed cameras"):set_generated()
+  local zoom_failure = ZOOM_OPCODES[op] and status and status ~= 0
+  add_cameras(t, "gcu.feedback.failed_cameras", status and r(70, 1) or r(69, 1),
+    zoom_failure and status or 0, "Failed cameras", zoom_failure):set_generated()
   ctx.summary = (ctx.summary or "") .. ", feedback " .. name .. " " .. result
 end
 
 -- one packet at [start, start+len) of s; good: its CRC matched
 local function dissect_packet(tvb, s, start, len, root, good, infos)
-  local ctx = {s = s, base = start}
+  local ctx = {s = s, base = start, values = {}}
   ctx.r = function(o, n) return tvb(start + o, n) end
   local host = u16be(s, start + 1) == HOST_HEADER
   local dir = host and "host" or "gcu"
@@ -1098,7 +1099,7 @@ end
 ---------------------------------------------------------------------------------------------
 -- UDP and TCP
 ---------------------------------------------------------------------------------------------
-function xfgcu.dissector(tvb, pinfo, tree)
+local function dissect_transport(tvb, pinfo, tree)
   local n = tvb:len()
   if n == 0 then return 0 end
   local s = tvb:raw(0, n)
@@ -1110,6 +1111,7 @@ function xfgcu.dissector(tvb, pinfo, tree)
   end
   return n
 end
+xfgcu.dissector = dissect_transport
 
 -- the payload holds at least one whole packet: header, length and CRC
 local function holds_packet(tvb)
@@ -1119,18 +1121,30 @@ local function holds_packet(tvb)
   return #packets > 0
 end
 
-local function heuristic_udp(tvb, pinfo, tree)
-  if not holds_packet(tvb) then return false end
-  xfgcu.dissector(tvb, pinfo, tree)
-  return true
+-- Wireshark drops errors raised in heuristic dissectors silently: report them as an item
+local function guarded(heuristic)
+  return function(tvb, pinfo, tree)
+    local ok, result = pcall(heuristic, tvb, pinfo, tree)
+    if ok then return result end
+    tree:add(xfgcu, tvb()):add_proto_expert_info(E.bug, "dissector error: " .. tostring(result))
+    return true
+  end
 end
 
-local function heuristic_tcp(tvb, pinfo, tree)
+local heuristic_udp = guarded(function(tvb, pinfo, tree)
+  if not holds_packet(tvb) then return false end
+  dissect_transport(tvb, pinfo, tree)
+  return true
+end)
+
+local heuristic_tcp = guarded(function(tvb, pinfo, tree)
   if not holds_packet(tvb) then return false end
   pinfo.conversation = xfgcu -- the rest of this connection is ours, wherever its segments cut
-  xfgcu.dissector(tvb, pinfo, tree)
+  -- called directly: a call through Proto.dissector would use up the one level of
+  -- reassembly TCP offers (can_desegment)
+  dissect_transport(tvb, pinfo, tree)
   return true
-end
+end)
 
 ---------------------------------------------------------------------------------------------
 -- serial links captured by gcu_async: DLT_USER5, one record per read or write
