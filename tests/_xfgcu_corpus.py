@@ -207,16 +207,24 @@ def _chunks(data: bytes, rng: random.Random) -> list[bytes]:
     return out
 
 
-TRAILER = 4
-"""Clean packets that end every stream: a false header near the end of a TCP or serial
-stream waits for bytes that never come (the dissector cannot know the stream ended, decode
-does), so the streams end with more than 256 bytes of packets and no junk."""
+# Every stream ends with more than 256 bytes of packets and no junk: a false header near the
+# end of a TCP or serial stream waits for bytes that never come (the dissector cannot know
+# the stream ended, decode can), a documented limit of any stream dissector.
 
 
 def stream_of(packets: list[bytes], rng: random.Random, junk_rate: float) -> bytes:
-    if len(packets) > TRAILER and junk_rate < 1.0:
-        head, tail = packets[:-TRAILER], packets[-TRAILER:]
-        return stream_of(head, rng, junk_rate) + b"".join(tail)
+    if junk_rate < 1.0:  # a stream: junk only before a clean tail of more than 256 bytes
+        tail = 0
+        while tail < len(packets) and sum(map(len, packets[len(packets) - tail :])) <= 256:
+            tail += 1
+        if sum(map(len, packets[len(packets) - tail :])) <= 256:
+            return b"".join(packets)  # too short for junk
+        head = packets[: len(packets) - tail]
+        return _mixed(head, rng, junk_rate) + b"".join(packets[len(head) :])
+    return _mixed(packets, rng, junk_rate)
+
+
+def _mixed(packets: list[bytes], rng: random.Random, junk_rate: float) -> bytes:
     parts: list[bytes] = []
     for packet in packets:
         if rng.random() < junk_rate:
@@ -242,7 +250,7 @@ def write_capture(path: Path, packets: list[bytes], *, seed: int = 1, junk_rate:
                 src, dst = (HOST, GCU) if packet[:2] == HOST_HEADER else (GCU, HOST)
                 roll = rng.random()
                 if roll < junk_rate:
-                    datagram = stream_of([packet, packet], rng, 1.0)
+                    datagram = _mixed([packet, packet], rng, 1.0)
                 elif roll < 2 * junk_rate:
                     datagram = packet + packet[: rng.randrange(1, len(packet))]  # a cut copy
                 else:

@@ -1081,12 +1081,15 @@ local function set_info(pinfo, infos)
   end
 end
 
--- dissect s (the bytes of tvb) and return the offset from which bytes wait for more (or nil)
-local function dissect_bytes(tvb, pinfo, tree, s, final)
+-- dissect s (the bytes of tvb) and return the offset from which bytes wait for more (or nil);
+-- items that start before `skip` were shown in an earlier frame
+local function dissect_bytes(tvb, pinfo, tree, s, final, skip)
   local items, pending = items_of(s, final)
   local infos = {}
   for _, item in ipairs(items) do
-    if item.kind == "junk" then
+    if skip and item.start < skip then
+      -- shown already
+    elseif item.kind == "junk" then
       dissect_junk(tvb, s, item.start, item.len, tree, final, infos)
     else
       dissect_packet(tvb, s, item.start, item.len, tree, item.kind == "packet", infos)
@@ -1099,12 +1102,58 @@ end
 ---------------------------------------------------------------------------------------------
 -- UDP and TCP
 ---------------------------------------------------------------------------------------------
+-- TCP hands a dissector that asks for more bytes at an offset inside the data it had
+-- already (a packet that starts in the previous segment) the whole extended run again from
+-- its old start. To show each packet once, the first pass remembers per direction of each
+-- connection how far (in relative sequence numbers) items have been shown, and per frame
+-- what it skipped. The reassembled data always ends where the frame's segment ends (only
+-- DESEGMENT_ONE_MORE_SEGMENT is asked for), at tcp.nxtseq.
+local f_tcp_stream = Field.new("tcp.stream")
+local f_tcp_srcport = Field.new("tcp.srcport")
+local f_tcp_nxtseq = Field.new("tcp.nxtseq")
+local tcp_shown = {} -- connection/direction -> relative sequence number shown up to
+local tcp_skips = {} -- frame/start -> skip offset used on the first pass
+
+local function last_value(extractor)
+  local values = {extractor()}
+  local last = values[#values]
+  return last and last.value
+end
+
+local function tcp_skip(pinfo, n)
+  local stream, port, nxtseq = last_value(f_tcp_stream), last_value(f_tcp_srcport),
+    last_value(f_tcp_nxtseq)
+  if not (stream and port and nxtseq) then return nil end
+  local start = tonumber(tostring(nxtseq)) - n
+  local frame_key = pinfo.number .. "/" .. start
+  if pinfo.visited then
+    local skip = tcp_skips[frame_key]
+    return skip and skip - start
+  end
+  local key = tostring(stream) .. "/" .. tostring(port)
+  local skip = tcp_shown[key]
+  tcp_skips[frame_key] = skip
+  return skip and skip - start, function(shown_to)
+    if not tcp_shown[key] or start + shown_to > tcp_shown[key] then
+      tcp_shown[key] = start + shown_to
+    end
+  end
+end
+
+function xfgcu.init()
+  tcp_shown = {}
+  tcp_skips = {}
+end
+
 local function dissect_transport(tvb, pinfo, tree)
   local n = tvb:len()
   if n == 0 then return 0 end
   local s = tvb:raw(0, n)
   local stream = pinfo.can_desegment > 0 -- TCP with reassembly: more bytes may follow
-  local pending = dissect_bytes(tvb, pinfo, tree, s, not stream)
+  local skip, record
+  if stream then skip, record = tcp_skip(pinfo, n) end
+  local pending = dissect_bytes(tvb, pinfo, tree, s, not stream, skip)
+  if record then record(pending or n) end
   if stream and pending then
     pinfo.desegment_offset = pending
     pinfo.desegment_len = DESEGMENT_ONE_MORE_SEGMENT
