@@ -53,6 +53,8 @@ class PacketCapture:
         if not os.fspath(path):
             raise ValueError("capture: the file path is empty")
         self._path = Path(path)
+        if self._path.is_dir():
+            raise ValueError(f"capture: {str(self._path)!r} is a directory, not a file path")
         _deps.require()
         self._users = 0
         self._sections = 0

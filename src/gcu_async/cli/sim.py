@@ -206,7 +206,11 @@ async def _serve(
     try:
         await server.start()
     except OSError as exc:
-        print(f"{PROG}: cannot listen on {args_url(spec)}: {exc}", file=sys.stderr)
+        capture = sim.capture
+        if capture is not None and exc.filename is not None and Path(exc.filename) == capture.path:
+            print(f"{PROG}: cannot write the capture file: {exc}", file=sys.stderr)
+        else:
+            print(f"{PROG}: cannot listen on {args_url(spec)}: {exc}", file=sys.stderr)
         return 1
     _install_switches(loop, sim, server, silence, stall)
     try:
