@@ -19,7 +19,6 @@ from collections import defaultdict
 from typing import Any
 
 from _tshark import Field, Frame, Item
-
 from gcu_async.protocol.enums import CameraMask
 from gcu_async.protocol.pods import pod_name
 
@@ -123,8 +122,8 @@ def compare(obj: dict[str, Any], item: Item) -> list[str]:
             continue
         for f, v in zip(got, values, strict=True):
             if not _same(f, v):
-                problems.append(f"{name}: decode {json.dumps(v) if not isinstance(v, bytes) else v.hex()}, "
-                                f"dissector {f.show!r} ({f.showname!r})")  # fmt: skip
+                want = v.hex() if isinstance(v, bytes) else json.dumps(v)
+                problems.append(f"{name}: decode {want}, dissector {f.show!r} ({f.showname!r})")
     for name in absent:
         if name in seen:
             problems.append(f"{name}: decode has none, the dissector shows {seen[name][0].show!r}")
@@ -184,8 +183,11 @@ def packets_by_stream(frames: list[Frame]) -> dict[tuple[str, str, str], list[tu
     return out
 
 
-def decoded_by_stream(objs: list[dict[str, Any]]) -> dict[tuple[str, str, str], list[dict[str, Any]]]:
-    out: dict[tuple[str, str, str], list[dict[str, Any]]] = defaultdict(list)
+Stream = tuple[str, str, str]
+
+
+def decoded_by_stream(objs: list[dict[str, Any]]) -> dict[Stream, list[dict[str, Any]]]:
+    out: dict[Stream, list[dict[str, Any]]] = defaultdict(list)
     for obj in objs:
         where = obj["capture"]
         out[(where["link"], where["src"], where["dst"])].append(obj)

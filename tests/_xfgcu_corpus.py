@@ -15,7 +15,6 @@ import random
 from pathlib import Path
 
 from _protocol_strategies import seal
-
 from gcu_async.capture import PacketCapture
 from gcu_async.protocol import (
     COMMAND_TYPES,
@@ -122,18 +121,18 @@ def gcu_packets() -> list[bytes]:
     mains = [
         GcuMainFrame.build(mode=0x12, pod_status=0x8001, miss_distance=(-500, 500),
                            relative_angles=(-8.03, 0.32, 62.18), attitude=(-0.01, 9.33, 62.15),
-                           angular_rates=(-0.1, 0.1, -3276.8)),  # fmt: skip
+                           angular_rates=(-0.1, 0.1, -3276.8)),
         GcuMainFrame(0x42, 0xFFFF, 1000, -1000, -18000, 17999, 0, 9000, -18000, 35999, 32767,
-                     -32768, 0),  # fmt: skip
+                     -32768, 0),
         GcuMainFrame(),
     ]
     subs: list[GcuSubFrame | UnknownSubFrame | None] = [
         GcuSubFrame.build(hardware_version=3.1, firmware_version=5.0, pod_model=41,
                           target_distance=589.4,
                           target_position=GeoPosition(38.0300822, 170.9175332, 41.123),
-                          camera1_zoom=29.9, camera2_zoom=2.0, time_zone=8),  # fmt: skip
+                          camera1_zoom=29.9, camera2_zoom=2.0, time_zone=8),
         GcuSubFrame(255, 0, 99, 0xFFFF, -1, -1_800_000_000, 900_000_000, -(2**31), 65535, 0,
-                    0xFF, 0xFFFF, -128),  # fmt: skip
+                    0xFF, 0xFFFF, -128),
         GcuSubFrame(10, 11, 45, 0x6080, 0, 1, -1, 2**31 - 1, 10, 10, 0x12, 0x2813, -5),
         None,
         UnknownSubFrame(0x02, b"\x00" * 30 + b"\x01"),

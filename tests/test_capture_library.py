@@ -20,10 +20,10 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+
 from _sim_process import CLI, SimProcess
 from _tshark import dissect, needs_tshark
 from _xfgcu_compare import compare_capture
-
 from gcu_async import GcuClient
 from gcu_async.capture import CaptureUnavailable, PacketCapture
 from gcu_async.cli.decode import decode_capture
@@ -100,15 +100,17 @@ async def test_udp_session_recorded_by_client_and_simulator(tmp_path: Path) -> N
 @needs_tshark
 async def test_tcp_session_with_a_reconnect(tmp_path: Path) -> None:
     sim = GcuSimulator(capture=tmp_path / "sim.pcapng")
-    async with served(sim, "tcp://127.0.0.1:0") as server:
-        async with connect(server.url, capture=tmp_path / "client.pcapng") as gcu:
-            await _session(gcu, 0.5)
-            assert server.kill_connection()
-            deadline = asyncio.get_running_loop().time() + WAIT
-            while gcu.transport.reconnects == 0 or not gcu.link.up:  # type: ignore[attr-defined]
-                assert asyncio.get_running_loop().time() < deadline
-                await asyncio.sleep(0.02)
-            await _session(gcu, 0.5)
+    async with (
+        served(sim, "tcp://127.0.0.1:0") as server,
+        connect(server.url, capture=tmp_path / "client.pcapng") as gcu,
+    ):
+        await _session(gcu, 0.5)
+        assert server.kill_connection()
+        deadline = asyncio.get_running_loop().time() + WAIT
+        while gcu.transport.reconnects == 0 or not gcu.link.up:  # type: ignore[attr-defined]
+            assert asyncio.get_running_loop().time() < deadline
+            await asyncio.sleep(0.02)
+        await _session(gcu, 0.5)
     objs = decode_capture((tmp_path / "client.pcapng").read_bytes())
     streams = {o["capture"]["stream"] for o in objs}
     assert len(streams) == 4  # two connections, both directions
@@ -182,7 +184,9 @@ def test_cli_capture_options(tmp_path: Path) -> None:
         assert compared == len(objs) > 0, name
 
 
-def test_capture_without_the_extra_names_it(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_capture_without_the_extra_names_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     for name in ("dpkt", "pcapng"):
         monkeypatch.setitem(sys.modules, name, None)  # import fails as if not installed
     with pytest.raises(CaptureUnavailable, match=r"'capture' extra.*gcu-async\[capture\]"):

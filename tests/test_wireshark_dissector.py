@@ -13,12 +13,10 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
 from _tshark import dissect, needs_tshark, verbose
 from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
 from _xfgcu_compare import compare_capture, packets_by_stream
 from _xfgcu_corpus import GCU, HOST, corpus, malformed_packets, write_capture
-
 from gcu_async.capture import PacketCapture
 from gcu_async.cli.decode import decode_capture
 
@@ -68,7 +66,8 @@ def test_junk_crc_failures_and_malformed_packets_are_flagged(tmp_path: Path) -> 
     assert len(malformed) == len(malformed_packets())
     for frame in malformed:
         assert [item.kind for item in frame.items] == ["packet"]
-        assert frame.items[0].has("xfgcu.malformed") and frame.items[0].has("xfgcu.malformed.expert")
+        item = frame.items[0]
+        assert item.has("xfgcu.malformed") and item.has("xfgcu.malformed.expert")
     compare_capture(decode_capture(path.read_bytes()), frames)
 
 
@@ -83,7 +82,8 @@ def test_random_bytes_never_raise_a_lua_error(tmp_path: Path) -> None:
         for _ in range(rng.randrange(0, 4)):  # false headers with lengths in and out of range
             if len(data) >= 4:
                 at = rng.randrange(0, len(data) - 3)
-                data[at : at + 4] = rng.choice(headers) + rng.randrange(0, 400).to_bytes(2, "little")
+                length = rng.randrange(0, 400).to_bytes(2, "little")
+                data[at : at + 4] = rng.choice(headers) + length
         capture.udp(HOST, GCU, bytes(data))
         capture.tcp(("127.0.0.1", 40001), ("127.0.0.1", 2332), bytes(data))
         capture.serial("/dev/noise", bytes(data), outbound=bool(i % 2))

@@ -10,13 +10,13 @@ failures and cuts; tshark and decode must agree on every field.
 
 from __future__ import annotations
 
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
 from _protocol_strategies import U8, gcu_packets, host_packets, seal
 from _tshark import dissect, needs_tshark, scratch_dir
 from _xfgcu_compare import compare_capture
 from _xfgcu_corpus import write_capture
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
-
 from gcu_async.cli.decode import decode_capture
 from gcu_async.protocol import COMMAND_TYPES, GCU_HEADER, HOST_HEADER
 
