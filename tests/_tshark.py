@@ -130,9 +130,10 @@ def run_tshark(capture: Path, *extra: str) -> subprocess.CompletedProcess[str]:
     return done
 
 
-def dissect(capture: Path) -> list[Frame]:
-    """Every frame of ``capture`` that has xfgcu items, as tshark's PDML shows it."""
-    done = run_tshark(capture, "-T", "pdml")
+def dissect(capture: Path, *extra: str) -> list[Frame]:
+    """Every frame of ``capture`` that has xfgcu items, as tshark's PDML shows it
+    (``extra``: more tshark options, e.g. ``-2``)."""
+    done = run_tshark(capture, "-T", "pdml", *extra)
     root = ET.fromstring(done.stdout)
     frames: list[Frame] = []
     for packet in root.iter("packet"):

@@ -24,7 +24,7 @@
 -- here by hand. Only the name tables between the GENERATED markers come from the Python
 -- package (tools/gen_wireshark_tables.py), so that the names cannot drift.
 --
--- Lua 5.2 to 5.4 (Wireshark 3.6 and later).
+-- Written for Lua 5.2 to 5.4; tested with Wireshark 4.0 (Lua 5.2).
 
 local xfgcu = Proto("xfgcu", "XF Robot GCU private protocol V2.0.6")
 local xfgcu_serial = Proto("xfgcu_serial", "XF GCU serial link")
@@ -1244,7 +1244,10 @@ end
 local udp_port = DissectorTable.get("udp.port")
 udp_port:add(2337, xfgcu)
 udp_port:add(2338, xfgcu)
-DissectorTable.get("tcp.port"):add(2332, xfgcu)
+local tcp_port = DissectorTable.get("tcp.port")
+tcp_port:add(2332, xfgcu)
+udp_port:add_for_decode_as(xfgcu)
+tcp_port:add_for_decode_as(xfgcu)
 DissectorTable.get("wtap_encap"):add(SERIAL_WTAP, xfgcu_serial)
 xfgcu:register_heuristic("udp", heuristic_udp)
 xfgcu:register_heuristic("tcp", heuristic_tcp)
