@@ -37,8 +37,12 @@ class Unit:
     frames: list[int] = field(default_factory=list)
 
     def add(self, frame: int, payload: bytes) -> None:
+        """Append ``payload``, which became readable in order at ``frame`` (a segment that
+        came early counts from the frame that filled the gap before it)."""
         if not payload:
             return
+        if self.frames and frame < self.frames[-1]:
+            frame = self.frames[-1]
         self.starts.append(len(self.data))
         self.frames.append(frame)
         self.data += payload

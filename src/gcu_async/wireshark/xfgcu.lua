@@ -1081,38 +1081,48 @@ local function set_info(pinfo, infos)
   end
 end
 
--- dissect s (the bytes of tvb) and return the offset from which bytes wait for more (or nil);
--- items that start before `skip` were shown in an earlier frame
-local function dissect_bytes(tvb, pinfo, tree, s, final, skip)
+-- dissect s (the bytes of tvb) and return the offset from which bytes wait for more (or nil)
+local function dissect_bytes(tvb, pinfo, tree, s, final)
   local items, pending = items_of(s, final)
   local infos = {}
   for _, item in ipairs(items) do
-    if skip and item.start < skip then
-      -- shown already
-    elseif item.kind == "junk" then
+    if item.kind == "junk" then
       dissect_junk(tvb, s, item.start, item.len, tree, final, infos)
     else
       dissect_packet(tvb, s, item.start, item.len, tree, item.kind == "packet", infos)
     end
   end
   set_info(pinfo, infos)
-  return pending
+  return pending, #items
 end
 
 ---------------------------------------------------------------------------------------------
--- UDP and TCP
+-- byte streams: TCP connections and serial links, reassembled here
 ---------------------------------------------------------------------------------------------
--- TCP hands a dissector that asks for more bytes at an offset inside the data it had
--- already (a packet that starts in the previous segment) the whole extended run again from
--- its old start. To show each packet once, the first pass remembers per direction of each
--- connection how far (in relative sequence numbers) items have been shown, and per frame
--- what it skipped. The reassembled data always ends where the frame's segment ends (only
--- DESEGMENT_ONE_MORE_SEGMENT is asked for), at tcp.nxtseq.
+-- Each direction of a TCP connection (tcp.stream, source) and of a serial link (interface,
+-- direction flag) is a stream. On Wireshark's first pass, which sees the records in order,
+-- the bytes a record brings are appended to what waited in that stream (TCP: in sequence
+-- order, retransmitted bytes taken once, early segments held until the gap before them is
+-- filled) and parsed as a stream; what may still become a packet waits for the next record.
+-- The bytes each frame dissected are kept, so that later passes (a GUI click, tshark -2)
+-- show exactly the same. TCP's own reassembly is not used: it hands a dissector that asks
+-- for more bytes inside data it already had the whole run again, later.
+local f_interface_id = Field.new("frame.interface_id")
 local f_tcp_stream = Field.new("tcp.stream")
-local f_tcp_srcport = Field.new("tcp.srcport")
-local f_tcp_nxtseq = Field.new("tcp.nxtseq")
-local tcp_shown = {} -- connection/direction -> relative sequence number shown up to
-local tcp_skips = {} -- frame/start -> skip offset used on the first pass
+local f_tcp_seq = Field.new("tcp.seq")
+local MAX_EARLY = 1024 -- TCP segments held past a gap, per stream
+local GAP_PATIENCE = 8 -- segments that may arrive before a gap is skipped
+
+local pending_bytes = {} -- stream key -> bytes waiting for more (first pass)
+local next_seq = {} -- TCP stream key -> next sequence number expected
+local early = {} -- TCP stream key -> {seq = bytes} past a gap
+local frame_bytes = {} -- frame/stream key -> the bytes that frame dissected
+local gap_age = {} -- TCP stream key -> segments seen since a gap opened
+
+local function reset_streams()
+  pending_bytes, next_seq, early, frame_bytes, gap_age = {}, {}, {}, {}, {}
+end
+xfgcu.init = reset_streams
 
 local function last_value(extractor)
   local values = {extractor()}
@@ -1120,44 +1130,103 @@ local function last_value(extractor)
   return last and last.value
 end
 
-local function tcp_skip(pinfo, n)
-  local stream, port, nxtseq = last_value(f_tcp_stream), last_value(f_tcp_srcport),
-    last_value(f_tcp_nxtseq)
-  if not (stream and port and nxtseq) then return nil end
-  local start = tonumber(tostring(nxtseq)) - n
-  local frame_key = pinfo.number .. "/" .. start
-  if pinfo.visited then
-    local skip = tcp_skips[frame_key]
-    return skip and skip - start
-  end
-  local key = tostring(stream) .. "/" .. tostring(port)
-  local skip = tcp_shown[key]
-  tcp_skips[frame_key] = skip
-  return skip and skip - start, function(shown_to)
-    if not tcp_shown[key] or start + shown_to > tcp_shown[key] then
-      tcp_shown[key] = start + shown_to
+local function drain(held, nxt, out)
+  local progress = true
+  while progress do
+    progress = false
+    for s, bytes in pairs(held) do
+      if s <= nxt then
+        held[s] = nil
+        if s + #bytes > nxt then
+          out[#out + 1] = bytes:sub(nxt - s + 1)
+          nxt = s + #bytes
+        end
+        progress = true
+      end
     end
   end
+  return nxt
 end
 
-function xfgcu.init()
-  tcp_shown = {}
-  tcp_skips = {}
+-- The new bytes a TCP segment brings to its stream, in sequence order, and whether a gap
+-- was skipped. With its default preferences Wireshark's TCP does not hand retransmitted or
+-- out-of-order segments to dissectors (tcp.no_subdissector_on_error): a gap that later
+-- segments do not fill within GAP_PATIENCE segments is skipped, with the bytes that waited
+-- before it.
+local function tcp_in_order(key, seq, payload)
+  local nxt = next_seq[key] or seq
+  local held = early[key] or {}
+  early[key] = held
+  local out = {}
+  local ahead = seq - nxt
+  if ahead < 0 then -- a retransmission, perhaps with new bytes at its end
+    payload = (-ahead < #payload) and payload:sub(-ahead + 1) or ""
+    ahead = 0
+  end
+  local skipped = false
+  if ahead > 0 then
+    local count = 0
+    for _ in pairs(held) do count = count + 1 end
+    if held[seq] == nil and count < MAX_EARLY then held[seq] = payload end
+    gap_age[key] = (gap_age[key] or 0) + 1
+    if gap_age[key] > GAP_PATIENCE then
+      local first
+      for s in pairs(held) do if first == nil or s < first then first = s end end
+      nxt, skipped = first, true
+      nxt = drain(held, nxt, out)
+      gap_age[key] = 0
+    end
+  elseif #payload > 0 then
+    out[1] = payload
+    nxt = drain(held, nxt + #payload, out)
+    gap_age[key] = 0
+  end
+  next_seq[key] = nxt
+  return table.concat(out), skipped
 end
 
+-- dissect one record of stream `key`; `new_bytes()` gives what it adds (first pass only)
+local function dissect_stream(tvb, pinfo, tree, key, new_bytes, label)
+  local fkey = pinfo.number .. "/" .. key
+  local data = frame_bytes[fkey]
+  local first = not pinfo.visited or data == nil
+  if first then
+    local bytes, skipped = new_bytes()
+    data = (skipped and "" or (pending_bytes[key] or "")) .. bytes
+    frame_bytes[fkey] = data
+  end
+  local view = tvb
+  if #data > 0 and data ~= tvb:raw(0, tvb:len()) then
+    view = ByteArray.new(data, true):tvb(label)
+  end
+  local pending, shown = dissect_bytes(view, pinfo, tree, data, false)
+  if first then pending_bytes[key] = pending and data:sub(pending + 1) or "" end
+  if shown == 0 then
+    pinfo.cols.protocol:set("XFGCU")
+    pinfo.cols.info:set(string.format("%d bytes wait for the rest of a packet",
+      pending and #data - pending or 0))
+  end
+  return #data - tvb:len(), pending
+end
+
+---------------------------------------------------------------------------------------------
+-- UDP and TCP
+---------------------------------------------------------------------------------------------
 local function dissect_transport(tvb, pinfo, tree)
   local n = tvb:len()
   if n == 0 then return 0 end
-  local s = tvb:raw(0, n)
-  local stream = pinfo.can_desegment > 0 -- TCP with reassembly: more bytes may follow
-  local skip, record
-  if stream then skip, record = tcp_skip(pinfo, n) end
-  local pending = dissect_bytes(tvb, pinfo, tree, s, not stream, skip)
-  if record then record(pending or n) end
-  if stream and pending then
-    pinfo.desegment_offset = pending
-    pinfo.desegment_len = DESEGMENT_ONE_MORE_SEGMENT
+  local seq = last_value(f_tcp_seq)
+  local stream = last_value(f_tcp_stream)
+  if seq ~= nil and stream ~= nil then
+    local key = string.format("tcp %s %s:%s", tostring(stream), tostring(pinfo.src),
+      tostring(pinfo.src_port))
+    local start = tonumber(tostring(seq))
+    dissect_stream(tvb, pinfo, tree, key, function()
+      return tcp_in_order(key, start, tvb:raw(0, n))
+    end, "TCP bytes (reassembled)")
+    return n
   end
+  dissect_bytes(tvb, pinfo, tree, tvb:raw(0, n), true) -- a datagram: its end ends it
   return n
 end
 xfgcu.dissector = dissect_transport
@@ -1188,9 +1257,7 @@ end)
 
 local heuristic_tcp = guarded(function(tvb, pinfo, tree)
   if not holds_packet(tvb) then return false end
-  pinfo.conversation = xfgcu -- the rest of this connection is ours, wherever its segments cut
-  -- called directly: a call through Proto.dissector would use up the one level of
-  -- reassembly TCP offers (can_desegment)
+  pinfo.conversation = xfgcu -- the rest of this connection is ours
   dissect_transport(tvb, pinfo, tree)
   return true
 end)
@@ -1198,43 +1265,20 @@ end)
 ---------------------------------------------------------------------------------------------
 -- serial links captured by gcu_async: DLT_USER5, one record per read or write
 ---------------------------------------------------------------------------------------------
-local interface_id = Field.new("frame.interface_id")
-local serial_pending = {} -- stream key -> bytes waiting for more (first pass)
-local serial_frames = {} -- frame number -> bytes to dissect (pending .. this record)
-
-function xfgcu_serial.init()
-  serial_pending = {}
-  serial_frames = {}
-end
+xfgcu_serial.init = reset_streams
 
 function xfgcu_serial.dissector(tvb, pinfo, tree)
   local n = tvb:len()
-  local dir = pinfo.p2p_dir == P2P_DIR_SENT and "sent" or (pinfo.p2p_dir == P2P_DIR_RECV and "received" or "unknown")
-  local iface = interface_id()
-  local key = tostring(iface and iface.value or 0) .. "/" .. dir
-  local data = serial_frames[pinfo.number]
-  if not pinfo.visited or data == nil then
-    data = (serial_pending[key] or "") .. tvb:raw(0, n)
-    serial_frames[pinfo.number] = data
-  end
-  local carried = #data - n
+  local dir = pinfo.p2p_dir == P2P_DIR_SENT and "sent"
+    or (pinfo.p2p_dir == P2P_DIR_RECV and "received" or "unknown")
+  local key = string.format("serial %s %s", tostring(last_value(f_interface_id) or 0), dir)
   local t = tree:add(xfgcu_serial, tvb())
   t:append_text(string.format(", %s by the capturing side", dir))
   t:add(serial_f.direction, tvb(), dir):set_generated()
   t:add(serial_f.chunk, tvb(), n):set_generated()
-  local view = tvb
-  if carried > 0 then
-    t:add(serial_f.pending, tvb(), carried):set_generated()
-    view = ByteArray.new(data, true):tvb("Serial bytes (reassembled)")
-  end
-  local pending = dissect_bytes(view, pinfo, tree, data, false)
-  if not pinfo.visited then
-    serial_pending[key] = pending and data:sub(pending + 1) or ""
-  end
-  if tostring(pinfo.cols.info) == "" or not tostring(pinfo.cols.info):find("GCU", 1, true) then
-    pinfo.cols.protocol:set("XFGCU")
-    if pending then pinfo.cols.info:set(string.format("%d bytes wait for the rest of a packet", #data - pending)) end
-  end
+  local carried = dissect_stream(tvb, pinfo, tree, key, function() return tvb:raw(0, n) end,
+    "Serial bytes (reassembled)")
+  if carried > 0 then t:add(serial_f.pending, tvb(), carried):set_generated() end
   return n
 end
 
