@@ -5,7 +5,8 @@
 --
 -- What it dissects
 --   * UDP ports 2337 (GCU) and 2338 (host), TCP port 2332 (GCU server), and, by heuristics
---     (header, length, CRC of a whole first packet), any other UDP or TCP port.
+--     (a payload holding a whole packet: header, length, CRC), any other UDP or TCP port;
+--     the bytes of each TCP direction are put in sequence order and reassembled here.
 --   * Serial links captured by gcu_async (`capture=`, `--capture`): link type DLT_USER5
 --     (LINKTYPE 152), one record per read or write, the pcapng packet flags giving the
 --     direction; the chunks of each direction are reassembled here.
