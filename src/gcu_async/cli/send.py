@@ -12,8 +12,10 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
+from gcu_async.capture import CaptureUnavailable, PacketCapture, as_capture
 from gcu_async.cli._exit import (
     EXIT_FAILED,
     EXIT_INTERRUPTED,
@@ -154,6 +156,9 @@ def register(sub: Any) -> None:
         help="after a mode command, keep sending its control values this long (default 3 s "
         "for euler/angle-control/fpv, stopping early once the camera is there; 0 otherwise)",
     )
+    p.add_argument("--capture", type=Path, metavar="FILE",
+                   help="write the packets exchanged to FILE (pcapng; open it in Wireshark "
+                   "with the dissector: gcu-async wireshark --install)")  # fmt: skip
     p.set_defaults(run=run)
 
 
@@ -179,9 +184,11 @@ ANGLE_MODES = {"euler", "angle-control", "fpv"}
 
 
 async def _send(
-    url: str, spec: CliCommand, values: list[Any], timeout: float, rate: float, hold: float
+    url: str, spec: CliCommand, values: list[Any], timeout: float, rate: float, hold: float,
+    capture: PacketCapture | None = None,
 ) -> tuple[Any, dict[str, Any]]:
-    async with connect(url, command_timeout=timeout, connect_timeout=timeout, rate_hz=rate) as gcu:
+    async with connect(url, command_timeout=timeout, connect_timeout=timeout, rate_hz=rate,
+                       capture=capture) as gcu:  # fmt: skip
         feedback = await spec.call(gcu, values)
         # Control values only act while packets carry them: hold them for a while (angle
         # modes stop early once the camera's attitude matches the target).
@@ -207,7 +214,8 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--timeout: {args.timeout!r} must be > 0")
         # validate the command's arguments before opening anything
         connect(args.url)
-    except ValueError as exc:
+        capture = as_capture(args.capture)
+    except (ValueError, CaptureUnavailable) as exc:
         print(f"gcu-async send: {exc}", file=sys.stderr)
         return EXIT_USAGE
     hold = args.hold if args.hold is not None else (3.0 if spec.holds else 0.0)
@@ -216,7 +224,7 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_USAGE
     try:
         feedback, state = asyncio.run(interruptible(
-            _send(args.url, spec, values, args.timeout, args.rate, hold)))  # fmt: skip
+            _send(args.url, spec, values, args.timeout, args.rate, hold, capture)))  # fmt: skip
     except (Interrupted, KeyboardInterrupt):  # KeyboardInterrupt: no loop signal handlers
         print(json.dumps({"ok": False, "error": "interrupted"}))
         return EXIT_INTERRUPTED
