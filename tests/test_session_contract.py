@@ -28,6 +28,9 @@ from gcu_async.protocol import HostPacket
 from gcu_async.session import Session, SessionState, TicketState
 
 GUARD = 0.015
+# ~2 min alone; more on a loaded machine: beyond the suite's default 120 s timeout
+pytestmark = pytest.mark.timeout(1200)
+
 COMMANDS_PER_EXAMPLE = 500
 EXAMPLES = 200  # × COMMANDS_PER_EXAMPLE = 100,000 commands per run
 TOTALS: Counter[str] = Counter()

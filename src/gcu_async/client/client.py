@@ -271,7 +271,8 @@ class GcuClient(CommandMethods, WaitingMethods):
                     delay = OPEN_BACKOFF.delay(attempts - 1, self._rng)
                     if abort.is_set():
                         raise LinkLost(f"{self.transport.url}: closed while opening") from exc
-                    if loop.time() + delay >= deadline:
+                    delay = min(delay, deadline - loop.time())  # the last try at the end
+                    if delay <= 0:
                         raise LinkLost(
                             f"{self.transport.url}: no GCU within open_timeout "
                             f"{self.open_timeout:g} s ({attempts} attempts; last: {exc})"
