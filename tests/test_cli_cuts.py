@@ -221,3 +221,18 @@ def test_monitor_json_shows_the_vendors_pod_name() -> None:
     assert done.returncode == 0, done.stderr
     infos = [json.loads(line)["info"] for line in done.stdout.splitlines()]
     assert {i["pod_model"] for i in infos if i is not None} == {"D-90AI"}
+
+
+# -- a value out of range is a usage error before anything is opened -------------------------
+@pytest.mark.parametrize(("args", "message"), [
+    (["zoom-to", "0.5"], "ratio: 0.5 is outside the allowed range [1, 3276.8] x"),
+    (["time-zone", "20"], "offset_hours: 20 is outside the allowed range [-12, 14] h"),
+    (["euler", "0", "-30", "400"], "yaw: 400.0 is outside the allowed range [-180, 360) deg"),
+    (["pointing-lock", "0", "200"], "yaw_rate: 200.0 is outside the allowed range [-150, 150]"),
+])  # fmt: skip
+def test_out_of_range_values_fail_before_connecting(args: list[str], message: str) -> None:
+    # nothing answers at DEAD: had the client been opened, this would be a timeout (1)
+    done = cli("send", DEAD, *args, "--timeout", "5")
+    assert done.returncode == 2, (done.stdout, done.stderr)
+    assert done.stderr.startswith(f"gcu-async send: {message}"), done.stderr
+    assert done.stdout == ""

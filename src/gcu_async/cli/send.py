@@ -139,9 +139,10 @@ class Invocation:
 
 
 def resolve(args: argparse.Namespace) -> Invocation:
-    """Parse the command's part of the command line into ``args`` and check it all; opens
-    nothing. Raises ``ValueError`` with a one-line reason; the command's parser exits with
-    status 2 (one line) for a bad argument, 0 after printing its ``--help``."""
+    """Parse the command's part of the command line into ``args`` and check it all, values
+    against the method's ranges included; opens nothing. Raises ``ValueError`` with a
+    one-line reason; the command's parser exits with status 2 (one line) for a bad
+    argument, 0 after printing its ``--help``."""
     spec = COMMANDS.get(args.name)
     if spec is None:
         raise ValueError(f"unknown command {args.name!r}; one of: {', '.join(COMMANDS)}")
@@ -161,6 +162,7 @@ def resolve(args: argparse.Namespace) -> Invocation:
         extra["cameras"] = args.cameras
     if args.timeout is not None and spec.takes_timeout:
         extra["timeout"] = args.timeout
+    spec.check(values, **extra)  # the method's own checks, before anything is opened
     connect(args.url)  # validates the URL and its options; opens nothing
     hold = args.hold if args.hold is not None else (3.0 if spec.holds else 0.0)
     if not 0 <= hold <= 3600:

@@ -5,6 +5,7 @@ the method's parameters (docs/cli.md, "gcu-async send")."""
 from __future__ import annotations
 
 import argparse
+import asyncio
 import inspect
 import re
 import textwrap
@@ -12,10 +13,15 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
-from gcu_async.client.api import ALTITUDE_RANGE, RATE_LIMIT
+from gcu_async.client.api import ALTITUDE_RANGE, RATE_LIMIT, CommandMethods
 from gcu_async.client.client import GcuClient
-from gcu_async.protocol.commands import ZOOM_RATIO_MAX
+from gcu_async.protocol.commands import ZOOM_RATIO_MAX, Command, command_code
 from gcu_async.protocol.enums import CameraMask, NightVisionMode, OsdCoordinates
+from gcu_async.protocol.feedback import Feedback
+from gcu_async.protocol.gcu_frames import GcuSubFrame
+from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.protocol.units import Attitude
+from gcu_async.session import ControlKind
 
 
 def _switch(text: str) -> bool:
@@ -138,6 +144,13 @@ class CliCommand:
         args, kwargs = self.build(values)
         return getattr(gcu, self.method)(*args, **kwargs, **extra)
 
+    def check(self, values: list[Any], **extra: Any) -> None:
+        """Check the arguments as the method does, with no GCU behind it: raises the same
+        ``TypeError`` or :class:`~gcu_async.errors.FieldRangeError` it would, sends nothing.
+        (Rate limits are checked at zoom 1x here; the method checks them again at the
+        GCU's zoom.)"""
+        asyncio.run(self.call(_Unconnected(), values, **extra))
+
     def description(self) -> str:
         """The command's ``--help`` text: the summary and the method's own docstring."""
         method = getattr(GcuClient, self.method)
@@ -145,6 +158,32 @@ class CliCommand:
         doc = _plain(inspect.getdoc(method) or "")
         paragraphs = [self.summary, f"Calls GcuClient.{self.method}({names}): {doc}"]
         return "\n\n".join(textwrap.fill(p, 78) for p in paragraphs)
+
+
+class _Unconnected(CommandMethods):
+    """The client's command methods with nothing behind them: every check runs, every
+    command "succeeds" without a packet."""
+
+    @property
+    def _info(self) -> GcuSubFrame | None:
+        return None
+
+    async def _submit(
+        self,
+        command: Command,
+        *,
+        timeout: float | None = None,
+        queue_timeout: float | None = None,
+        control: ControlValues | None = None,
+        recording_target: bool | None = None,
+    ) -> Feedback | None:
+        return Feedback(command_code(command), 0)
+
+    def _set_control(self, control: ControlValues | None, kind: ControlKind) -> None:
+        pass
+
+    def _current_attitude(self) -> Attitude:
+        return Attitude(0.0, 0.0, 0.0)
 
 
 _ROLE = re.compile(r":[a-z]+:`~?([^`]+)`")
