@@ -4,10 +4,10 @@
 VENV ?= .venv
 PYTHON ?= python3
 BIN := $(VENV)/bin
-EXTRAS := test,bench,mavlink,web,docs
+EXTRAS := test,bench,mavlink,web,docs,capture
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: demo test lint docs browser bench clean
+.PHONY: demo test lint docs browser tshark bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -19,7 +19,7 @@ demo: $(STAMP)
 	$(BIN)/gcu-async demo
 
 lint: $(STAMP)
-	$(BIN)/ruff check src tests examples benchmarks
+	$(BIN)/ruff check src tests examples benchmarks tools
 	$(BIN)/mypy
 
 docs: $(STAMP)
@@ -35,7 +35,20 @@ browser:
 	    >/dev/null) || echo "chromium could not be installed: the browser test will skip"; \
 	fi
 
-test: lint docs browser
+# The Wireshark dissector is tested with Debian's tshark (and tcpdump for captures made
+# independently of the library). In CI (CI=true, root, apt available) they are installed;
+# elsewhere those tests skip and say why.
+tshark:
+	@if { [ ! -x /usr/bin/tshark ] || [ ! -x /usr/bin/tcpdump ]; } && [ "$${CI:-}" = "true" ] \
+	    && [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	  echo "installing Debian's tshark and tcpdump for the Wireshark dissector tests"; \
+	  echo "wireshark-common wireshark-common/install-setuid boolean false" \
+	    | debconf-set-selections 2>/dev/null; \
+	  (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq tshark \
+	    tcpdump >/dev/null) || echo "tshark could not be installed: the dissector tests will skip"; \
+	fi
+
+test: lint docs browser tshark
 	$(BIN)/python -m pytest
 
 bench: $(STAMP)

@@ -207,6 +207,7 @@ async def test_demo_pan_rate_follows_the_zoom() -> None:
 # -- 5. the vendor's pod names ---------------------------------------------------------------
 def test_sub_frame_dict_uses_the_vendors_name() -> None:
     assert GcuSubFrame.build(pod_model=41).as_dict()["pod_model"] == "D-90AI"
+    assert GcuSubFrame.build(pod_model=41).as_dict()["pod_model_member"] == "D_90AI"
     assert GcuSubFrame.build(pod_model=45).as_dict()["pod_model"] == "D-90Pro(TA)"
     assert GcuSubFrame.build(pod_model=99).as_dict()["pod_model"] == "unknown (code 99)"
 

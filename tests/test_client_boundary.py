@@ -614,6 +614,8 @@ def _client_options(owner: str, build: Callable[[dict[str, Any]], GcuClient],
     opt("clock", "callable", valid=(time.monotonic, time.perf_counter),
         wrong=(None, 5, "time", b"", object(), time.monotonic(), [time.monotonic],
                lambda: "x", lambda: None), bad=(lambda: NAN, lambda: -INF))
+    opt("capture", "part", optional=True, valid=(None,),
+        wrong=(5, 1.5, True, b"x.pcapng", object(), ["x.pcapng"]), bad=("",))
 
 
 async def _read_version(rig: Rig, client: GcuClient) -> Any:

@@ -165,7 +165,9 @@ def test_not_run_python_block_compiles(block: Block) -> None:
 # -- shell blocks ---------------------------------------------------------------------------
 def commands(block: Block) -> list[list[str]]:
     """The commands of a shell block: ``$ ``-prefixed lines of a console block (the rest is
-    output), every line of a sh block; continuation lines joined, comments dropped."""
+    output), every line of a sh block; continuation lines joined, comments dropped, split at
+    ``;``, ``&&``, ``||``, ``&`` and ``$( )``. A command reading a pipe (``| head -3``,
+    ``| jq ...``) only shapes the output and is left out."""
     lines = block.text.splitlines()
     if block.lang == "console":
         lines = [line[2:] for line in _joined(lines) if line.startswith("$ ")]
@@ -173,12 +175,22 @@ def commands(block: Block) -> list[list[str]]:
         lines = _joined(lines)
     out = []
     for line in lines:
-        argv = shlex.split(line, comments=True)
-        if argv and argv[-1] == "&":
-            argv.pop()
-        if argv:
-            out.append(argv)
+        lexer = shlex.shlex(line, posix=True, punctuation_chars=True)
+        lexer.whitespace_split = True
+        lexer.commenters = "#"
+        argv: list[str] = []
+        piped = False
+        for token in [*lexer, ";"]:
+            if token in SEPARATORS:
+                if argv and not piped:
+                    out.append([a.removesuffix("$") for a in argv])
+                argv, piped = [], token == "|"
+            else:
+                argv.append(token)
     return out
+
+
+SEPARATORS = {"|", "||", "&&", ";", "&", "(", ")", "$("}
 
 
 def _joined(lines: list[str]) -> list[str]:
@@ -343,6 +355,19 @@ def test_unmarked_and_misused_blocks_are_problems() -> None:
     assert "marker 'fragment' on a sh block" in found[2]
     assert "marker 'pytest' on a text block" in found[3]
     assert "defines tests, which a plain run never calls" in found[4]
+
+
+def test_shell_lines_are_split_into_commands() -> None:
+    (block,) = sample(
+        "```console\n$ gcu-async decode --file x.pcapng | jq -c '[.a // .b]' | head -3\n[1]\n"
+        "$ tshark -X lua_script:$(gcu-async wireshark --print-path) -r c.pcapng  # one run\n"
+        "$ gcu-async sim && kill -HUP $!\n```\n"
+    )
+    assert commands(block) == [
+        ["gcu-async", "decode", "--file", "x.pcapng"],
+        ["tshark", "-X", "lua_script:"], ["gcu-async", "wireshark", "--print-path"],
+        ["-r", "c.pcapng"], ["gcu-async", "sim"], ["kill", "-HUP", "$!"],
+    ]
 
 
 def test_a_bad_command_line_is_caught() -> None:

@@ -1,4 +1,5 @@
-"""``gcu-async decode``: hex or a binary capture in, one JSON object per packet out."""
+"""``gcu-async decode``: hex, a raw binary capture or a pcap/pcapng capture in, one JSON
+object per packet out."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from gcu_async.capture.reader import is_capture
 from gcu_async.cli._exit import EXIT_FAILED, EXIT_OK, EXIT_USAGE
 from gcu_async.errors import RemoteProtocolError
 from gcu_async.protocol.deframer import Deframer
@@ -30,7 +32,12 @@ def register(sub: Any) -> None:
         "arguments or, with none, from stdin; whitespace, 0x prefixes and commas are ignored.",
     )
     p.add_argument("hex", nargs="*", help="hex bytes (default: read stdin)")
-    p.add_argument("--file", type=Path, help="binary capture file to decode instead of hex")
+    p.add_argument(
+        "--file",
+        type=Path,
+        help="decode this file instead of hex: a pcap or pcapng capture (UDP, TCP, gcu_async's "
+        "serial link type; needs the 'capture' extra) or raw bytes",
+    )
     p.add_argument("--indent", type=int, default=None, help="pretty-print JSON with this indent")
     p.set_defaults(run=run)
 
@@ -49,23 +56,52 @@ def parse_hex(text: str) -> bytes:
     return bytes(out)
 
 
-def decode_stream(data: bytes) -> tuple[list[dict[str, Any]], dict[str, int]]:
-    """Decode every packet of both directions in ``data``, in stream order."""
-    found: list[tuple[int, dict[str, Any]]] = []
-    errors = 0
+def decode_spans(data: bytes) -> list[tuple[int, int, dict[str, Any]]]:
+    """Every packet of both directions in ``data`` as (offset, length, JSON object), in
+    stream order: one deframer per direction reads the whole of ``data`` and is flushed at
+    its end (a datagram, or a stream that ended)."""
+    found: list[tuple[int, int, dict[str, Any]]] = []
     for header, decoder in ((GCU_HEADER, decode_gcu_packet), (HOST_HEADER, decode_host_packet)):
         deframer = Deframer(header)
         offset = 0
         for raw in [*deframer.feed(data), *deframer.flush()]:
             offset = data.find(raw, offset)
             try:
-                found.append((offset, decoder(raw).as_dict()))
+                obj = decoder(raw).as_dict()
             except RemoteProtocolError as exc:
-                errors += 1
-                found.append((offset, {"error": str(exc), "hex": raw.hex(" ")}))
+                obj = {"error": str(exc), "hex": raw.hex(" ")}
+            found.append((offset, len(raw), obj))
             offset += len(raw)
     found.sort(key=lambda item: item[0])
-    return [obj for _, obj in found], {"decode_errors": errors}
+    return found
+
+
+def decode_stream(data: bytes) -> tuple[list[dict[str, Any]], dict[str, int]]:
+    """Decode every packet of both directions in ``data``, in stream order."""
+    spans = decode_spans(data)
+    errors = sum(1 for _, _, obj in spans if "error" in obj)
+    return [obj for _, _, obj in spans], {"decode_errors": errors}
+
+
+def decode_capture(data: bytes) -> list[dict[str, Any]]:
+    """Every packet of a pcap or pcapng capture, each with a ``capture`` object: the
+    ``frame`` (1-based, as in Wireshark) that brought its last byte, its ``link`` (udp, tcp,
+    serial), ``src`` and ``dst``, and the ``stream`` it belongs to. UDP datagrams are
+    decoded one by one; the bytes of each TCP or serial direction are put in order first.
+    Ordered by frame, then by position. Raises ``ValueError`` for a damaged file and
+    :class:`~gcu_async.capture.CaptureUnavailable` without the ``capture`` extra."""
+    from gcu_async.capture.reader import read_records
+    from gcu_async.capture.reassembly import units
+
+    found: list[tuple[int, int, int, dict[str, Any]]] = []
+    for number, unit in enumerate(units(read_records(data))):
+        for offset, length, obj in decode_spans(bytes(unit.data)):
+            frame = unit.frame_of(offset + length - 1)
+            where = {"frame": frame, "link": unit.link, "src": unit.src, "dst": unit.dst,
+                     "stream": unit.name}  # fmt: skip
+            found.append((frame, number, offset, {**obj, "capture": where}))
+    found.sort(key=lambda item: item[:3])
+    return [obj for *_, obj in found]
 
 
 def _silence_stdout() -> None:
@@ -83,10 +119,16 @@ def run(args: argparse.Namespace) -> int:
         else:
             text = " ".join(args.hex) if args.hex else sys.stdin.read()
             data = parse_hex(text)
+        if args.file is not None and is_capture(data):
+            packets = decode_capture(data)
+        else:
+            packets, _ = decode_stream(data)
+    except ImportError as exc:  # a capture file without the capture extra
+        print(f"gcu-async decode: {exc}", file=sys.stderr)
+        return EXIT_FAILED
     except (OSError, ValueError) as exc:  # unreadable file, not hex: a usage error
         print(f"gcu-async decode: {exc}", file=sys.stderr)
         return EXIT_USAGE
-    packets, _ = decode_stream(data)
     valid = [p for p in packets if "error" not in p]
     try:
         for obj in packets:

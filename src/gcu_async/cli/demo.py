@@ -24,8 +24,10 @@ import time
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
+from pathlib import Path
 from typing import Any
 
+from gcu_async.capture import CaptureUnavailable, PacketCapture, as_capture
 from gcu_async.cli._exit import (
     EXIT_FAILED,
     EXIT_INTERRUPTED,
@@ -98,6 +100,9 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--no-live", action="store_true", help="no live status view, only the progress lines"
     )
+    p.add_argument("--capture", type=Path, metavar="FILE",
+                   help="write the packets the client exchanges to FILE (pcapng; open it in "
+                   "Wireshark with the dissector: gcu-async wireshark --install)")  # fmt: skip
     p.set_defaults(run=run)
 
 
@@ -110,6 +115,8 @@ class DemoOptions:
     speed: float
     live: str
     """``tty``, ``plain`` or ``off`` (see :class:`Console`)."""
+    capture: PacketCapture | None = None
+    """Where the client records its packets."""
 
 
 def parse_options(args: argparse.Namespace, *, isatty: bool) -> DemoOptions:
@@ -144,7 +151,11 @@ def parse_options(args: argparse.Namespace, *, isatty: bool) -> DemoOptions:
         if not 0 < speed <= MAX_SPEED:
             raise ValueError(f"--speed: {speed!r} is outside the allowed range (0, {MAX_SPEED:g}]")
     live = "off" if args.no_live else ("tty" if isatty else "plain")
-    return DemoOptions(args.url, listen, pod, speed, live)
+    try:
+        capture = as_capture(getattr(args, "capture", None))
+    except (TypeError, CaptureUnavailable) as exc:
+        raise ValueError(f"--capture: {exc}") from None
+    return DemoOptions(args.url, listen, pod, speed, live, capture)
 
 
 # -- the aircraft -----------------------------------------------------------------------------
@@ -606,7 +617,8 @@ async def _session(opts: DemoOptions, console: Console, report: Report) -> None:
             report.url = opts.url
         console.line(f"connecting to {report.url} ...")
         t0 = time.monotonic()
-        gcu = connect(report.url, connect_timeout=CONNECT_TIMEOUT, **options)
+        gcu = connect(report.url, connect_timeout=CONNECT_TIMEOUT, capture=opts.capture,
+                      **options)  # fmt: skip
         report.gcu = await stack.enter_async_context(gcu)
         path = FlightPath()
         started = time.monotonic()

@@ -9,8 +9,10 @@ import dataclasses
 import json
 import sys
 import time
+from pathlib import Path
 from typing import Any
 
+from gcu_async.capture import CaptureUnavailable, PacketCapture, as_capture
 from gcu_async.cli._exit import (
     EXIT_FAILED,
     EXIT_INTERRUPTED,
@@ -39,6 +41,9 @@ def register(sub: Any) -> None:
     p.add_argument("--timeout", type=float, default=3.0, help="seconds to wait for the GCU")
     p.add_argument("--json", action="store_true",
                    help="one JSON object per line (the frames as `decode` shows them)")
+    p.add_argument("--capture", type=Path, metavar="FILE",
+                   help="write the packets exchanged to FILE (pcapng; open it in Wireshark "
+                   "with the dissector: gcu-async wireshark --install)")  # fmt: skip
     p.set_defaults(run=run)
 
 
@@ -92,9 +97,9 @@ def down_line(gcu: GcuClient) -> str:
             f"restored {link.restored_count}")  # fmt: skip
 
 
-async def _monitor(url: str, interval: float, count: int, timeout: float,
-                   as_json: bool) -> int:  # fmt: skip
-    async with connect(url, connect_timeout=timeout) as gcu:
+async def _monitor(url: str, interval: float, count: int, timeout: float, as_json: bool,
+                   capture: PacketCapture | None = None) -> int:  # fmt: skip
+    async with connect(url, connect_timeout=timeout, capture=capture) as gcu:
         latest: list[TelemetrySample] = []
         fresh = asyncio.Event()
 
@@ -131,12 +136,13 @@ def run(args: argparse.Namespace) -> int:
         if args.count < 0:
             raise ValueError(f"--count: {args.count!r} must be >= 0")
         connect(args.url)
-    except ValueError as exc:
+        capture = as_capture(args.capture)
+    except (ValueError, CaptureUnavailable) as exc:
         print(f"gcu-async monitor: {exc}", file=sys.stderr)
         return EXIT_USAGE
     try:
-        return asyncio.run(interruptible(
-            _monitor(args.url, args.interval, args.count, args.timeout, args.json)))  # fmt: skip
+        return asyncio.run(interruptible(_monitor(
+            args.url, args.interval, args.count, args.timeout, args.json, capture)))  # fmt: skip
     except (Interrupted, KeyboardInterrupt):  # KeyboardInterrupt: no loop signal handlers
         return EXIT_INTERRUPTED
     except (LinkLost, GcuError, OSError) as exc:

@@ -17,8 +17,10 @@ import textwrap
 import time
 from dataclasses import dataclass
 from functools import cache
+from pathlib import Path
 from typing import Any, NoReturn
 
+from gcu_async.capture import CaptureUnavailable, PacketCapture, as_capture
 from gcu_async.cli._exit import (
     EXIT_FAILED,
     EXIT_INTERRUPTED,
@@ -59,7 +61,10 @@ def _shared_options(parser: argparse.ArgumentParser, *, cameras: bool = True) ->
         help="the cameras a camera command addresses: camera numbers 1-8 or names (visible = "
         "1, thermal = 2), comma-separated, e.g. 1,2 (default: the method's, camera 1 or 2)"
         if cameras else argparse.SUPPRESS,
-    )  # fmt: skip
+    )
+    parser.add_argument("--capture", type=Path, metavar="FILE",
+                        help="write the packets exchanged to FILE (pcapng; open it in Wireshark "
+                        "with the dissector: gcu-async wireshark --install)")  # fmt: skip
 
 
 def _command_list() -> str:
@@ -136,6 +141,8 @@ class Invocation:
     """Seconds the link and the command's feedback may take."""
     rate: float
     hold: float
+    capture: PacketCapture | None = None
+    """Where the client records its packets (``--capture``)."""
 
 
 def resolve(args: argparse.Namespace) -> Invocation:
@@ -167,13 +174,18 @@ def resolve(args: argparse.Namespace) -> Invocation:
     hold = args.hold if args.hold is not None else (3.0 if spec.holds else 0.0)
     if not 0 <= hold <= 3600:
         raise ValueError(f"--hold: {hold!r} is outside [0, 3600] s")
+    try:
+        capture = as_capture(args.capture)
+    except (TypeError, CaptureUnavailable) as exc:
+        raise ValueError(f"--capture: {exc}") from None
     timeout = args.timeout if args.timeout is not None else DEFAULT_TIMEOUT
-    return Invocation(args.url, args.name, spec, values, extra, timeout, args.rate, hold)
+    return Invocation(args.url, args.name, spec, values, extra, timeout, args.rate, hold,
+                      capture)
 
 
 async def _send(inv: Invocation) -> tuple[Any, dict[str, Any]]:
     async with connect(inv.url, command_timeout=inv.timeout, connect_timeout=inv.timeout,
-                       rate_hz=inv.rate) as gcu:  # fmt: skip
+                       rate_hz=inv.rate, capture=inv.capture) as gcu:  # fmt: skip
         feedback = await inv.spec.call(gcu, inv.values, **inv.extra)
         # Control values only act while packets carry them: hold them for a while (angle
         # modes stop early once the camera's attitude matches the target).

@@ -17,8 +17,10 @@ import contextlib
 import logging
 import signal
 import sys
+from pathlib import Path
 from typing import Any
 
+from gcu_async.capture import CaptureUnavailable, as_capture
 from gcu_async.cli._exit import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_USAGE
 from gcu_async.sim.faults import FaultConfig, FaultPlan
 from gcu_async.sim.listen import ListenSpec, parse_hostport, parse_listen_url
@@ -97,6 +99,9 @@ def register(sub: Any) -> None:
                    help="seed for fault injection and the model's noise (default 0)")  # fmt: skip
     p.add_argument("--max-zoom", type=float, default=None, metavar="X",
                    help="maximum optical zoom of camera 1 (default: per pod model)")  # fmt: skip
+    p.add_argument("--capture", type=Path, metavar="FILE",
+                   help="write the packets the simulator receives and sends to FILE (pcapng; "
+                   "open it in Wireshark with: gcu-async wireshark --install)")  # fmt: skip
     p.add_argument("-q", "--quiet", action="store_true", help="do not log executed commands")
     p.set_defaults(run=run)
 
@@ -149,9 +154,10 @@ def _build(args: argparse.Namespace) -> tuple[GcuSimulator, ListenSpec]:
         elif args.faults_on == "replies":
             plan = FaultPlan(replies=plan.replies)
         model = SimulatorModel(args.pod, seed=args.seed, max_zoom=args.max_zoom)
-    except ValueError as exc:
+        capture = as_capture(args.capture)
+    except (ValueError, CaptureUnavailable) as exc:
         raise _UsageError(str(exc)) from None
-    return GcuSimulator(model, faults=plan), spec
+    return GcuSimulator(model, faults=plan, capture=capture), spec
 
 
 def _install_switches(
@@ -201,7 +207,11 @@ async def _serve(
     try:
         await server.start()
     except OSError as exc:
-        print(f"{PROG}: cannot listen on {args_url(spec)}: {exc}", file=sys.stderr)
+        capture = sim.capture
+        if capture is not None and exc.filename is not None and Path(exc.filename) == capture.path:
+            print(f"{PROG}: cannot write the capture file: {exc}", file=sys.stderr)
+        else:
+            print(f"{PROG}: cannot listen on {args_url(spec)}: {exc}", file=sys.stderr)
         return EXIT_FAILED
     _install_switches(loop, sim, server, silence, stall)
     try:

@@ -15,6 +15,7 @@ import enum
 import inspect
 import logging
 import math
+import os
 import random
 import sys
 import time
@@ -32,6 +33,7 @@ from gcu_async._checks import (
     check_real,
     type_error,
 )
+from gcu_async.capture.writer import PacketCapture
 from gcu_async.client.api import CommandMethods
 from gcu_async.client.telemetry import TelemetrySubscription
 from gcu_async.client.waiting import WaitingMethods
@@ -68,6 +70,7 @@ from gcu_async.session import (
 from gcu_async.session.session import RATE_MAX_HZ, RATE_MIN_HZ
 from gcu_async.transport.backoff import Backoff
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
+from gcu_async.transport.tap import with_capture
 
 log = logging.getLogger("gcu_async.client")
 _RESOLUTION = time.get_clock_info("monotonic").resolution
@@ -140,6 +143,8 @@ class GcuClient(CommandMethods, WaitingMethods):
             "Aircraft data: what the packets claim").
         version: protocol version byte to send (2; some field devices expect 1).
         clock: monotonic time source (seconds).
+        capture: write every packet exchanged to this pcapng file (a path or a
+            :class:`~gcu_async.capture.PacketCapture`; needs the ``capture`` extra).
     """
 
     def __init__(
@@ -157,9 +162,11 @@ class GcuClient(CommandMethods, WaitingMethods):
         aircraft_timeout: float = 1.0,
         version: int = DEFAULT_VERSION,
         clock: Callable[[], float] = time.monotonic,
+        capture: PacketCapture | str | os.PathLike[str] | None = None,
     ) -> None:
         if not isinstance(transport, Transport):
             raise type_error("transport", "a Transport", transport)
+        transport = with_capture(transport, capture)
         rate = check_real("rate_hz", rate_hz, RATE_MIN_HZ, RATE_MAX_HZ, "Hz")
         if reorder_guard is None:
             reorder_guard = 0.0 if transport.ordered else DEFAULT_REORDER_GUARD

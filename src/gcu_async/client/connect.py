@@ -22,12 +22,12 @@ def connect(url: str, **options: Any) -> GcuClient:
     2332), ``serial:///dev/ttyUSB0?baudrate=115200``. Options named like
     :class:`GcuClient`'s keyword arguments (``rate_hz``, ``command_timeout``,
     ``queue_timeout``, ``connect_timeout``, ``silence_timeout``, ``check_support``,
-    ``reorder_guard``, ``aircraft_timeout``, ``version``, ``clock``) configure the session;
-    the rest go to the transport (e.g. ``local_port``, ``discovery``, ``baudrate``).
-    ``connect_timeout`` as a keyword is the client's (the wait for the first reply); a TCP
-    transport's own connect timeout goes in the URL (``tcp://HOST?connect_timeout=5``). A
-    bad URL or option raises ``TypeError``/``ValueError`` before anything is opened (a
-    ``url`` that is not a ``str`` is a ``TypeError``).
+    ``reorder_guard``, ``aircraft_timeout``, ``version``, ``clock``, ``capture``) configure
+    the session; the rest go to the transport (e.g. ``local_port``, ``discovery``,
+    ``baudrate``). ``connect_timeout`` as a keyword is the client's (the wait for the first
+    reply); a TCP transport's own connect timeout goes in the URL
+    (``tcp://HOST?connect_timeout=5``). A bad URL or option raises ``TypeError``/``ValueError``
+    before anything is opened (a ``url`` that is not a ``str`` is a ``TypeError``).
     """
     from gcu_async.transport.url import open_transport
 

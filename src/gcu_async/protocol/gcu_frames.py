@@ -359,6 +359,7 @@ class GcuSubFrame(NamedTuple):
             "firmware_version": self.firmware_version,
             "firmware_version_raw": self.firmware_version_raw,
             "pod_model": pod_name(self.pod_code),  # the vendor's spelling, e.g. "D-90AI"
+            "pod_model_member": self.pod_model.name,  # PodModel's member, e.g. "D_90AI"
             "pod_code": self.pod_code,
             "faults": _flag_names(self.faults),
             "fault_raw": self.fault_raw,

@@ -33,21 +33,29 @@ class MemoryServer(SimServer):
         if self._exchange is not None:
             return
         self._exchange = Exchange(self._sim, stream=True)
+        if self._sim.capture is not None:
+            self._sim.capture.acquire()
         await self._ours.open()
 
     def _received(self, data: bytes) -> None:
         if self._exchange is not None:
+            if self._sim.capture is not None:
+                self._sim.capture.serial(self.url, data, outbound=False)
             self._exchange.feed(data, self._send)
 
     def _send(self, data: bytes) -> None:
         if not self._ours.connected:
             raise LinkLost("memory link: the client end is closed")
         self._ours.send(data)
+        if self._sim.capture is not None:
+            self._sim.capture.serial(self.url, data, outbound=True)
 
     async def aclose(self) -> None:
         exchange, self._exchange = self._exchange, None
         if exchange is not None:
             exchange.close()
+            if self._sim.capture is not None:
+                self._sim.capture.release()
         await self._ours.close()
 
     async def __aenter__(self) -> MemoryTransport:  # type: ignore[override]

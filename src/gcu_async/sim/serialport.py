@@ -54,6 +54,21 @@ class SerialServer(SimServer):
     async def start(self) -> None:
         if self._fd is not None:
             return
+        if self._sim.capture is not None:
+            self._sim.capture.acquire()  # OSError if the file cannot be created
+        try:
+            self._open()
+        except BaseException:
+            if self._sim.capture is not None:
+                self._sim.capture.release()
+            raise
+        self._exchange = Exchange(self._sim, stream=True)
+        self._reading = False
+        self._sim.stalls.join(self)  # pauses at once during a stall
+        if not self._sim.stalled:
+            self.resume()
+
+    def _open(self) -> None:
         if self._path is None:
             leader, follower = os.openpty()
             try:
@@ -68,11 +83,6 @@ class SerialServer(SimServer):
             self._serial = _open_device(self._path, self.baudrate)
             self._fd = int(self._serial.fileno())
         os.set_blocking(self._fd, False)
-        self._exchange = Exchange(self._sim, stream=True)
-        self._reading = False
-        self._sim.stalls.join(self)  # pauses at once during a stall
-        if not self._sim.stalled:
-            self.resume()
 
     def pause(self) -> None:
         """Stall member: stop reading the descriptor."""
@@ -98,6 +108,8 @@ class SerialServer(SimServer):
             log.debug("serial read: %s", exc)
             return
         if data:
+            if self._sim.capture is not None:
+                self._sim.capture.serial(self.device_path, data, outbound=False)
             exchange.feed(data, self._write)
 
     def _write(self, data: bytes) -> None:
@@ -105,13 +117,18 @@ class SerialServer(SimServer):
         if fd is None:
             return
         view = memoryview(data)
-        while view:
-            try:
-                n = os.write(fd, view)
-            except (BlockingIOError, InterruptedError):
-                self.replies_dropped += 1
-                return
-            view = view[n:]
+        try:
+            while view:
+                try:
+                    n = os.write(fd, view)
+                except (BlockingIOError, InterruptedError):
+                    self.replies_dropped += 1
+                    return
+                view = view[n:]
+        finally:
+            if self._sim.capture is not None:  # what reached the terminal
+                self._sim.capture.serial(self.device_path, data[: len(data) - len(view)],
+                                         outbound=True)  # fmt: skip
 
     async def aclose(self) -> None:
         self._sim.stalls.leave(self)
@@ -121,6 +138,8 @@ class SerialServer(SimServer):
             self._exchange.close()
         if fd is None:
             return
+        if self._sim.capture is not None:
+            self._sim.capture.release()
         if self._serial is not None:
             self._serial.close()
             self._serial = None

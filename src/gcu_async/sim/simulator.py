@@ -4,8 +4,10 @@ endpoints, with fault injection, a "silence" switch and a "stall" switch."""
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 
+from gcu_async.capture.writer import PacketCapture, as_capture
 from gcu_async.protocol.enums import PodModel
 from gcu_async.sim.clock import Clock
 from gcu_async.sim.faults import FaultConfig, FaultInjector, FaultPlan
@@ -35,7 +37,10 @@ class GcuSimulator:
 
     ``faults`` is a :class:`FaultPlan` (requests and replies configured separately) or one
     :class:`FaultConfig` for both directions (see :meth:`FaultPlan.both`). Endpoints of one
-    simulator share its model and fault injectors.
+    simulator share its model and fault injectors. ``capture`` (a pcapng file path or a
+    :class:`~gcu_async.capture.PacketCapture`; needs the ``capture`` extra) records what
+    every endpoint receives and sends, as it crosses the socket or terminal (after fault
+    injection); the file is open while an endpoint runs.
     """
 
     def __init__(
@@ -46,6 +51,7 @@ class GcuSimulator:
         faults: FaultPlan | FaultConfig | None = None,
         clock: Clock | None = None,
         seed: int = 0,
+        capture: PacketCapture | str | os.PathLike[str] | None = None,
     ) -> None:
         if model is not None and (clock is not None or seed != 0 or pod != DEFAULT_POD):
             raise ValueError("GcuSimulator: give either model= or pod=/clock=/seed=, not both")
@@ -58,6 +64,8 @@ class GcuSimulator:
         self._silent_until = -math.inf
         self.stalls = StallSwitch(self.model.clock)
         """The stall switch every endpoint and exchange of this simulator joins."""
+        self.capture = as_capture(capture)
+        """Where the endpoints record the packets they exchange (``None``: nowhere)."""
 
     # -- switches -----------------------------------------------------------------------------
     def set_faults(self, faults: FaultPlan | FaultConfig | None) -> None:

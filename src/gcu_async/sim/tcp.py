@@ -56,7 +56,15 @@ class TcpServer(SimServer):
         if self._server is not None:
             return
         self._closing = False
-        self._server = await asyncio.start_server(self._serve, self._host, self._port)
+        capture = self._sim.capture
+        if capture is not None:
+            capture.acquire()  # OSError if the file cannot be created: nothing bound yet
+        try:
+            self._server = await asyncio.start_server(self._serve, self._host, self._port)
+        except BaseException:
+            if capture is not None:
+                capture.release()
+            raise
         sockname = self._server.sockets[0].getsockname()
         self.address = (str(sockname[0]), int(sockname[1]))
 
@@ -95,16 +103,24 @@ class TcpServer(SimServer):
         exchange = Exchange(self._sim, stream=True)
         reading = TransportReading(writer.transport)
         self._sim.stalls.join(reading)  # stalled: the kernel buffers what the client sends
+        capture = self._sim.capture
+        ends = _ends(writer)
+        if capture is not None and ends is not None:
+            capture.tcp_open(ends[1], ends[0])
 
         def send(data: bytes) -> None:
             if not writer.is_closing():
                 writer.write(data)
+                if capture is not None and ends is not None:
+                    capture.tcp(ends[0], ends[1], data)
 
         try:
             while True:
                 data = await reader.read(READ_SIZE)
                 if not data:
                     break
+                if capture is not None and ends is not None:
+                    capture.tcp(ends[1], ends[0], data)
                 exchange.feed(data, send)
         except (ConnectionError, OSError) as exc:
             log.debug("TCP client %s: %s", peer, exc)
@@ -112,12 +128,18 @@ class TcpServer(SimServer):
             self._sim.stalls.leave(reading)
             exchange.close()
             self._active = None
+            if capture is not None and ends is not None:
+                killed = writer.transport.is_closing()
+                capture.tcp_close(ends[0] if killed else ends[1], ends[1] if killed else ends[0],
+                                  reset=killed)  # fmt: skip
             log.info("TCP client %s left", peer)
 
     async def aclose(self) -> None:
         server, self._server = self._server, None
         if server is None:
             return
+        if self._sim.capture is not None:
+            self._sim.capture.release()
         self._closing = True
         server.close()
         for writer in list(self._writers):
@@ -130,3 +152,11 @@ class TcpServer(SimServer):
             if pending:
                 await asyncio.wait(pending, timeout=CLOSE_TIMEOUT)
         await asyncio.wait_for(server.wait_closed(), timeout=CLOSE_TIMEOUT)
+
+
+def _ends(writer: asyncio.StreamWriter) -> tuple[tuple[str, int], tuple[str, int]] | None:
+    """(server, client) addresses of a connection, for the capture."""
+    local, peer = writer.get_extra_info("sockname"), writer.get_extra_info("peername")
+    if not (isinstance(local, tuple) and isinstance(peer, tuple)):
+        return None
+    return (str(local[0]), int(local[1])), (str(peer[0]), int(peer[1]))

@@ -12,6 +12,7 @@ import asyncio
 import logging
 from typing import TYPE_CHECKING, Any
 
+from gcu_async.capture.synth import source_address
 from gcu_async.sim.exchange import Exchange
 from gcu_async.sim.server import SimServer
 from gcu_async.sim.stall import TransportReading
@@ -75,11 +76,19 @@ class UdpServer(SimServer):
             return
         loop = asyncio.get_running_loop()
         self._closed = loop.create_future()
-        transport, _ = await loop.create_datagram_endpoint(
-            lambda: _Protocol(self),
-            local_addr=(self._host, self._port),
-            allow_broadcast=self.reply_to is not None,
-        )
+        capture = self._sim.capture
+        if capture is not None:
+            capture.acquire()  # OSError if the file cannot be created: nothing bound yet
+        try:
+            transport, _ = await loop.create_datagram_endpoint(
+                lambda: _Protocol(self),
+                local_addr=(self._host, self._port),
+                allow_broadcast=self.reply_to is not None,
+            )
+        except BaseException:
+            if capture is not None:
+                capture.release()
+            raise
         self._transport = transport
         self._exchange = Exchange(self._sim, stream=False)
         self._reading = TransportReading(transport)
@@ -98,10 +107,16 @@ class UdpServer(SimServer):
             target = self.reply_to
         elif self.reply_port is not None:
             target = (addr[0], self.reply_port, *addr[2:])
+        capture = self._sim.capture
+        local = (source_address(peer, self.address[0]), self.address[1])
+        if capture is not None:
+            capture.udp(peer, local, data)
 
         def send(reply: bytes) -> None:
             if not transport.is_closing():
                 transport.sendto(reply, target)
+                if capture is not None:
+                    capture.udp(local, (str(target[0]), int(target[1])), reply)
 
         exchange.feed(data, send)
 
@@ -118,6 +133,8 @@ class UdpServer(SimServer):
             self._exchange.close()
         if transport is None:
             return
+        if self._sim.capture is not None:
+            self._sim.capture.release()
         transport.close()
         if self._closed is not None:
             await asyncio.wait_for(asyncio.shield(self._closed), timeout=2.0)
