@@ -26,7 +26,7 @@ FLAG_LISTS = {"pod_status", "faults", "thermal_flags", "camera_flags"}
 RENAMED = {"xfgcu.host.sub.data_hex": "xfgcu.sub.data", "xfgcu.gcu.sub.data_hex": "xfgcu.sub.data"}
 DISPLAY_ONLY = {
     "xfgcu.header", "xfgcu.length", "xfgcu.crc", "xfgcu.crc.computed", "xfgcu.crc.status",
-    "xfgcu.reserved", "xfgcu.host.main.flags_reserved", "xfgcu.gcu.sub.pod_vendor_name",
+    "xfgcu.reserved", "xfgcu.host.main.flags_reserved",
 }  # fmt: skip
 """Fields decode's JSON has no key for; checked by :func:`check_display_only`."""
 _CAMERA_BITS = re.compile(r"^xfgcu\.cameras\.camera_(\d)$")
@@ -157,7 +157,7 @@ def check_display_only(obj: dict[str, Any], seen: dict[str, list[Field]]) -> lis
     if [int(f.show, 0) for f in header] != [want]:
         problems.append(f"header: {[f.show for f in header]}")
     if "sub" in obj and obj["sub"] and "pod_code" in obj["sub"]:
-        vendor = [f.show for f in seen.get("xfgcu.gcu.sub.pod_vendor_name", [])]
+        vendor = [f.show for f in seen.get("xfgcu.gcu.sub.pod_model", [])]
         if vendor != [pod_name(obj["sub"]["pod_code"])]:
             problems.append(f"pod vendor name: {vendor} for code {obj['sub']['pod_code']}")
     masks = [int(f.show, 0) for name in ("xfgcu.gcu.feedback.failed_cameras",

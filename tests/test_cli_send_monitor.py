@@ -103,8 +103,12 @@ def test_send_timeout_exits_1() -> None:
     ("args", "message"),
     [
         (["udp://127.0.0.1:2337", "frobnicate"], "unknown command 'frobnicate'"),
-        (["udp://127.0.0.1:2337", "zoom-to"], "zoom-to takes ratio"),
-        (["udp://127.0.0.1:2337", "zoom-to", "fast"], "ratio"),
+        (["udp://127.0.0.1:2337", "zoom-to"], "zoom-to: the following arguments are required: "
+                                               "ratio"),
+        (["udp://127.0.0.1:2337", "zoom-to", "fast"], "argument ratio: invalid float value"),
+        (["udp://127.0.0.1:2337", "zoom-to", "2", "3"], "unrecognized arguments: 3"),
+        (["udp://127.0.0.1:2337", "area-temperature", "on", "0.1"], "give all of left top "
+                                                                    "right bottom, or none"),
         (["udp://127.0.0.1:2337", "ranging", "maybe"], "expected on/off"),
         (["ftp://127.0.0.1", "photo"], "scheme"),
         (["udp://127.0.0.1:99999", "photo"], "port"),

@@ -181,14 +181,14 @@ class Spy:
 
 
 def test_cli_send_table_matches_the_cli() -> None:
-    from gcu_async.cli.send import COMMANDS
+    from gcu_async.cli.send_commands import COMMANDS
 
     rows = cli_rows(CLI_DOC.read_text(encoding="utf-8"))
     assert [r.command for r in rows] == list(COMMANDS)
     for row in rows:
         spec = COMMANDS[row.command]
-        assert row.params == tuple(name for name, _ in spec.params), row.command
+        assert row.params == tuple(p.name for p in spec.params), row.command
         spy = Spy()
-        spec.call(spy, [0.5] * len(spec.params))  # type: ignore[arg-type]
-        assert spy.called == [row.method], row.command
+        spec.call(spy, [0.5] * len(spec.params))
+        assert spy.called == [row.method] == [spec.method], row.command
         assert hasattr(GcuClient, row.method)

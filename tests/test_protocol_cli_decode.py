@@ -81,7 +81,7 @@ def check_gcu_example(obj: dict[str, Any]) -> None:
     assert main["attitude_deg"] == {"roll": -0.01, "pitch": 9.33, "yaw": 62.15}
     assert main["attitude_raw"] == [-1, 933, 6215]
     assert main["relative_angles_deg"] == {"x": -8.03, "y": 0.32, "z": 62.18}
-    assert (sub["pod_model"], sub["pod_code"]) == ("D_90AI", 41)
+    assert (sub["pod_model"], sub["pod_code"]) == ("D-90AI", 41)  # the vendor's name
     assert (sub["target_distance_m"], sub["target_distance_raw"]) == (589.4, 5894)
     assert (sub["camera1_zoom"], sub["camera1_zoom_raw"]) == (29.9, 299)
     assert sub["time_zone"] == 8

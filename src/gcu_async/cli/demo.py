@@ -37,6 +37,7 @@ from gcu_async.cli._exit import (
     interruptible,
 )
 from gcu_async.cli.liveview import Console, LiveView
+from gcu_async.client.api import RATE_LIMIT
 from gcu_async.client.client import GcuClient
 from gcu_async.client.connect import connect
 from gcu_async.client.telemetry import TelemetrySample
@@ -416,7 +417,10 @@ class Demo:
         )
 
     async def step_pan(self) -> None:
-        rate = min(15.0 * self.speed, 90.0)
+        # the rate limit shrinks with the zoom (150 / zoom deg/s): stay inside it
+        info = self.gcu.info
+        zoom = max(info.camera1_zoom, 1.0) if info is not None else 1.0
+        rate = round(min(15.0 * self.speed, 90.0, 0.9 * RATE_LIMIT / zoom), 1)
         await self.cmd(f"pointing_lock(yaw_rate={rate:g})",
                        lambda: self.gcu.pointing_lock(yaw_rate=rate))  # fmt: skip
         yaw0 = self.gcu.status.attitude.yaw
@@ -536,11 +540,31 @@ class Demo:
             ("back to pointing-follow, centred, ranging off", (), self.step_finish),
         ]
 
+    async def prepare(self) -> None:
+        """Start from the state the script assumes, whatever state the GCU is in: camera 1
+        back at 1x (a GCU left zoomed in would cap the script's rates at 150 / zoom deg/s).
+        A failure is reported and the script goes on (its rates follow the zoom)."""
+        info = self.gcu.info
+        if info is None or info.camera1_zoom <= 1.05:
+            return
+        self.console.line(f"[prep] camera 1 is at {info.camera1_zoom:.1f}x: back to 1x first "
+                          f"(rates are limited to {RATE_LIMIT:g}/zoom deg/s)")  # fmt: skip
+        try:
+            await self._zoom_to(1.0)
+        except StepFailed as exc:
+            self.say(f"=> not at 1x ({exc}): the script goes on at this zoom")
+
     async def run(self) -> None:
         """Run every step; a failed step is reported and the next one runs, a lost link
         ends the script."""
         steps = self.steps()
         self.tally.steps_total = len(steps)
+        try:
+            await self.prepare()
+        except LinkLost as exc:
+            self.tally.aborted = f"link lost: {exc}"
+            self.say(f"=> FAILED: link lost: {exc}")
+            return
         for number, (title, needs, step) in enumerate(steps, 1):
             self.console.line(f"[{number:>2}/{len(steps)}] {title}")
             missing = [op for op in needs if not self.supported(op)]

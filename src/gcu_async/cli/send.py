@@ -1,6 +1,10 @@
 """``gcu-async send URL COMMAND [ARGS…]``: run one command, print its feedback as JSON.
 
-Exit status: 0 success, 1 failure / timeout / no link, 2 usage error.
+Parsed in two stages: the ``send`` parser takes the URL, the command's name and the options
+given before the name; the command's own parser (:func:`command_parser`, which also gives
+its ``--help``) takes its arguments and the options given after the name.
+
+Exit status: 0 success, 1 failure / timeout / no link, 2 usage error, 130 interrupted.
 """
 
 from __future__ import annotations
@@ -9,11 +13,12 @@ import argparse
 import asyncio
 import json
 import sys
+import textwrap
 import time
-from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import cache
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from gcu_async.capture import CaptureUnavailable, PacketCapture, as_capture
 from gcu_async.cli._exit import (
@@ -24,177 +29,169 @@ from gcu_async.cli._exit import (
     Interrupted,
     interruptible,
 )
+from gcu_async.cli.send_commands import COMMANDS, CliCommand, parse_cameras
 from gcu_async.client.client import GcuClient
 from gcu_async.client.connect import connect
 from gcu_async.errors import CommandFailed, GcuError, LinkLost
-from gcu_async.protocol.enums import NightVisionMode, OsdCoordinates
 from gcu_async.protocol.feedback import Feedback
 
-
-def _switch(text: str) -> bool:
-    value = text.strip().lower()
-    if value in ("on", "1", "true", "yes", "enable"):
-        return True
-    if value in ("off", "0", "false", "no", "disable"):
-        return False
-    raise ValueError(f"expected on/off, got {text!r}")
+PROG = "gcu-async send"
+DEFAULT_TIMEOUT = 5.0
+"""Seconds: how long the link and a command's feedback may take when ``--timeout`` is not
+given (a method with a ``timeout`` parameter, e.g. ``calibrate``, keeps its own default)."""
 
 
-def _night(text: str) -> NightVisionMode:
-    try:
-        return NightVisionMode[text.strip().upper()]
-    except KeyError:
-        raise ValueError(f"expected off/on/auto, got {text!r}") from None
-
-
-def _osd_coords(text: str) -> OsdCoordinates:
-    try:
-        return OsdCoordinates[text.strip().upper()]
-    except KeyError:
-        raise ValueError(f"expected aircraft/target, got {text!r}") from None
-
-
-Call = Callable[[GcuClient, list[Any]], Any]
-
-
-@dataclass(frozen=True)
-class CliCommand:
-    params: tuple[tuple[str, Callable[[str], Any]], ...]
-    call: Call
-    optional: int = 0
-    """How many trailing parameters may be omitted (the method's defaults apply)."""
-    angle_target: bool = False
-    """The parameters are roll/pitch/yaw targets of an angle mode."""
-    holds: bool = False
-    """A mode command whose control values need packets to act (default ``--hold`` 3 s)."""
-
-
-F, N = float, int
-COMMANDS: dict[str, CliCommand] = {
-    "calibrate": CliCommand((), lambda g, a: g.calibrate()),
-    "centre": CliCommand((), lambda g, a: g.centre()),
-    "euler": CliCommand((("roll", F), ("pitch", F), ("yaw", F)),
-                        lambda g, a: g.euler_control(roll=a[0], pitch=a[1], yaw=a[2]),
-                        angle_target=True, holds=True),
-    "angle-control": CliCommand((("roll", F), ("pitch", F), ("yaw", F)),
-                                lambda g, a: g.angle_control(roll=a[0], pitch=a[1], yaw=a[2]),
-                                holds=True),
-    "fpv": CliCommand((("roll", F), ("pitch", F), ("yaw", F)),
-                      lambda g, a: g.fpv(roll=a[0], pitch=a[1], yaw=a[2]), holds=True),
-    "pointing-lock": CliCommand((("pitch_rate", F), ("yaw_rate", F)),
-                                lambda g, a: g.pointing_lock(**_kw(a, "pitch_rate", "yaw_rate")),
-                                optional=2),
-    "pointing-follow": CliCommand(
-        (("pitch_rate", F), ("yaw_rate", F)),
-        lambda g, a: g.pointing_follow(**_kw(a, "pitch_rate", "yaw_rate")), optional=2),
-    "top-down": CliCommand((("yaw_rate", F),), lambda g, a: g.top_down(**_kw(a, "yaw_rate")),
-                           optional=1),
-    "gaze-at": CliCommand((("latitude", F), ("longitude", F), ("altitude", F)),
-                          lambda g, a: g.gaze_at(*a)),
-    "gaze-lock": CliCommand((), lambda g, a: g.gaze_lock()),
-    "track": CliCommand((("left", F), ("top", F), ("right", F), ("bottom", F)),
-                        lambda g, a: g.track(tuple(a))),
-    "stop-tracking": CliCommand((), lambda g, a: g.stop_tracking()),
-    "click-to-pan": CliCommand((("x", F), ("y", F)), lambda g, a: g.click_to_pan(*a)),
-    "photo": CliCommand((), lambda g, a: g.take_photo()),
-    "record": CliCommand((), lambda g, a: g.toggle_recording()),
-    "zoom-in": CliCommand((), lambda g, a: g.zoom_in()),
-    "zoom-out": CliCommand((), lambda g, a: g.zoom_out()),
-    "zoom-stop": CliCommand((), lambda g, a: g.zoom_stop()),
-    "zoom-to": CliCommand((("ratio", F),), lambda g, a: g.zoom_to(a[0])),
-    "zoom-fraction": CliCommand((("fraction", F),), lambda g, a: g.zoom_to_fraction(a[0])),
-    "focus": CliCommand((), lambda g, a: g.focus()),
-    "palette": CliCommand((("palette", N),), lambda g, a: g.set_palette(a[0])),
-    "night-vision": CliCommand((("mode", _night),), lambda g, a: g.set_night_vision(a[0])),
-    "area-temperature": CliCommand(
-        (("on", _switch), ("left", F), ("top", F), ("right", F), ("bottom", F)),
-        lambda g, a: g.area_temperature(a[0], tuple(a[1:]) if len(a) > 1 else (0, 0, 1, 1)),
-        optional=4),
-    "temperature-alarm": CliCommand((("on", _switch), ("high", F), ("low", F)),
-                                    lambda g, a: g.temperature_alarm(a[0], high=a[1], low=a[2])),
-    "isotherm": CliCommand((("on", _switch), ("high", F), ("low", F)),
-                           lambda g, a: g.isotherm(a[0], high=a[1], low=a[2])),
-    "spot-temperature": CliCommand((("on", _switch), ("x", F), ("y", F)),
-                                   lambda g, a: g.spot_temperature(*a)),
-    "osd": CliCommand((("on", _switch),), lambda g, a: g.set_osd(a[0])),
-    "osd-coordinates": CliCommand((("coordinates", _osd_coords),),
-                                  lambda g, a: g.set_osd_coordinates(a[0])),
-    "auto-flip": CliCommand((("on", _switch),), lambda g, a: g.set_image_auto_flip(a[0])),
-    "time-zone": CliCommand((("hours", N),), lambda g, a: g.set_time_zone(a[0])),
-    "pip": CliCommand((("mode", N),), lambda g, a: g.set_picture_in_picture(a[0])),
-    "target-detection": CliCommand((("on", _switch),),
-                                   lambda g, a: g.set_target_detection(a[0])),
-    "digital-zoom": CliCommand((("on", _switch),), lambda g, a: g.set_digital_zoom(a[0])),
-    "fill-light": CliCommand((("brightness", N),), lambda g, a: g.set_fill_light(a[0])),
-    "ranging": CliCommand((("on", _switch),), lambda g, a: g.set_ranging(a[0])),
-}  # fmt: skip
-
-
-def _kw(values: list[Any], *names: str) -> dict[str, Any]:
-    """Keyword arguments for the given (possibly fewer) positional values."""
-    return dict(zip(names, values, strict=False))
-
-
-def register(sub: Any) -> None:
-    names = ", ".join(COMMANDS)
-    p = sub.add_parser(
-        "send",
-        help="send one command to a GCU and print its feedback as JSON",
-        description=f"Commands: {names}. Exit 0 on success, 1 on failure or timeout, 2 on "
-        "a usage error.",
+def _shared_options(parser: argparse.ArgumentParser, *, cameras: bool = True) -> None:
+    """The options taken both before and after the command's name (``cameras=False``: the
+    command takes no cameras, ``--cameras`` is accepted but hidden and refused later)."""
+    parser.add_argument(
+        "--timeout", type=float, default=None, metavar="SECONDS",
+        help=f"seconds to wait for the link and for the command's feedback, for every command "
+        f"(default {DEFAULT_TIMEOUT:g}; calibrate: 15, its method's default)",
     )
-    p.add_argument("url", help="udp://HOST[:PORT], tcp://HOST[:PORT] or serial:///dev/…")
-    p.add_argument("name", metavar="COMMAND", help="command name (see above)")
-    p.add_argument("args", nargs="*", metavar="ARG", help="command arguments")
-    p.add_argument("--timeout", type=float, default=5.0, help="seconds to wait (default 5)")
-    p.add_argument("--rate", type=float, default=50.0, help="heartbeat rate in Hz (default 50)")
-    p.add_argument(
-        "--hold",
-        type=float,
-        default=None,
-        metavar="SECONDS",
+    parser.add_argument("--rate", type=float, default=50.0, metavar="HZ",
+                        help="heartbeat rate in Hz (default 50)")
+    parser.add_argument(
+        "--hold", type=float, default=None, metavar="SECONDS",
         help="after a mode command, keep sending its control values this long (default 3 s "
         "for euler/angle-control/fpv, stopping early once the camera is there; 0 otherwise)",
     )
-    p.add_argument("--capture", type=Path, metavar="FILE",
-                   help="write the packets exchanged to FILE (pcapng; open it in Wireshark "
-                   "with the dissector: gcu-async wireshark --install)")  # fmt: skip
-    p.set_defaults(run=run)
+    parser.add_argument(
+        "--cameras", type=parse_cameras, default=None, metavar="LIST",
+        help="the cameras a camera command addresses: camera numbers 1-8 or names (visible = "
+        "1, thermal = 2), comma-separated, e.g. 1,2 (default: the method's, camera 1 or 2)"
+        if cameras else argparse.SUPPRESS,
+    )
+    parser.add_argument("--capture", type=Path, metavar="FILE",
+                        help="write the packets exchanged to FILE (pcapng; open it in Wireshark "
+                        "with the dissector: gcu-async wireshark --install)")  # fmt: skip
 
 
-def parse_args(name: str, raw: Sequence[str]) -> tuple[CliCommand, list[Any]]:
-    """Look up ``name`` and convert its arguments; raise ValueError with a one-line reason."""
-    spec = COMMANDS.get(name)
+def _command_list() -> str:
+    """The commands for ``gcu-async send --help``."""
+    lines = ["commands (gcu-async send URL COMMAND --help: its arguments, units, ranges):"]
+    for name, spec in COMMANDS.items():
+        args = [f"[{p.name}]" if p.optional else p.name for p in spec.params]
+        lines.append(f"  {name:<18} {' '.join([*args, f'-> {spec.method}()'])}")
+        lines.append(f"  {'':<18} {spec.summary}")
+    return "\n".join(lines)
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser(
+        "send",
+        help="send one command to a GCU and print its feedback as JSON",
+        description=textwrap.fill(
+            "Connect, run one command, print its feedback (with the camera's attitude and "
+            "mode) as one JSON object. Exit 0 on success, 1 on failure or timeout, 2 on a "
+            "usage error, 130 when interrupted.", 78),
+        epilog=_command_list(),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("url", metavar="URL",
+                   help="udp://HOST[:PORT], tcp://HOST[:PORT] or serial:///dev/…")
+    p.add_argument("name", metavar="COMMAND", help="one of the commands below")
+    p.add_argument("args", nargs=argparse.REMAINDER, metavar="ARG ...",
+                   help="the command's arguments, then options")
+    _shared_options(p)
+    p.set_defaults(run=run)  # fmt: skip
+
+
+class CommandParser(argparse.ArgumentParser):
+    """The parser of one ``send`` command: a usage error is one line on stderr, status 2."""
+
+    def __init__(self, command: str, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self.command = command
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_USAGE, f"{PROG}: {self.command}: {message}\n")
+
+
+@cache
+def command_parser(name: str) -> CommandParser:
+    """The parser of command ``name``: its arguments (converted, in ``arg_<name>``), the
+    shared options, ``-v`` and ``--help`` (the command's own help)."""
+    from gcu_async.cli import VERBOSE_HELP  # the package is loaded once a command is parsed
+
+    spec = COMMANDS[name]
+    parser = CommandParser(
+        name, prog=f"{PROG} URL {name}", description=spec.description(),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )  # fmt: skip
+    for param in spec.params:
+        parser.add_argument(f"arg_{param.name}", metavar=param.name, type=param.convert,
+                            nargs="?" if param.optional else None, help=param.help)  # fmt: skip
+    _shared_options(parser, cameras=spec.takes_cameras)
+    parser.add_argument("-v", "--verbose", action="count", help=VERBOSE_HELP)
+    return parser
+
+
+@dataclass(frozen=True)
+class Invocation:
+    """A checked ``send`` command line: what to call and how long to wait."""
+
+    url: str
+    name: str
+    spec: CliCommand
+    values: list[Any]
+    extra: dict[str, Any]
+    """Keyword arguments from the options: ``cameras``, ``timeout`` (if the method has it)."""
+    timeout: float
+    """Seconds the link and the command's feedback may take."""
+    rate: float
+    hold: float
+    capture: PacketCapture | None = None
+    """Where the client records its packets (``--capture``)."""
+
+
+def resolve(args: argparse.Namespace) -> Invocation:
+    """Parse the command's part of the command line into ``args`` and check it all, values
+    against the method's ranges included; opens nothing. Raises ``ValueError`` with a
+    one-line reason; the command's parser exits with status 2 (one line) for a bad
+    argument, 0 after printing its ``--help``."""
+    spec = COMMANDS.get(args.name)
     if spec is None:
-        raise ValueError(f"unknown command {name!r}; one of: {', '.join(COMMANDS)}")
-    need = len(spec.params) - spec.optional
-    if not need <= len(raw) <= len(spec.params):
-        expected = " ".join(p for p, _ in spec.params) or "no arguments"
-        raise ValueError(f"{name} takes {expected}; got {len(raw)} argument(s)")
-    values: list[Any] = []
-    for (pname, convert), text in zip(spec.params, raw, strict=False):
-        try:
-            values.append(convert(text))
-        except ValueError as exc:
-            raise ValueError(f"{name}: {pname}: {exc}") from None
-    return spec, values
+        raise ValueError(f"unknown command {args.name!r}; one of: {', '.join(COMMANDS)}")
+    command_parser(args.name).parse_args(args.args, namespace=args)
+    given = [getattr(args, f"arg_{p.name}") for p in spec.params]
+    values = [v for v in given if v is not None]
+    optional = [p.name for p in spec.params if p.optional]
+    if spec.together and len(spec.params) > len(values) > len(spec.params) - len(optional):
+        raise ValueError(f"{args.name}: give all of {' '.join(optional)}, or none")
+    if args.timeout is not None and not 0 < args.timeout < float("inf"):
+        raise ValueError(f"--timeout: {args.timeout!r} must be a number of seconds > 0")
+    extra: dict[str, Any] = {}
+    if args.cameras is not None:
+        if not spec.takes_cameras:
+            raise ValueError(f"--cameras: {args.name} addresses no camera ({spec.method}() has "
+                             "no cameras parameter)")  # fmt: skip
+        extra["cameras"] = args.cameras
+    if args.timeout is not None and spec.takes_timeout:
+        extra["timeout"] = args.timeout
+    spec.check(values, **extra)  # the method's own checks, before anything is opened
+    connect(args.url)  # validates the URL and its options; opens nothing
+    hold = args.hold if args.hold is not None else (3.0 if spec.holds else 0.0)
+    if not 0 <= hold <= 3600:
+        raise ValueError(f"--hold: {hold!r} is outside [0, 3600] s")
+    try:
+        capture = as_capture(args.capture)
+    except (TypeError, CaptureUnavailable) as exc:
+        raise ValueError(f"--capture: {exc}") from None
+    timeout = args.timeout if args.timeout is not None else DEFAULT_TIMEOUT
+    return Invocation(args.url, args.name, spec, values, extra, timeout, args.rate, hold,
+                      capture)
 
 
-ANGLE_MODES = {"euler", "angle-control", "fpv"}
-
-
-async def _send(
-    url: str, spec: CliCommand, values: list[Any], timeout: float, rate: float, hold: float,
-    capture: PacketCapture | None = None,
-) -> tuple[Any, dict[str, Any]]:
-    async with connect(url, command_timeout=timeout, connect_timeout=timeout, rate_hz=rate,
-                       capture=capture) as gcu:  # fmt: skip
-        feedback = await spec.call(gcu, values)
+async def _send(inv: Invocation) -> tuple[Any, dict[str, Any]]:
+    async with connect(inv.url, command_timeout=inv.timeout, connect_timeout=inv.timeout,
+                       rate_hz=inv.rate, capture=inv.capture) as gcu:  # fmt: skip
+        feedback = await inv.spec.call(gcu, inv.values, **inv.extra)
         # Control values only act while packets carry them: hold them for a while (angle
         # modes stop early once the camera's attitude matches the target).
-        deadline = time.monotonic() + hold
+        deadline = time.monotonic() + inv.hold
         while time.monotonic() < deadline:
-            if spec.angle_target and _arrived(gcu, values):
+            if inv.spec.angle_target and _arrived(gcu, inv.values):
                 break
             await asyncio.sleep(0.05)
         return feedback, {"attitude_deg": gcu.status.attitude._asdict(),
@@ -208,28 +205,23 @@ def _arrived(gcu: GcuClient, values: list[Any]) -> bool:
 
 
 def run(args: argparse.Namespace) -> int:
+    verbose = args.verbose
     try:
-        spec, values = parse_args(args.name, args.args)
-        if not args.timeout > 0:
-            raise ValueError(f"--timeout: {args.timeout!r} must be > 0")
-        # validate the command's arguments before opening anything
-        connect(args.url)
-        capture = as_capture(args.capture)
-    except (ValueError, CaptureUnavailable) as exc:
-        print(f"gcu-async send: {exc}", file=sys.stderr)
+        inv = resolve(args)
+    except ValueError as exc:
+        print(f"{PROG}: {exc}", file=sys.stderr)
         return EXIT_USAGE
-    hold = args.hold if args.hold is not None else (3.0 if spec.holds else 0.0)
-    if not 0 <= hold <= 3600:
-        print(f"gcu-async send: --hold: {hold!r} is outside [0, 3600] s", file=sys.stderr)
-        return EXIT_USAGE
+    if args.verbose != verbose:  # -v after the command's name
+        from gcu_async.cli import configure_logging
+
+        configure_logging(args.verbose)
     try:
-        feedback, state = asyncio.run(interruptible(
-            _send(args.url, spec, values, args.timeout, args.rate, hold, capture)))  # fmt: skip
+        feedback, state = asyncio.run(interruptible(_send(inv)))
     except (Interrupted, KeyboardInterrupt):  # KeyboardInterrupt: no loop signal handlers
         print(json.dumps({"ok": False, "error": "interrupted"}))
         return EXIT_INTERRUPTED
-    except ValueError as exc:
-        print(f"gcu-async send: {exc}", file=sys.stderr)
+    except ValueError as exc:  # a value out of range for the method
+        print(f"{PROG}: {exc}", file=sys.stderr)
         return EXIT_USAGE
     except CommandFailed as exc:
         out = {"ok": False, "error": str(exc), "opcode": exc.opcode, "status_raw": exc.status,

@@ -23,7 +23,7 @@ import warnings
 from collections.abc import AsyncGenerator, Callable
 from datetime import datetime
 from types import TracebackType
-from typing import Any
+from typing import Any, Final
 
 from gcu_async._checks import (
     check_bool,
@@ -78,7 +78,20 @@ _RESOLUTION = time.get_clock_info("monotonic").resolution
 DEFAULT_REORDER_GUARD = 0.015
 """Seconds; the reordering guard on links that may reorder (UDP)."""
 RATE_ADVISED = (30.0, 50.0)
-_UNSET: Any = object()
+
+
+class Keep(enum.Enum):
+    """The type of :data:`KEEP`: "not given, keep the current value" (a default distinct
+    from ``None``, which clears a value)."""
+
+    KEEP = "KEEP"
+
+    def __repr__(self) -> str:
+        return "KEEP"
+
+
+KEEP: Final = Keep.KEEP
+"""Default of :meth:`GcuClient.update_aircraft`'s parameters: the field keeps its value."""
 
 LinkCallback = Callable[[LinkEvent], None]
 TelemetryCallback = Callable[[TelemetrySample], None]
@@ -371,20 +384,21 @@ class GcuClient(CommandMethods, WaitingMethods):
     def update_aircraft(
         self,
         *,
-        attitude: Attitude | tuple[float, float, float] | None = _UNSET,
-        acceleration: NorthEastUp | tuple[float, float, float] | None = _UNSET,
-        velocity: NorthEastUp | tuple[float, float, float] | None = _UNSET,
-        position: GeoPosition | tuple[float, float, float] | None = _UNSET,
-        relative_altitude: float = _UNSET,
-        satellites: int = _UNSET,
+        attitude: Attitude | tuple[float, float, float] | Keep | None = KEEP,
+        acceleration: NorthEastUp | tuple[float, float, float] | Keep | None = KEEP,
+        velocity: NorthEastUp | tuple[float, float, float] | Keep | None = KEEP,
+        position: GeoPosition | tuple[float, float, float] | Keep | None = KEEP,
+        relative_altitude: float | Keep = KEEP,
+        satellites: int | Keep = KEEP,
         gnss_time: datetime | None = None,
-        gnss_week: int = _UNSET,
-        gnss_ms: int = _UNSET,
+        gnss_week: int | Keep = KEEP,
+        gnss_ms: int | Keep = KEEP,
     ) -> AircraftState:
-        """Update the aircraft state carried by the heartbeat; fields not given keep their
-        value, ``None`` clears one. Units: degrees (attitude, yaw in [0, 360)), m/s² north/
-        east/up without gravity, m/s north/east/up, (latitude °, longitude °, altitude m MSL),
-        metres. ``gnss_time`` (aware UTC) sets week + ms with leap seconds applied.
+        """Update the aircraft state carried by the heartbeat; fields not given (default
+        :data:`KEEP`) keep their value, ``None`` clears one. Units: degrees (attitude, yaw in
+        [0, 360)), m/s² north/east/up without gravity, m/s north/east/up, (latitude °,
+        longitude °, altitude m MSL), metres. ``gnss_time`` (aware UTC) sets week + ms with
+        leap seconds applied.
 
         The parts given count as measured now: INS-valid goes out only while attitude,
         acceleration and velocity have all been given within ``aircraft_timeout``, the sub
@@ -396,19 +410,19 @@ class GcuClient(CommandMethods, WaitingMethods):
         changes: dict[str, Any] = {}
         for name, value in (("attitude", attitude), ("acceleration", acceleration),
                             ("velocity", velocity), ("position", position)):  # fmt: skip
-            if value is not _UNSET:
+            if value is not KEEP:
                 changes[name] = None if value is None else _triple(name, value)
-        if relative_altitude is not _UNSET:
+        if relative_altitude is not KEEP:
             changes["relative_altitude"] = check_real(
                 "relative_altitude", relative_altitude, *S32_MM, "m")
         for name, scalar, high in (("satellites", satellites, 255),
                                    ("gnss_week", gnss_week, GNSS_WEEK_MAX),
                                    ("gnss_ms", gnss_ms, MS_PER_WEEK - 1)):  # fmt: skip
-            if scalar is not _UNSET:
+            if scalar is not KEEP:
                 changes[name] = check_int(name, scalar, 0, high)
         if gnss_time is not None:
             check_instance("gnss_time", gnss_time, datetime)
-            if gnss_week is not _UNSET or gnss_ms is not _UNSET:
+            if gnss_week is not KEEP or gnss_ms is not KEEP:
                 raise ValueError("gnss_time: give either gnss_time or gnss_week/gnss_ms, "
                                  "not both")  # fmt: skip
             week, ms = AircraftState.gnss_from_utc(gnss_time)

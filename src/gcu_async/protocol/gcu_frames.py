@@ -19,6 +19,7 @@ from gcu_async.protocol.enums import (
     PodStatus,
     ThermalFlags,
 )
+from gcu_async.protocol.pods import pod_name
 from gcu_async.protocol.units import Attitude, AxisAngles, GeoPosition, check_tuple, quantize
 
 GCU_MAIN = struct.Struct("<BHhhhhhhhHhhh7x")
@@ -357,7 +358,8 @@ class GcuSubFrame(NamedTuple):
             "hardware_version_raw": self.hardware_version_raw,
             "firmware_version": self.firmware_version,
             "firmware_version_raw": self.firmware_version_raw,
-            "pod_model": self.pod_model.name,
+            "pod_model": pod_name(self.pod_code),  # the vendor's spelling, e.g. "D-90AI"
+            "pod_model_member": self.pod_model.name,  # PodModel's member, e.g. "D_90AI"
             "pod_code": self.pod_code,
             "faults": _flag_names(self.faults),
             "fault_raw": self.fault_raw,
