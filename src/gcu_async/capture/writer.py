@@ -163,16 +163,19 @@ class PacketCapture:
         for segment in flow.handshake():
             self._write(0, segment)
 
+    def _flow(self, sender: Address, receiver: Address) -> tuple[TcpFlow | None, bool]:
+        """The TCP flow between the two addresses and whether ``sender`` is its client."""
+        flow = self._flows.get((sender, receiver))
+        if flow is not None:
+            return flow, True
+        return self._flows.get((receiver, sender)), False
+
     def tcp(self, src: Address, dst: Address, payload: bytes) -> None:
         """Bytes ``src`` sent to ``dst`` on a TCP connection (opened implicitly, ``src`` as
         the client, if :meth:`tcp_open` was not called)."""
         if self._writer is None or not payload:
             return
-        flow = self._flows.get((src, dst))
-        from_client = True
-        if flow is None:
-            flow = self._flows.get((dst, src))
-            from_client = False
+        flow, from_client = self._flow(src, dst)
         if flow is None or flow.closed:
             self.tcp_open(src, dst)
             flow, from_client = self._flows[(src, dst)], True
@@ -182,11 +185,7 @@ class PacketCapture:
         """The end of a TCP connection, closed by ``closer`` (FIN both ways, or an RST)."""
         if self._writer is None:
             return
-        flow = self._flows.get((closer, peer))
-        from_client = True
-        if flow is None:
-            flow = self._flows.get((peer, closer))
-            from_client = False
+        flow, from_client = self._flow(closer, peer)
         if flow is None:
             return
         for segment in flow.finish(from_client, reset=reset):
