@@ -91,6 +91,13 @@ async def retry(attempt: Callable[[float], Awaitable[None]], backoff: Backoff,
     return last if last is not None else LinkLost("no attempt fitted in max_total")
 
 
+async def cancel_and_wait(task: asyncio.Task[None] | None) -> None:
+    """Cancel a reconnect task (if running) and return once it has ended."""
+    if task is not None and not task.done():
+        task.cancel()
+        await asyncio.wait({task})
+
+
 def giving_up(url: str, attempts: int, last: LinkLost) -> LinkEvent:
     """The final ``LOST`` event of a reconnection that ran out of attempts or time."""
     plural = "s" if attempts != 1 else ""
@@ -99,4 +106,4 @@ def giving_up(url: str, attempts: int, last: LinkLost) -> LinkEvent:
                      f" ({url})")  # fmt: skip
 
 
-__all__ = ["Backoff", "giving_up", "retry"]
+__all__ = ["Backoff", "cancel_and_wait", "giving_up", "retry"]

@@ -38,7 +38,7 @@ import serial_asyncio  # type: ignore[import-untyped]
 from gcu_async._checks import check_bool, type_error
 from gcu_async.errors import LinkLost
 from gcu_async.transport._common import call_guarded, check_reason
-from gcu_async.transport.backoff import Backoff, giving_up, retry
+from gcu_async.transport.backoff import Backoff, cancel_and_wait, giving_up, retry
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 try:
@@ -307,6 +307,4 @@ class SerialTransport(Transport):
 
     async def _stop_task(self) -> None:
         task, self._task = self._task, None
-        if task is not None and not task.done():
-            task.cancel()
-            await asyncio.wait({task})
+        await cancel_and_wait(task)

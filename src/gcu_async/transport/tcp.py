@@ -42,7 +42,7 @@ from gcu_async.transport._common import (
     check_reason,
     format_hostport,
 )
-from gcu_async.transport.backoff import Backoff, giving_up, retry
+from gcu_async.transport.backoff import Backoff, cancel_and_wait, giving_up, retry
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 GCU_TCP_PORT = 2332
@@ -240,9 +240,7 @@ class TcpTransport(Transport):
 
     async def _stop_task(self) -> None:
         task, self._task = self._task, None
-        if task is not None and not task.done():
-            task.cancel()
-            await asyncio.wait({task})
+        await cancel_and_wait(task)
 
     async def _reconnect_loop(self) -> None:
         self.reconnect_attempts = 0
