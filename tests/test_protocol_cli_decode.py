@@ -224,9 +224,7 @@ def test_decode_into_a_closed_pipe_exits_quietly() -> None:
     import subprocess
     import sys
 
-    from _vectors import SPEC_DIR
-
-    hex_text = (SPEC_DIR / "gcu-example.hex").read_text() * 200
+    hex_text = (GCU_EXAMPLE.hex(" ") + "\n") * 200
     proc = subprocess.run(
         f"{sys.executable} -m gcu_async.cli decode | head -c 10",
         shell=True,

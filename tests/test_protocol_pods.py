@@ -1,11 +1,11 @@
 """Pod models (Appendix 7) and the command support matrix (Appendix 8), checked against the
-tables of the protocol document itself."""
+repository's own transcription of the document's tables (tests/data/pod-*.csv)."""
 
 from __future__ import annotations
 
 import pytest
 
-from _vectors import spec_text
+from _vectors import pod_models, pod_support
 from gcu_async.protocol import (
     POD_NAMES,
     Opcode,
@@ -18,27 +18,6 @@ from gcu_async.protocol import (
 )
 from gcu_async.protocol.pods import MATRIX_COMMANDS, SUPPORT
 
-# Appendix 8 row labels → opcodes
-ROW_OPCODES = {
-    "跟踪": Opcode.TRACK,
-    "OSD 坐标": Opcode.OSD_COORDINATES,
-    "图像自动翻转": Opcode.IMAGE_AUTO_FLIP,
-    "时区": Opcode.TIME_ZONE,
-    "指定倍率": Opcode.ZOOM_TO,
-    "聚焦": Opcode.FOCUS,
-    "调色盘": Opcode.PALETTE,
-    "夜视": Opcode.NIGHT_VISION,
-    "区域测温": Opcode.AREA_TEMPERATURE,
-    "温度报警": Opcode.TEMPERATURE_ALARM,
-    "等温线": Opcode.ISOTHERM,
-    "指点测温": Opcode.SPOT_TEMPERATURE,
-    "OSD": Opcode.OSD,
-    "画中画": Opcode.PICTURE_IN_PICTURE,
-    "目标识别": Opcode.TARGET_DETECTION,
-    "数字变焦": Opcode.DIGITAL_ZOOM,
-    "补光": Opcode.FILL_LIGHT,
-    "连续测距": Opcode.RANGING,
-}
 THERMAL_ONLY = {
     Opcode.AREA_TEMPERATURE,
     Opcode.TEMPERATURE_ALARM,
@@ -47,46 +26,18 @@ THERMAL_ONLY = {
 }
 
 
-def _section(title: str) -> str:
-    text = spec_text()
-    start = text.index(f"## {title}")
-    end = text.find("\n## ", start + 1)
-    return text[start : end if end >= 0 else len(text)]
-
-
-def appendix7() -> dict[int, str]:
-    """Code → model name, parsed from the document's Appendix 7 table."""
-    table = {}
-    for line in _section("附录 7").splitlines():
-        cells = line.split("\t")
-        if len(cells) == 2 and cells[0].strip().isdigit():
-            table[int(cells[0])] = cells[1].strip()
-    return table
-
-
-def appendix8() -> dict[tuple[str, Opcode], bool]:
-    """(model name, opcode) → supported (● / ○), parsed from the document's Appendix 8."""
-    table: dict[tuple[str, Opcode], bool] = {}
-    models: list[str] = []
-    for line in _section("附录 8").splitlines():
-        cells = [c.strip() for c in line.split("\t")]
-        if cells[0] == "命令":
-            models = cells[1:]
-        elif cells[0] in ROW_OPCODES:
-            assert len(cells) == len(models) + 1, line
-            for model, mark in zip(models, cells[1:], strict=True):
-                assert mark in ("●", "○"), mark
-                table[(model, ROW_OPCODES[cells[0]])] = mark == "●"
-    return table
-
-
-def test_parsed_tables_are_complete() -> None:
-    assert len(appendix7()) == 20
-    assert len(appendix8()) == 20 * 18
+def test_transcribed_tables_are_complete() -> None:
+    models = pod_models()
+    commands, matrix = pod_support()
+    assert len(models) == 20
+    assert len(commands) == len(set(commands)) == 18
+    assert len(matrix) == 20 * 18
+    # Appendix 8 names the same models as Appendix 7, in the same order
+    assert list(dict.fromkeys(model for model, _ in matrix)) == list(models.values())
 
 
 def test_every_appendix7_code_has_a_name_and_a_matrix_row() -> None:
-    table = appendix7()
+    table = pod_models()
     listed = {m for m in PodModel if m is not PodModel.UNKNOWN}
     assert {int(m) for m in listed} == set(table)
     assert set(POD_NAMES) == listed == set(SUPPORT)
@@ -97,9 +48,10 @@ def test_every_appendix7_code_has_a_name_and_a_matrix_row() -> None:
 
 
 def test_matrix_equals_appendix8_cell_by_cell() -> None:
-    assert set(MATRIX_COMMANDS) == set(ROW_OPCODES.values())
-    for (model, opcode), supported in appendix8().items():
-        assert supports(model, opcode) is supported, (model, opcode.name)
+    commands, matrix = pod_support()
+    assert [op.name for op in MATRIX_COMMANDS] == commands  # the document's row order
+    for (model, command), supported in matrix.items():
+        assert supports(model, Opcode[command]) is supported, (model, command)
 
 
 @pytest.mark.parametrize(

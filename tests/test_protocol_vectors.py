@@ -1,6 +1,6 @@
-"""The corrected vendor examples (Appendix 1 host packet, Appendix 2 GCU packet) decode to the
-values the document and NOTES.md list, re-encode byte for byte, and the Appendix 1 packet can
-be built from the document's physical values."""
+"""The corrected vendor examples (Appendix 1 host packet, Appendix 2 GCU packet; tests/data)
+decode to the values docs/protocol-notes.md ("Errata") lists, re-encode byte for byte, and the
+Appendix 1 packet can be built from the document's physical values."""
 
 from __future__ import annotations
 

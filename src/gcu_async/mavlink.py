@@ -17,9 +17,10 @@ GPS_RAW_INT                   satellites (255 = unknown → 0)
 SYSTEM_TIME                   gnss_week, gnss_ms (GPS time: leap seconds applied)
 ============================  =====================================================
 
-Acceleration must exclude gravity (NOTES §11: zero at rest or in straight, constant-speed
-flight; an autopilot driver that sent raw accelerometer output made the gimbal drift), so it
-comes from exactly one source chosen when the mapper is built.
+Acceleration must exclude gravity (docs/protocol-notes.md §10 "Aircraft acceleration excludes
+gravity": zero at rest or in straight, constant-speed flight; an autopilot driver that sent raw
+accelerometer output made the gimbal drift), so it comes from exactly one source chosen when the
+mapper is built.
 
 Out-of-range values are **raised, not clamped or dropped**: :meth:`MavlinkAircraftState.update`
 lets :class:`~gcu_async.errors.FieldRangeError` (e.g. an acceleration beyond the S16 field's

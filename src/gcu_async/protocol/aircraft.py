@@ -1,9 +1,9 @@
 """The aircraft state a host sends in every packet (host main frame bytes 11–29, sub frame).
 
-NOTES §11: acceleration is north/east/up **without gravity** (zero at rest or in straight,
-constant-speed flight) and velocity north/east/up; wrong values corrupt the gimbal's
-attitude solution. Fields left ``None`` are never invented: no attitude → INS-valid bit
-clear; no position → no sub frame.
+docs/protocol-notes.md §10 "Aircraft acceleration excludes gravity": acceleration is north/east/up
+**without gravity** (zero at rest or in straight, constant-speed flight) and velocity north/east/up;
+wrong values corrupt the gimbal's attitude solution. Fields left ``None`` are never invented: no
+attitude → INS-valid bit clear; no position → no sub frame.
 """
 
 from __future__ import annotations

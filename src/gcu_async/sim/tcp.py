@@ -1,14 +1,19 @@
 """The simulator's TCP endpoint: a server on the GCU port (2332), one client at a time.
 
 A client that connects while another is being served waits (its connection is accepted but
-not read) until the previous one leaves — then it is served; any number of clients in turn.
-:meth:`TcpServer.kill_connection` aborts the current connection (RST) to test reconnects.
+not read: the kernel buffers what it sends) until the previous one leaves — then it is
+served; any number of clients in turn. :meth:`TcpServer.kill_connection` aborts the current
+connection (RST) to test reconnects.
+
+Every connection is an :class:`asyncio.Protocol` driven by the event loop's callbacks; the
+server runs no task of its own per connection, so nothing of a connection outlives it: its
+state is released in ``connection_lost``, when the socket is closed.
 """
 
 from __future__ import annotations
 
 import asyncio
-import contextlib
+import collections
 import logging
 from typing import TYPE_CHECKING
 
@@ -23,8 +28,49 @@ if TYPE_CHECKING:
 log = logging.getLogger("gcu_async.sim")
 
 GCU_TCP_PORT = 2332
-READ_SIZE = 4096
 CLOSE_TIMEOUT = 2.0
+
+
+class _Connection(asyncio.Protocol):
+    """One accepted client: waiting (reading paused) or served (fed to an Exchange)."""
+
+    def __init__(self, server: TcpServer) -> None:
+        self._server = server
+        self.transport: asyncio.Transport | None = None
+        self.peer: object = None
+        self.exchange: Exchange | None = None
+        self.reading: TransportReading | None = None
+        self.early = bytearray()  # read before its turn came (see connection_made)
+        self.closed: asyncio.Future[None] = asyncio.get_running_loop().create_future()
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        assert isinstance(transport, asyncio.Transport)
+        self.transport = transport
+        self.peer = transport.get_extra_info("peername")
+        # The transport starts reading right after this call (a call_soon queued before it),
+        # and on Python 3.10 that start undoes a pause_reading() made here: the server
+        # takes the connection (and pauses it, when it must wait) on the next callback.
+        asyncio.get_running_loop().call_soon(self._server._arrived, self)
+
+    def data_received(self, data: bytes) -> None:
+        if self.exchange is not None:
+            self.exchange.feed(data, self.send)
+        else:  # not served yet: kept for its turn (normally the pause keeps it in the kernel)
+            self.early += data
+
+    def eof_received(self) -> bool:
+        return False  # the client is done: close our side as well
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        if exc is not None:
+            log.debug("TCP client %s: %s", self.peer, exc)
+        self._server._left(self)
+        if not self.closed.done():
+            self.closed.set_result(None)
+
+    def send(self, data: bytes) -> None:
+        if self.transport is not None and not self.transport.is_closing():
+            self.transport.write(data)
 
 
 class TcpServer(SimServer):
@@ -35,10 +81,9 @@ class TcpServer(SimServer):
         self._host = host
         self._port = port
         self._server: asyncio.Server | None = None
-        self._turn = asyncio.Lock()
-        self._writers: set[asyncio.StreamWriter] = set()
-        self._tasks: set[asyncio.Task[None]] = set()
-        self._active: asyncio.StreamWriter | None = None
+        self._connections: set[_Connection] = set()
+        self._waiting: collections.deque[_Connection] = collections.deque()
+        self._active: _Connection | None = None
         self._closing = False
         self.address: tuple[str, int] = (host, port)
         self.clients_served = 0
@@ -56,63 +101,66 @@ class TcpServer(SimServer):
         if self._server is not None:
             return
         self._closing = False
-        self._server = await asyncio.start_server(self._serve, self._host, self._port)
+        loop = asyncio.get_running_loop()
+        self._server = await loop.create_server(lambda: _Connection(self), self._host, self._port)
         sockname = self._server.sockets[0].getsockname()
         self.address = (str(sockname[0]), int(sockname[1]))
 
     def kill_connection(self) -> bool:
         """Abort the connection being served now (the client sees a reset). Returns whether
         there was one."""
-        writer = self._active
-        if writer is None:
+        conn = self._active
+        if conn is None or conn.transport is None:
             return False
-        log.info("killing the TCP connection to %s", writer.get_extra_info("peername"))
-        writer.transport.abort()
+        log.info("killing the TCP connection to %s", conn.peer)
+        conn.transport.abort()
         return True
 
-    async def _serve(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        task = asyncio.current_task()
-        if task is not None:
-            self._tasks.add(task)
-        self._writers.add(writer)
-        try:
-            async with self._turn:
-                if not self._closing and not writer.is_closing():
-                    await self._session(reader, writer)
-        finally:
-            self._writers.discard(writer)
-            if task is not None:
-                self._tasks.discard(task)
-            writer.close()
-            with contextlib.suppress(Exception):
-                await writer.wait_closed()
+    # -- connection callbacks ------------------------------------------------------------
 
-    async def _session(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        peer = writer.get_extra_info("peername")
-        self._active = writer
+    def _arrived(self, conn: _Connection) -> None:
+        assert conn.transport is not None
+        if conn.closed.done():
+            return  # gone before the server took it
+        self._connections.add(conn)
+        if self._closing:
+            conn.transport.abort()
+        elif self._active is None:
+            self._serve(conn)
+        else:
+            conn.transport.pause_reading()  # its turn comes when the current client leaves
+            self._waiting.append(conn)
+
+    def _serve(self, conn: _Connection) -> None:
+        assert conn.transport is not None
+        self._active = conn
         self.clients_served += 1
-        log.info("TCP client %s connected", peer)
-        exchange = Exchange(self._sim, stream=True)
-        reading = TransportReading(writer.transport)
-        self._sim.stalls.join(reading)  # stalled: the kernel buffers what the client sends
+        log.info("TCP client %s connected", conn.peer)
+        conn.exchange = Exchange(self._sim, stream=True)
+        conn.reading = TransportReading(conn.transport)
+        self._sim.stalls.join(conn.reading)  # stalled: the kernel buffers what the client sends
+        if conn.early:
+            early, conn.early = bytes(conn.early), bytearray()
+            conn.exchange.feed(early, conn.send)
 
-        def send(data: bytes) -> None:
-            if not writer.is_closing():
-                writer.write(data)
-
-        try:
-            while True:
-                data = await reader.read(READ_SIZE)
-                if not data:
-                    break
-                exchange.feed(data, send)
-        except (ConnectionError, OSError) as exc:
-            log.debug("TCP client %s: %s", peer, exc)
-        finally:
-            self._sim.stalls.leave(reading)
-            exchange.close()
-            self._active = None
-            log.info("TCP client %s left", peer)
+    def _left(self, conn: _Connection) -> None:
+        self._connections.discard(conn)
+        if conn in self._waiting:
+            self._waiting.remove(conn)
+        if conn is not self._active:
+            return
+        if conn.reading is not None:
+            self._sim.stalls.leave(conn.reading)
+        if conn.exchange is not None:
+            conn.exchange.close()
+        self._active = None
+        log.info("TCP client %s left", conn.peer)
+        while self._waiting and not self._closing:
+            following = self._waiting.popleft()
+            if following.transport is not None and not following.transport.is_closing():
+                following.transport.resume_reading()  # a stall going on pauses it again
+                self._serve(following)
+                break
 
     async def aclose(self) -> None:
         server, self._server = self._server, None
@@ -120,13 +168,10 @@ class TcpServer(SimServer):
             return
         self._closing = True
         server.close()
-        for writer in list(self._writers):
-            writer.transport.abort()
-        tasks = list(self._tasks)
-        if tasks:
-            _, pending = await asyncio.wait(tasks, timeout=CLOSE_TIMEOUT)
-            for task in pending:
-                task.cancel()
-            if pending:
-                await asyncio.wait(pending, timeout=CLOSE_TIMEOUT)
+        connections = list(self._connections)
+        for conn in connections:
+            if conn.transport is not None:
+                conn.transport.abort()
+        if connections:
+            await asyncio.wait([conn.closed for conn in connections], timeout=CLOSE_TIMEOUT)
         await asyncio.wait_for(server.wait_closed(), timeout=CLOSE_TIMEOUT)

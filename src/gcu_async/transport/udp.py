@@ -1,9 +1,9 @@
 """UDP transport: the host listens on a local port (2338) and sends to the GCU (port 2337).
 
-Protocol NOTES §9/§13: the GCU sends from port 2337 to the LAN broadcast address, port
-2338; emulators answer by unicast to the sender. The socket is therefore *not* connected:
-it binds ``local_host:local_port`` (wildcard by default, so broadcasts arrive) and filters
-sources itself.
+docs/protocol-notes.md §12 "Transports": the GCU sends from port 2337 to the LAN broadcast address,
+port 2338; emulators answer by unicast to the sender. The socket is therefore *not* connected: it
+binds ``local_host:local_port`` (wildcard by default, so broadcasts arrive) and filters sources
+itself.
 
 Source filtering
     By default only datagrams whose source is the configured GCU ``(host, port)`` are
@@ -51,9 +51,9 @@ from gcu_async.transport._datagram import DrainingDatagramTransport
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 GCU_UDP_PORT = 2337
-"""Port the GCU listens on (NOTES §9)."""
+"""Port the GCU listens on (docs/protocol-notes.md §12 "Transports")."""
 HOST_UDP_PORT = 2338
-"""Port the host listens on; the GCU broadcasts to it (NOTES §9)."""
+"""Port the host listens on; the GCU broadcasts to it (docs/protocol-notes.md §12 "Transports")."""
 MAX_DATAGRAM = 65536
 """Receive buffer size: no UDP payload is larger. (On the fallback path, asyncio's default
 of 256 KiB is above glibc's mmap threshold: an mmap/mremap/munmap per received datagram.)"""

@@ -1,8 +1,8 @@
 """Make a transport from a URL: ``udp://HOST[:PORT]``, ``tcp://HOST[:PORT]``,
 ``serial:///dev/ttyUSB0?baudrate=115200`` (or ``serial:/dev/ttyUSB0``).
 
-IPv6 literals go in brackets (``udp://[::1]:2337``). Default ports follow NOTES §9: UDP
-2337 (the host listens on 2338), TCP 2332.
+IPv6 literals go in brackets (``udp://[::1]:2337``). Default ports follow docs/protocol-notes.md §12
+"Transports": UDP 2337 (the host listens on 2338), TCP 2332.
 
 Options come from the query string and/or keyword arguments of :func:`open_transport`.
 Query values are text (booleans as 1/0, true/false, yes/no, on/off; ``none`` for an unset
