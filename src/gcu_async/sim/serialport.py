@@ -15,7 +15,6 @@ from __future__ import annotations
 import asyncio
 import logging
 import os
-import tty
 from typing import TYPE_CHECKING, Any
 
 from gcu_async.sim.exchange import Exchange
@@ -55,6 +54,10 @@ class SerialServer(SimServer):
         if self._fd is not None:
             return
         if self._path is None:
+            if not hasattr(os, "openpty"):  # Windows
+                raise OSError("serve_pty: pseudo-terminals need a POSIX system")
+            import tty  # POSIX only (termios): imported here so the package imports anywhere
+
             leader, follower = os.openpty()
             try:
                 tty.setraw(follower)

@@ -28,7 +28,12 @@ Errors
     UDP is connectionless: send errors (``EMSGSIZE``, ICMP port unreachable reported as
     ``ConnectionRefusedError``, ``BlockingIOError`` when the socket's send buffer is full:
     that datagram is dropped, never queued) are counted in :attr:`UdpTransport.send_errors`
-    and kept in :attr:`UdpTransport.last_error`; the transport stays usable.
+    and kept in :attr:`UdpTransport.last_error`; the transport stays usable. An ICMP port
+    unreachable (a GCU not yet listening) may also be reported by a later *receive*: Windows
+    does so on any UDP socket (``ConnectionResetError``), Linux only on a connected one. It
+    is counted the same way and receiving goes on; on Windows the socket is told not to
+    report it at all (``SIO_UDP_CONNRESET`` off, see :func:`ignore_icmp_connreset`), since
+    before Python 3.13 asyncio's proactor loop stops reading a datagram socket after one.
     Silence is detected by the session's link health, not here.
     :meth:`~gcu_async.transport.Transport.reset` does nothing: no datagram is ever queued.
 """
@@ -67,6 +72,21 @@ def is_broadcast_address(host: str) -> bool:
     except ValueError:
         return False
     return isinstance(ip, ipaddress.IPv4Address) and ip.packed[3] == 255
+
+
+def ignore_icmp_connreset(sock: socket.socket) -> bool:
+    """Windows: keep ``recvfrom`` on ``sock`` from failing with WSAECONNRESET after an ICMP
+    port unreachable (the ``SIO_UDP_CONNRESET`` ioctl, off). Returns whether it was applied;
+    elsewhere (no such ioctl) it does nothing and returns False."""
+    code = getattr(socket, "SIO_UDP_CONNRESET", None)
+    ioctl = getattr(sock, "ioctl", None)
+    if code is None or ioctl is None:
+        return False
+    try:
+        ioctl(code, False)
+    except OSError:
+        return False
+    return True
 
 
 async def _endpoint(
@@ -243,6 +263,7 @@ class UdpTransport(Transport):
                 sock.setsockopt(socket.SOL_SOCKET, socket.SO_BROADCAST, 1)
             sock.bind((local_host, self._local_port))
             sock.setblocking(False)
+            ignore_icmp_connreset(sock)
             proto = _UdpProtocol(self)
             dtransport = await _endpoint(loop, sock, proto)
         except OSError as exc:
