@@ -33,7 +33,7 @@ Errors
     does so on any UDP socket (``ConnectionResetError``), Linux only on a connected one. It
     is counted the same way and receiving goes on; on Windows the socket is told not to
     report it at all (``SIO_UDP_CONNRESET`` off, see :func:`ignore_icmp_connreset`), since
-    before Python 3.13 asyncio's proactor loop stops reading a datagram socket after one.
+    the proactor loop of Python 3.10–3.12 stops reading a datagram socket after one.
     Silence is detected by the session's link health, not here.
     :meth:`~gcu_async.transport.Transport.reset` does nothing: no datagram is ever queued.
 """
