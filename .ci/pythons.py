@@ -5,10 +5,10 @@
 The main venv (the one that lints and builds the docs) runs the suite at full size
 (``GCU_TEST_SIZE=full``); every other version found runs it in its own venv, ``.venv-3.X``
 (created, or refreshed when pyproject.toml or the package version changed), at reduced size
-(``GCU_TEST_SIZE=reduced``, see tests/_scale.py). An interpreter is looked for in pyenv's
-versions (``pyenv root``, else ``$PYENV_ROOT`` or ``~/.pyenv``), then as ``python3.X`` on
-PATH. At the end it prints which versions ran (and how they did) and which were missing.
-Exit status: 0 if every run passed, 1 if one failed, 2 on a usage error.
+(``GCU_TEST_SIZE=reduced``, see tests/_scale.py). An interpreter is looked for in pyenv's versions
+(``pyenv root``, else ``$PYENV_ROOT`` or ``.pyenv`` in the home directory), then as ``python3.X`` on
+PATH. At the end it prints which versions ran (and how they did) and which were missing. Exit
+status: 0 if every run passed, 1 if one failed, 2 on a usage error.
 
 Standard library only: it runs before any venv exists but the main one.
 """

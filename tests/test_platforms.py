@@ -19,7 +19,8 @@ from typing import Any
 import pytest
 
 from _transport_recorder import Recorder
-from gcu_async.sim import parse_listen_url
+from gcu_async.sim import ManualClock, parse_listen_url
+from gcu_async.sim.stall import POLL_SECONDS, StallSwitch, TransportReading
 from gcu_async.transport import SerialTransport, UdpTransport, open_transport
 from gcu_async.transport._datagram import DrainingDatagramTransport
 from gcu_async.transport.udp import ignore_icmp_connreset
@@ -343,3 +344,38 @@ def test_plugin_serial_transport_skips_without_ptys(tmp_path: Path) -> None:
     assert proc.returncode == 0, output
     assert "1 skipped" in output, output
     assert "gcu_sim_transport 'serial' is a pseudo-terminal: POSIX only" in output, output
+
+
+# -- Python 3.10: datagram transports that cannot pause -----------------------------------------
+
+
+async def test_a_transport_that_cannot_pause_reading_does_not_break_a_stall() -> None:
+    """Python 3.10's datagram transport has pause_reading() but raises NotImplementedError
+    from it: a stall must still start, be timed and end (the exchange holds the packets)."""
+
+    class Unpausable(asyncio.BaseTransport):
+        def __init__(self) -> None:
+            super().__init__()
+            self.calls: list[str] = []
+
+        def is_closing(self) -> bool:
+            return False
+
+        def pause_reading(self) -> None:
+            self.calls.append("pause")
+            raise NotImplementedError
+
+        def resume_reading(self) -> None:
+            self.calls.append("resume")
+            raise NotImplementedError
+
+    clock = ManualClock()
+    switch = StallSwitch(clock)
+    transport = Unpausable()
+    switch.join(TransportReading(transport))
+    switch.stall(1.0)
+    assert switch.stalled and transport.calls == ["pause"]
+    clock.advance(1.0)
+    await asyncio.sleep(POLL_SECONDS * 3)
+    assert not switch.stalled
+    assert transport.calls == ["pause", "resume"]
