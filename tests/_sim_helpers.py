@@ -6,7 +6,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import os
-import tty
 from typing import Any, cast
 
 from gcu_async.protocol import (
@@ -271,7 +270,10 @@ class FdPeer:
 
     @classmethod
     def open_path(cls, path: str) -> FdPeer:
-        """Open a serial device path the way a client would (raw, no controlling tty)."""
+        """Open a serial device path the way a client would (raw, no controlling tty).
+        POSIX only (the callers skip on Windows)."""
+        import tty
+
         fd = os.open(path, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
         tty.setraw(fd)
         return cls(fd)

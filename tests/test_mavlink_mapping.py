@@ -222,7 +222,8 @@ def test_imu_at_rest_any_attitude_is_zero() -> None:
 
 
 def test_imu_raw_output_would_not_be_zero() -> None:
-    # the bug of NOTES §11: without the +g a level aircraft at rest "accelerates" 1 g upwards
+    # the bug of docs/protocol-notes.md §10 "Aircraft acceleration excludes gravity":
+    # without the +g a level aircraft at rest "accelerates" 1 g upwards
     wrong = acceleration_from_specific_force((0, 0, -G), Attitude(0, 0, 0), gravity=0.0)
     assert wrong == approx_neu(0, 0, G)
     right = acceleration_from_specific_force((0, 0, -G), Attitude(0, 0, 0))

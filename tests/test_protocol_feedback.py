@@ -1,5 +1,6 @@
-"""Execution status is read per command (NOTES §1): calibration 0x02 = in progress,
-palette/thermal failure 0x02, zoom failure = camera mask, no status = NONE."""
+"""Execution status is read per command (docs/protocol-notes.md §2 "Execution status per command"):
+calibration 0x02 = in progress, palette/thermal failure 0x02, zoom failure = camera mask, no status
+= NONE."""
 
 from __future__ import annotations
 

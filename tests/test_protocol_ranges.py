@@ -307,7 +307,8 @@ MASKED = [
 
 
 def test_masked_commands_are_the_documented_ones() -> None:
-    # NOTES §2: photo/record/zoom/focus/track/click-to-pan/night vision + palette/thermal
+    # docs/protocol-notes.md §3 "Camera masks": photo/record/zoom/focus/track/click-to-pan/night
+    # vision + palette/thermal
     assert {cls.OPCODE for cls in MASKED} == {
         0x17,
         0x1A,

@@ -16,6 +16,7 @@ from typing import Any
 import pytest
 
 from _fault_proxy import DelayNullRequests, DropFirstReplyOfEachCommand, FaultProxy
+from _scale import FULL, scaled
 from _sim_process import SimProcess
 from _vtime import tagged_commands
 from gcu_async import (
@@ -75,15 +76,19 @@ def check_truthful(
 async def test_udp_loss_corruption_duplication_and_reordering_below_the_guard() -> None:
     """30 % loss, 5 % corruption, 5 % duplication each way, 20 % of packets held 5, 10 or
     13 ms (below the 15 ms guard): 500 commands per hold, half of them repeating one opcode
-    (each needs a proven null separation). 0 executed twice, 0 false outcomes."""
+    (each needs a proven null separation). 0 executed twice, 0 false outcomes. A reduced-size
+    run (tests/_scale.py): the 13 ms hold only, 200 commands."""
+
+    holds = [(0.005, 1), (0.010, 2), (0.013, 3)] if FULL else [(0.013, 3)]
+    n = scaled(500, 200)
 
     async def one(hold: float, seed: int) -> Counter[str]:
         sim = SimProcess("--listen", "udp://127.0.0.1:0", "--loss", "0.3", "--corrupt", "0.05",
                          "--duplicate", "0.05", "--reorder", "0.2", "--reorder-hold", str(hold),
                          "--seed", str(seed))  # fmt: skip
         try:
-            same = list(itertools.islice(tagged_commands("same", seed * 1000), 250))
-            mixed = list(itertools.islice(tagged_commands("mixed", seed * 1000 + 500), 250))
+            same = list(itertools.islice(tagged_commands("same", seed * 1000), n // 2))
+            mixed = list(itertools.islice(tagged_commands("mixed", seed * 1000 + 500), n // 2))
             commands = [c for pair in zip(same, mixed, strict=True) for c in pair]
             async with connect(sim.url, local_port=0) as gcu:
                 results = await drive(gcu, commands, seed)
@@ -92,10 +97,10 @@ async def test_udp_loss_corruption_duplication_and_reordering_below_the_guard() 
             executed = sim.executions()
         return check_truthful(results, executed)
 
-    outcomes = await asyncio.gather(one(0.005, 1), one(0.010, 2), one(0.013, 3))
+    outcomes = await asyncio.gather(*(one(hold, seed) for hold, seed in holds))
     for counts in outcomes:
-        assert sum(counts.values()) == 500
-        assert counts["SUCCEEDED"] > 450, counts
+        assert sum(counts.values()) == n
+        assert counts["SUCCEEDED"] > n * 0.9, counts
 
 
 async def test_nulls_delayed_10ms_and_each_first_reply_dropped_by_a_proxy() -> None:
@@ -158,7 +163,11 @@ async def test_tcp_peer_that_stalls_cannot_run_stale_control_packets_later() -> 
     resumed = [(t, p) for t, p, _ in recorder.packets if t > stalled_at + 2.5]
     stale_valid = [p for t, p in resumed if p.main.control_valid and t < stalled_at + 3.5]
     assert resumed
-    assert len(stale_valid) <= 0.2 * 50 + 2, len(stale_valid)
+    # valid packets the GCU meets after the stall: the heartbeat slots of control_silence
+    # (0.2 s at 50 Hz: 10, 11 when a slot falls on each end), one packet in flight when the
+    # stall began (answered before it, so the client's last reply is that late), and the
+    # take_photo's early packet (sent at once, off the heartbeat cadence): at most 13
+    assert len(stale_valid) <= 0.2 * 50 + 3, len(stale_valid)
     photos = [e for e in sim.model.execution_log if e.command.OPCODE == Opcode.TAKE_PHOTO]
     assert len(photos) == 2  # the one reported "unknown" (it ran late) and the last one
 

@@ -11,7 +11,6 @@ import socket
 import subprocess
 import sys
 import time
-import tty
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -25,6 +24,7 @@ from gcu_async.protocol import Deframer, GcuPacket, Opcode, Palette, TakePhoto, 
 from gcu_async.sim import parse_listen_url
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals and ptys")
+tty = pytest.importorskip("tty", reason="POSIX signals and ptys")
 
 _SCRIPT = Path(sys.executable).with_name("gcu-async")
 CLI = (

@@ -1,4 +1,5 @@
-"""Sans-I/O SimulatorModel: modes and angles on a ManualClock (NOTES §5)."""
+"""Sans-I/O SimulatorModel: modes and angles on a ManualClock (docs/protocol-notes.md §5 "Control
+values change meaning with the mode")."""
 
 from __future__ import annotations
 

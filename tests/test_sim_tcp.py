@@ -102,3 +102,60 @@ async def test_closing_the_server_disconnects_clients() -> None:
         await asyncio.wait_for(asyncio.open_connection(*server.address), 2.0)
     await peer.close()
     await waiting.close()
+
+
+async def test_connections_run_no_task_that_could_outlive_them() -> None:
+    """A served and a waiting client add no task; once both have closed, nothing of them
+    runs (a task per connection outlived its client on Python 3.12+)."""
+    before = {t for t in asyncio.all_tasks() if not t.done()}
+    async with GcuSimulator().serve_tcp(port=0) as server:
+        first = await StreamPeer.connect(server.address)
+        await first.request(host_bytes(TakePhoto()))
+        second = await StreamPeer.connect(server.address)
+        second.writer.write(host_bytes())
+        await asyncio.sleep(0.05)
+        assert {t for t in asyncio.all_tasks() if not t.done()} == before
+        await first.close()
+        assert (await second.reply(timeout=2.0)).feedback.opcode == 0
+        await second.close()
+        assert {t for t in asyncio.all_tasks() if not t.done()} == before
+    assert {t for t in asyncio.all_tasks() if not t.done()} == before
+
+
+async def test_a_waiting_client_is_not_read_before_its_turn() -> None:
+    """Its bytes stay in the kernel (reading paused on every Python version), and bytes a
+    transport delivered early anyway are kept and answered when its turn comes."""
+    sim = GcuSimulator()
+    async with sim.serve_tcp(port=0) as server:
+        first = await StreamPeer.connect(server.address)
+        await first.request(host_bytes())
+        second = await StreamPeer.connect(server.address)
+        second.writer.write(host_bytes(TakePhoto()) * 50)
+        await second.writer.drain()
+        await asyncio.sleep(0.1)
+        [waiting] = server._waiting
+        assert waiting.early == b""  # never read: the pause took effect
+        assert sim.model.executions[Opcode.TAKE_PHOTO] == 0
+        waiting.data_received(host_bytes())  # as if the transport had read it early
+        await first.close()
+        replies = [await second.reply(timeout=2.0) for _ in range(51)]
+        # the early bytes first, then the kernel's: one null reply, 50 photo replies
+        assert [r.feedback.opcode for r in replies] == [0] + [Opcode.TAKE_PHOTO] * 50
+        await second.close()
+    assert sim.model.executions[Opcode.TAKE_PHOTO] == 1  # the same-opcode rule: once
+
+
+async def test_a_waiting_client_that_left_does_not_hold_up_the_next() -> None:
+    """Its close is seen only when its turn comes (its reading is paused until then): it is
+    served nothing, leaves at once, and the client behind it is served."""
+    async with GcuSimulator().serve_tcp(port=0) as server:
+        first = await StreamPeer.connect(server.address)
+        await first.request(host_bytes())
+        quitter = await StreamPeer.connect(server.address)
+        third = await StreamPeer.connect(server.address)
+        third.writer.write(host_bytes(TakePhoto()))
+        await quitter.close()
+        await first.close()
+        assert (await third.reply(timeout=2.0)).feedback.opcode == Opcode.TAKE_PHOTO
+        await third.close()
+        assert server.clients_served == 3

@@ -6,9 +6,8 @@ from __future__ import annotations
 import asyncio
 import errno
 import os
-import termios
+import sys
 import time
-import tty
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -20,7 +19,11 @@ from _transport_recorder import Recorder, open_fds, other_tasks
 from gcu_async.errors import LinkLost
 from gcu_async.transport import BAUDRATES, Backoff, LinkEventKind, SerialTransport
 
-pytestmark = pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs a pty")
+_PTY_ONLY = "the serial transport is tested on a pseudo-terminal: POSIX only (not Windows)"
+if sys.platform == "win32" or not hasattr(os, "openpty"):
+    pytest.skip(_PTY_ONLY, allow_module_level=True)
+termios = pytest.importorskip("termios", reason=_PTY_ONLY)
+tty = pytest.importorskip("tty", reason=_PTY_ONLY)
 
 
 class Pty:

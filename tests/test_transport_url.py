@@ -5,7 +5,7 @@ from __future__ import annotations
 import asyncio
 import os
 import random
-import tty
+import sys
 from typing import Any
 
 import pytest
@@ -226,7 +226,13 @@ async def test_tcp_url_end_to_end() -> None:
         await server.wait_closed()
 
 
+@pytest.mark.skipif(
+    sys.platform == "win32" or not hasattr(os, "openpty"),
+    reason="a pseudo-terminal stands in for the serial port: POSIX only",
+)
 async def test_serial_url_end_to_end() -> None:
+    import tty
+
     controller, follower = os.openpty()
     try:
         tty.setraw(controller)

@@ -21,6 +21,7 @@ from gcu_async.protocol import *  # noqa: F403
 from gcu_async.protocol import __all__ as _protocol_all
 
 __version__ = "0.1.0"
+"""The package version: the only place it is written (pyproject.toml reads it from here)."""
 
 __all__ = [
     "CommandError", "CommandFailed", "CommandLinkLost", "CommandTimeout", "FieldRangeError",

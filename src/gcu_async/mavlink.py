@@ -18,8 +18,8 @@ GPS_RAW_INT                   satellites (255 = unknown → 0)
 SYSTEM_TIME                   gnss_week, gnss_ms (GPS time: leap seconds applied)
 ============================  =====================================================
 
-Acceleration must exclude gravity (docs/protocol-notes.md, "10. Aircraft acceleration
-excludes gravity": zero at rest or in straight, constant-speed flight; an autopilot driver
+Acceleration must exclude gravity (docs/protocol-notes.md §10 "Aircraft acceleration excludes
+gravity": zero at rest or in straight, constant-speed flight; an autopilot driver
 that sent raw accelerometer output made the gimbal drift), so it comes from exactly one
 source chosen when the mapper is built. Velocity comes from whichever of GLOBAL_POSITION_INT
 and LOCAL_POSITION_NED arrived last (both carry the estimator's north/east/down velocity), so

@@ -19,6 +19,8 @@ without it they skip.
 
 from __future__ import annotations
 
+import os
+import sys
 from collections.abc import AsyncIterator
 from dataclasses import dataclass
 from typing import Any
@@ -35,6 +37,8 @@ from gcu_async.sim.simulator import GcuSimulator
 from gcu_async.sim.tcp import TcpServer
 
 TRANSPORTS = ("memory", "udp", "tcp", "serial")
+PTY_AVAILABLE = hasattr(os, "openpty") and sys.platform != "win32"
+"""Can the ``"serial"`` transport (a pseudo-terminal and the POSIX serial client) run here?"""
 
 
 @dataclass
@@ -150,7 +154,10 @@ async def gcu_sim(
     gcu_sim_seed: int,
     gcu_sim_model_options: dict[str, Any],
 ) -> AsyncIterator[SimHandle]:
-    """A running simulator endpoint (see the module docstring)."""
+    """A running simulator endpoint (see the module docstring). The ``"serial"`` transport
+    is a pseudo-terminal, and both ends need POSIX: on Windows the test is skipped."""
+    if gcu_sim_transport == "serial" and not PTY_AVAILABLE:
+        pytest.skip("gcu_sim_transport 'serial' is a pseudo-terminal: POSIX only (not Windows)")
     model = SimulatorModel(gcu_sim_pod, seed=gcu_sim_seed, **gcu_sim_model_options)
     sim = GcuSimulator(model, faults=gcu_sim_faults)
     server = start_endpoint(sim, gcu_sim_transport)

@@ -451,8 +451,9 @@ class GcuClient(CommandMethods, WaitingMethods):
 
     def set_control(self, control: ControlValues | None) -> None:
         """Raw control values for the current mode (their meaning depends on the mode,
-        NOTES §5); ``None`` sends them invalid (rates 0, angles held). Raises ``ValueError``
-        (nothing changes) when no mode takes values or a value is out of range."""
+        docs/protocol-notes.md §5 "Control values change meaning with the mode"); ``None`` sends
+        them invalid (rates 0, angles held). Raises ``ValueError`` (nothing changes) when no mode
+        takes values or a value is out of range."""
         self.session.set_control(control)
 
     def _set_control(self, control: ControlValues | None, kind: ControlKind) -> None:
@@ -767,7 +768,8 @@ AIRCRAFT_TUPLES: dict[str, tuple[type[Any], str, tuple[tuple[float, float, bool]
                                               (*S32_MM, False))),
 }  # fmt: skip
 """The aircraft fields given as triples: type, unit, (low, high, high open) per element (the
-ranges of host bytes 12–29 and the sub frame, NOTES §11)."""
+ranges of host bytes 12–29 and the sub frame; docs/protocol-notes.md §10 "Aircraft
+acceleration excludes gravity")."""
 
 
 def _triple(name: str, value: object) -> Any:

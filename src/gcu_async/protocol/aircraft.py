@@ -1,7 +1,7 @@
 """The aircraft state a host sends in every packet (host main frame bytes 11–29, sub frame).
 
 Acceleration is north/east/up **without gravity** (zero at rest or in straight,
-constant-speed flight) and velocity north/east/up (docs/protocol-notes.md, "10. Aircraft
+constant-speed flight) and velocity north/east/up (docs/protocol-notes.md §10 "Aircraft
 acceleration excludes gravity"); wrong values corrupt the gimbal's attitude solution.
 Fields left ``None`` are never invented: the INS-valid bit is set only when attitude,
 acceleration and velocity are all given (else the INS bytes are zeros, marked invalid); no

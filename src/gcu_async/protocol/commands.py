@@ -8,8 +8,8 @@ only ``int`` (camera masks 1–255, ``CameraMask`` members welcome), real fields
 ``box``/``point`` an :class:`ImageBox` / :class:`ImagePoint` (or a plain tuple, stored as
 the NamedTuple) checked element by element. ``encode_params()`` gives the parameter bytes;
 :func:`decode_command` turns opcode + parameter bytes back into the typed command.
-The first parameter byte of many commands is a camera mask (NOTES §2): it is the
-``cameras`` field, defaulting to the value the document shows.
+The first parameter byte of many commands is a camera mask (docs/protocol-notes.md §3 "Camera
+masks"): it is the ``cameras`` field, defaulting to the value the document shows.
 """
 
 from __future__ import annotations
@@ -158,7 +158,8 @@ class Command:
 # --- no-parameter commands ------------------------------------------------------------
 @dataclass(frozen=True, slots=True)
 class NullCommand(Command):
-    """0x00: separates two commands with the same opcode (NOTES §3)."""
+    """0x00: separates two commands with the same opcode (docs/protocol-notes.md §4 "The
+    same-opcode rule")."""
 
     OPCODE = Opcode.NULL
 

@@ -119,8 +119,9 @@ class HostFlags(IntFlag):
 
 
 class PodStatus(IntFlag):
-    """GCU main frame bytes 6–7, read little-endian (see NOTES: the vendor example
-    contradicts its own byte-order rule; the library follows the rule)."""
+    """GCU main frame bytes 6–7, read little-endian (docs/protocol-notes.md §1 "Byte order of the
+    pod-status example": the vendor example contradicts its own byte-order rule; the library follows
+    the rule)."""
 
     TRACKING_OK = 1 << 0
     RANGE_VALID = 1 << 7
@@ -184,7 +185,8 @@ class CameraMask(IntFlag):
 
 
 class ExecutionStatus(IntEnum):
-    """Meaning of a feedback's execution status, read per command (NOTES §1)."""
+    """Meaning of a feedback's execution status, read per command (docs/protocol-notes.md
+    §2 "Execution status per command")."""
 
     NONE = 0
     """The reply carried no execution status (e.g. feedback to the null command)."""

@@ -1,8 +1,9 @@
 """Command feedback of a GCU packet: the opcode (byte 69) and execution status (byte 70).
 
-The status is read per command (NOTES §1): 0x00 is success everywhere; calibration answers
-0x02 while in progress; zoom commands answer a camera mask naming the failed cameras; any
-other non-zero value is a failure (0x01 for most commands, 0x02 for palette/thermal).
+The status is read per command (docs/protocol-notes.md §2 "Execution status per command"): 0x00 is
+success everywhere; calibration answers 0x02 while in progress; zoom commands answer a camera mask
+naming the failed cameras; any other non-zero value is a failure (0x01 for most commands, 0x02 for
+palette/thermal).
 """
 
 from __future__ import annotations

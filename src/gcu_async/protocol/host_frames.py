@@ -43,8 +43,8 @@ _NOT_FLAG_BITS = ~_FLAG_BITS
 
 class ControlValues(NamedTuple):
     """Host main frame bytes 5–10 as raw S16 values; their meaning depends on the mode
-    (NOTES §5). Build them with :meth:`angles` or :meth:`rates`, which check their
-    arguments.
+    (docs/protocol-notes.md §5 "Control values change meaning with the mode"). Build them with
+    :meth:`angles` or :meth:`rates`, which check their arguments.
 
     Invariant: each raw value is an ``int`` in [-18000, 18000] (±180° at 0.01°; rates use
     ±1500 of it). A ``NamedTuple`` cannot check itself when built raw

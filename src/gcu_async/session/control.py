@@ -1,8 +1,8 @@
 """Which control values (host bytes 5–10) go out valid, and for which mode.
 
-Control values change meaning with the mode (NOTES §5): the same raw numbers are Euler
-angles in one mode, angular rates in another. The rule (docs/client.md, "Control values"):
-values are sent valid only while
+Control values change meaning with the mode (docs/protocol-notes.md §5 "Control values change
+meaning with the mode"): the same raw numbers are Euler angles in one mode, angular rates in
+another. The rule (docs/client.md, "Control values"): values are sent valid only while
 
 - the mode they were given for is the last mode the GCU confirmed (its mode command got a
   success feedback), and

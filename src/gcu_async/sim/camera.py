@@ -80,7 +80,8 @@ class CameraState:
 
     @property
     def main_zoom(self) -> float:
-        """Zoom of the main view (camera 1), which scales the control rates (NOTES §5)."""
+        """Zoom of the main view (camera 1), which scales the control rates
+        (docs/protocol-notes.md §5 "Control values change meaning with the mode")."""
         return self.zoom[VISIBLE].value
 
     @property

@@ -1,9 +1,10 @@
 """What each command does to the simulated pod, and the execution status it answers.
 
-Statuses follow NOTES §1 via :func:`~gcu_async.protocol.feedback.failure_status`: 0x00
-success; 0x01 failure (0x02 for palette and the thermal commands; the failed-camera mask for
-zoom commands); calibration 0x02 while in progress. A command the pod model does not support
-(Appendix 8) fails without effect. Interpretations the simulator makes:
+Statuses follow docs/protocol-notes.md §2 "Execution status per command" via
+:func:`~gcu_async.protocol.feedback.failure_status`: 0x00 success; 0x01 failure (0x02 for palette
+and the thermal commands; the failed-camera mask for zoom commands); calibration 0x02 while in
+progress. A command the pod model does not support (Appendix 8) fails without effect.
+Interpretations the simulator makes:
 
 - a camera mask naming a camera the pod lacks fails (zoom: those cameras are the mask NN,
   the others still zoom); palette/thermal commands need camera 2 in the mask;

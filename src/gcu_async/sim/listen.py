@@ -9,6 +9,7 @@ from urllib.parse import parse_qs, urlsplit
 from gcu_async.sim.serialport import DEFAULT_BAUDRATE
 from gcu_async.sim.tcp import GCU_TCP_PORT
 from gcu_async.sim.udp import GCU_UDP_PORT
+from gcu_async.transport.url import serial_device
 
 SERIAL_BAUDRATES = (115200, 250000, 500000, 1000000)
 _DEFAULT_PORTS = {"udp": GCU_UDP_PORT, "tcp": GCU_TCP_PORT}
@@ -62,9 +63,10 @@ def parse_listen_url(url: str) -> ListenSpec:
         return ListenSpec(scheme, parts.hostname,
                           _DEFAULT_PORTS[scheme] if port is None else port)  # fmt: skip
     if scheme == "serial":
-        path = (parts.netloc + parts.path) if parts.netloc else parts.path
-        if not path:
-            raise ValueError(f"listen URL {url!r}: missing device path (serial:///dev/ttyUSB0)")
+        try:
+            path = serial_device(parts.netloc, parts.path)  # the client's rule (COM3 too)
+        except ValueError as exc:
+            raise ValueError(f"listen URL {url!r}: {exc}") from None
         query = parse_qs(parts.query)
         unknown = set(query) - {"baudrate"}
         if unknown:

@@ -1,10 +1,11 @@
 """The sans-I/O GCU model: host packets in, GCU packets out, with a pod behind them.
 
-``SimulatorModel.receive(bytes)`` takes raw bytes in any chunking and returns the encoded
-replies; ``handle(HostPacket)`` answers one decoded packet. Time comes from an injectable
-clock; on every packet the model first advances its physics to ``clock.now()``, then runs the
-command (the same-opcode rule applies, NOTES §3), then takes the packet's control values,
-and answers with main frame, the requested sub frame and the feedback (NOTES §1).
+``SimulatorModel.receive(bytes)`` takes raw bytes in any chunking and returns the encoded replies;
+``handle(HostPacket)`` answers one decoded packet. Time comes from an injectable clock; on every
+packet the model first advances its physics to ``clock.now()``, then runs the command (the
+same-opcode rule applies, docs/protocol-notes.md §4 "The same-opcode rule"), then takes the packet's
+control values, and answers with main frame, the requested sub frame and the feedback
+(docs/protocol-notes.md §2 "Execution status per command").
 """
 
 from __future__ import annotations
@@ -53,7 +54,8 @@ class ModelStats:
     bytes_discarded: int = 0
     """Bytes that belonged to no valid packet (garbage, bad CRC/length)."""
     repeated: int = 0
-    """Packets whose opcode repeated the previous one: answered, not executed (NOTES §3)."""
+    """Packets whose opcode repeated the previous one: answered, not executed
+    (docs/protocol-notes.md §4 "The same-opcode rule")."""
 
 
 class ExecutionRecord(NamedTuple):

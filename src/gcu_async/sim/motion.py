@@ -1,9 +1,10 @@
 """Gimbal pointing: the mode machine and how the camera moves (sans-I/O).
 
-The truth is the three relative (motor) angles roll/pitch/yaw of the camera against the
-aircraft; absolute angles are derived from them plus the aircraft attitude (a small-angle
-sum: roll and pitch add, yaw adds and wraps). Each mode gives every axis a *setpoint*,
-either absolute (stabilised in the world) or relative (fixed to the aircraft) — NOTES §5:
+The truth is the three relative (motor) angles roll/pitch/yaw of the camera against the aircraft;
+absolute angles are derived from them plus the aircraft attitude (a small-angle sum: roll and pitch
+add, yaw adds and wraps). Each mode gives every axis a *setpoint*, either absolute (stabilised in
+the world) or relative (fixed to the aircraft) — docs/protocol-notes.md §5 "Control values change
+meaning with the mode":
 
 =============  =====================  =====================  ===========================
 mode           roll                   pitch                  yaw
@@ -230,8 +231,9 @@ class Gimbal:
 
     # -- inputs and time ---------------------------------------------------------------
     def control_input(self, control: ControlValues, valid: bool, zoom: float) -> None:
-        """Host bytes 5–11: rates or angles per the mode (NOTES §5); invalid (B2 = 0) means
-        rate 0 and angles held. Ignored while a click-to-pan runs and while tracking."""
+        """Host bytes 5–11: rates or angles per the mode (docs/protocol-notes.md §5 "Control values
+        change meaning with the mode"); invalid (B2 = 0) means rate 0 and angles held. Ignored while
+        a click-to-pan runs and while tracking."""
         self.control_rates = (0.0, 0.0, 0.0)
         if self.pan is not None or self.mode == Mode.TRACK:
             return

@@ -1,13 +1,13 @@
 """The simulator's serial endpoint: a pseudo-terminal pair, or a real device path.
 
-``serve_pty()`` creates a pty pair (POSIX), puts the follower side in raw mode and publishes
-its path (``device_path``) for a client to open like a serial port; the simulator keeps the
-follower open too, so clients may open and close it repeatedly. ``serve_serial(path)`` opens
-an existing device (8N1, the given baud rate) with pyserial. A pty ignores the baud rate;
-the real GCU detects 115200/250000/500000/1000000 (NOTES §9). Replies the other side does
-not read are dropped once the terminal buffer is full (counted in ``replies_dropped``).
-While the simulator is stalled the endpoint does not read its descriptor: the terminal
-buffers what the host writes (a Linux pty took 16 KiB; then the host's writes block).
+``serve_pty()`` creates a pty pair (POSIX), puts the follower side in raw mode and publishes its
+path (``device_path``) for a client to open like a serial port; the simulator keeps the follower
+open too, so clients may open and close it repeatedly. ``serve_serial(path)`` opens an existing
+device (8N1, the given baud rate) with pyserial. A pty ignores the baud rate; the real GCU detects
+115200/250000/500000/1000000 (docs/protocol-notes.md §12 "Transports"). Replies the other side does
+not read are dropped once the terminal buffer is full (counted in ``replies_dropped``). While the
+simulator is stalled the endpoint does not read its descriptor: the terminal buffers what the host
+writes (a Linux pty took 16 KiB; then the host's writes block).
 """
 
 from __future__ import annotations
@@ -15,7 +15,6 @@ from __future__ import annotations
 import asyncio
 import logging
 import os
-import tty
 from typing import TYPE_CHECKING, Any
 
 from gcu_async.sim.exchange import Exchange
@@ -70,6 +69,10 @@ class SerialServer(SimServer):
 
     def _open(self) -> None:
         if self._path is None:
+            if not hasattr(os, "openpty"):  # Windows
+                raise OSError("serve_pty: pseudo-terminals need a POSIX system")
+            import tty  # POSIX only (termios): imported here so the package imports anywhere
+
             leader, follower = os.openpty()
             try:
                 tty.setraw(follower)

@@ -18,6 +18,7 @@ after the clock has been advanced past its end.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import math
 from typing import Protocol
 
@@ -112,19 +113,23 @@ class StallSwitch:
 class TransportReading:
     """Stall member that pauses reading on an asyncio transport (TCP stream, UDP socket).
 
-    A transport without ``pause_reading`` (not one of asyncio's selector transports) keeps
-    reading; its exchange then holds the packets instead of the OS.
+    A transport that cannot pause reading keeps reading; its exchange then holds the packets
+    instead of the OS. That is one without ``pause_reading``, or one whose ``pause_reading``
+    raises ``NotImplementedError``: Python 3.10's selector datagram transport inherits it
+    from ``asyncio.ReadTransport`` without implementing it.
     """
 
     def __init__(self, transport: asyncio.BaseTransport) -> None:
         self._transport = transport
 
     def pause(self) -> None:
-        pause = getattr(self._transport, "pause_reading", None)
-        if pause is not None and not self._transport.is_closing():
-            pause()
+        self._call("pause_reading")
 
     def resume(self) -> None:
-        resume = getattr(self._transport, "resume_reading", None)
-        if resume is not None and not self._transport.is_closing():
-            resume()
+        self._call("resume_reading")
+
+    def _call(self, name: str) -> None:
+        method = getattr(self._transport, name, None)
+        if method is not None and not self._transport.is_closing():
+            with contextlib.suppress(NotImplementedError):
+                method()

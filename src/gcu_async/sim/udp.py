@@ -1,9 +1,9 @@
 """The simulator's UDP endpoint: binds the GCU port (2337) and answers each datagram.
 
 Replies go to the sender's address; or to the sender's host at a fixed ``reply_port`` (what
-emulators in the field do: port 2338); or to a fixed ``reply_to`` address — the real GCU
-sends to the LAN broadcast address, port 2338 (NOTES §9, §13); broadcast is allowed on the
-socket when ``reply_to`` is set. Replies leave from the bound port.
+emulators in the field do: port 2338); or to a fixed ``reply_to`` address — the real GCU sends to
+the LAN broadcast address, port 2338 (docs/protocol-notes.md §12 "Transports"); broadcast is allowed
+on the socket when ``reply_to`` is set. Replies leave from the bound port.
 :func:`interface_broadcast` finds the broadcast address of the interface that owns the
 listen address (``gcu-async sim --reply-to broadcast``).
 """

@@ -9,7 +9,10 @@ so one busy socket cannot starve the loop either.
 
 Sends go straight to ``sock.sendto`` (non-blocking); every ``OSError``, ``BlockingIOError``
 (send buffer full: the datagram is dropped, never queued) included, goes to the protocol's
-``error_received``, as asyncio reports send errors.
+``error_received``, as asyncio reports send errors. Receive errors go there too and never
+close the transport; an ICMP port unreachable reported by ``recvfrom``
+(``ConnectionRefusedError``, or ``ConnectionResetError`` on Windows) does not even end the
+current drain.
 
 Loops without ``add_reader`` (Windows' proactor loop) raise ``NotImplementedError`` from the
 constructor; the caller then falls back to ``loop.create_datagram_endpoint``.
@@ -67,6 +70,12 @@ class DrainingDatagramTransport(asyncio.DatagramTransport):
                 return True  # drained
             except InterruptedError:
                 return False
+            except (ConnectionRefusedError, ConnectionResetError) as exc:
+                # ICMP port unreachable for an earlier send, reported by this receive
+                # (Windows: WSAECONNRESET; Linux: a connected socket or IP_RECVERR). The
+                # report is consumed by the call: the datagrams behind it are read on.
+                protocol.error_received(exc)
+                continue
             except OSError as exc:
                 protocol.error_received(exc)
                 return False  # like asyncio; anything left is read at the next event

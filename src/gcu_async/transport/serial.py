@@ -1,8 +1,8 @@
 """Serial transport over pyserial-asyncio: TTL UART, 8 data bits, no parity, 1 stop bit.
 
-NOTES §9: the GCU detects the rate itself among 115200, 250000, 500000 and 1000000 baud;
-no other rate is accepted. If the device disappears (USB adapter unplugged, pty peer
-closed) a :attr:`~LinkEventKind.LOST` event is emitted and the transport stays down; call
+docs/protocol-notes.md §12 "Transports": the GCU detects the rate itself among 115200, 250000,
+500000 and 1000000 baud; no other rate is accepted. If the device disappears (USB adapter unplugged,
+pty peer closed) a :attr:`~LinkEventKind.LOST` event is emitted and the transport stays down; call
 :meth:`SerialTransport.open` again to retry.
 
 Reading
@@ -49,7 +49,7 @@ except ImportError:  # pragma: no cover - not POSIX
     _FLUSH_ERRORS = (OSError,)
 
 BAUDRATES = (115200, 250000, 500000, 1000000)
-"""The rates a GCU auto-detects (NOTES §9)."""
+"""The rates a GCU auto-detects (docs/protocol-notes.md §12 "Transports")."""
 DEFAULT_BAUDRATE = 115200
 
 _CLOSE_GRACE = 1.0

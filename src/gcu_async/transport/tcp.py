@@ -1,4 +1,5 @@
-"""TCP transport: the host is the client, the GCU the server on port 2332 (NOTES §9/§13).
+"""TCP transport: the host is the client, the GCU the server on port 2332 (docs/protocol-notes.md
+§12 "Transports").
 
 When an established connection drops, a :attr:`~LinkEventKind.LOST` event is emitted at
 once; with ``reconnect=True`` (default) a background task then reconnects with exponential
@@ -46,7 +47,7 @@ from gcu_async.transport.backoff import Backoff, cancel_and_wait, giving_up, ret
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 GCU_TCP_PORT = 2332
-"""Port the GCU's TCP server listens on (NOTES §9)."""
+"""Port the GCU's TCP server listens on (docs/protocol-notes.md §12 "Transports")."""
 
 _CLOSE_GRACE = 1.0
 """Seconds :meth:`TcpTransport.close` lets unsent bytes flush before aborting."""

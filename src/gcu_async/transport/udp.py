@@ -1,9 +1,9 @@
 """UDP transport: the host listens on a local port (2338) and sends to the GCU (port 2337).
 
-Protocol NOTES §9/§13: the GCU sends from port 2337 to the LAN broadcast address, port
-2338; emulators answer by unicast to the sender. The socket is therefore *not* connected:
-it binds ``local_host:local_port`` (wildcard by default, so broadcasts arrive) and filters
-sources itself.
+docs/protocol-notes.md §12 "Transports": the GCU sends from port 2337 to the LAN broadcast address,
+port 2338; emulators answer by unicast to the sender. The socket is therefore *not* connected: it
+binds ``local_host:local_port`` (wildcard by default, so broadcasts arrive) and filters sources
+itself.
 
 Source filtering
     By default only datagrams whose source is the configured GCU ``(host, port)`` are
@@ -38,7 +38,12 @@ Errors
     UDP is connectionless: send errors (``EMSGSIZE``, ICMP port unreachable reported as
     ``ConnectionRefusedError``, ``BlockingIOError`` when the socket's send buffer is full:
     that datagram is dropped, never queued) are counted in :attr:`UdpTransport.send_errors`
-    and kept in :attr:`UdpTransport.last_error`; the transport stays usable.
+    and kept in :attr:`UdpTransport.last_error`; the transport stays usable. An ICMP port
+    unreachable (a GCU not yet listening) may also be reported by a later *receive*: Windows
+    does so on any UDP socket (``ConnectionResetError``), Linux only on a connected one. It
+    is counted the same way and receiving goes on; on Windows the socket is told not to
+    report it at all (``SIO_UDP_CONNRESET`` off, see :func:`ignore_icmp_connreset`), since
+    the proactor loop of Python 3.10–3.12 stops reading a datagram socket after one.
     Silence is detected by the session's link health, not here.
     :meth:`~gcu_async.transport.Transport.reset` does nothing: no datagram is ever queued.
 """
@@ -61,9 +66,9 @@ from gcu_async.transport._datagram import DrainingDatagramTransport
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 GCU_UDP_PORT = 2337
-"""Port the GCU listens on (NOTES §9)."""
+"""Port the GCU listens on (docs/protocol-notes.md §12 "Transports")."""
 HOST_UDP_PORT = 2338
-"""Port the host listens on; the GCU broadcasts to it (NOTES §9)."""
+"""Port the host listens on; the GCU broadcasts to it (docs/protocol-notes.md §12 "Transports")."""
 MAX_DATAGRAM = 65536
 """Receive buffer size: no UDP payload is larger. (On the fallback path, asyncio's default
 of 256 KiB is above glibc's mmap threshold: an mmap/mremap/munmap per received datagram.)"""
@@ -89,6 +94,21 @@ def _reuse_port(requested: bool | None, local_port: int) -> bool:
     if requested and not available:
         raise ValueError("reuse_port: True is not possible here (the platform has no SO_REUSEPORT)")
     return requested
+
+
+def ignore_icmp_connreset(sock: socket.socket) -> bool:
+    """Windows: keep ``recvfrom`` on ``sock`` from failing with WSAECONNRESET after an ICMP
+    port unreachable (the ``SIO_UDP_CONNRESET`` ioctl, off). Returns whether it was applied;
+    elsewhere (no such ioctl) it does nothing and returns False."""
+    code = getattr(socket, "SIO_UDP_CONNRESET", None)
+    ioctl = getattr(sock, "ioctl", None)
+    if code is None or ioctl is None:
+        return False
+    try:
+        ioctl(code, False)
+    except OSError:
+        return False
+    return True
 
 
 async def _endpoint(
@@ -276,6 +296,7 @@ class UdpTransport(Transport):
                 sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEPORT, 1)
             sock.bind((local_host, self._local_port))
             sock.setblocking(False)
+            ignore_icmp_connreset(sock)
             proto = _UdpProtocol(self)
             dtransport = await _endpoint(loop, sock, proto)
         except OSError as exc:

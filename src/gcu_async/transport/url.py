@@ -1,8 +1,9 @@
 """Make a transport from a URL: ``udp://HOST[:PORT]``, ``tcp://HOST[:PORT]``,
-``serial:///dev/ttyUSB0?baudrate=115200`` (or ``serial:/dev/ttyUSB0``).
+``serial:///dev/ttyUSB0?baudrate=115200`` (or ``serial:/dev/ttyUSB0``; on Windows
+``serial://COM3``, see :func:`serial_device`).
 
-IPv6 literals go in brackets (``udp://[::1]:2337``). Default ports follow NOTES §9: UDP
-2337 (the host listens on 2338), TCP 2332.
+IPv6 literals go in brackets (``udp://[::1]:2337``). Default ports follow docs/protocol-notes.md §12
+"Transports": UDP 2337 (the host listens on 2338), TCP 2332.
 
 Options come from the query string and/or keyword arguments of :func:`open_transport`.
 Query values are text (booleans as 1/0, true/false, yes/no, on/off; ``none`` for an unset
@@ -251,11 +252,34 @@ def _host_port(netloc: str, default_port: int) -> tuple[str, int]:
     return host, int(port_text)
 
 
-def _serial(netloc: str, path: str, opts: dict[str, object]) -> Transport:
+_WINDOWS_PORT = re.compile(r"COM[1-9][0-9]*\Z", re.IGNORECASE)
+
+
+def serial_device(netloc: str, path: str) -> str:
+    """The device a ``serial:`` URL names, from its host part and path (still quoted).
+
+    A POSIX path: ``serial:///dev/ttyUSB0`` or ``serial:/dev/ttyUSB0``. A Windows port
+    name (``COM`` and a number, any case): ``serial://COM3``, ``serial:COM3`` and also
+    ``serial:///COM3`` (no POSIX serial device sits at ``/COMn``) all name ``COM3``. Raises
+    ValueError (field ``device``) for any other host part or a missing device.
+    """
     if netloc:
-        raise ValueError(f"device: host part {netloc!r} is not allowed (use serial:///dev/ttyUSB0)")
+        name = unquote(netloc)
+        if path not in ("", "/") or not _WINDOWS_PORT.match(name):
+            raise ValueError(
+                f"device: host part {netloc!r} is not allowed "
+                "(use serial:///dev/ttyUSB0, or serial://COM3 on Windows)"
+            )
+        return name
     device = unquote(path)
+    if device.startswith("/") and _WINDOWS_PORT.match(device[1:]):
+        return device[1:]
     if not device or device == "/":
-        raise ValueError("device: missing (use serial:///dev/ttyUSB0)")
+        raise ValueError("device: missing (use serial:///dev/ttyUSB0, or serial://COM3 on Windows)")
+    return device
+
+
+def _serial(netloc: str, path: str, opts: dict[str, object]) -> Transport:
+    device = serial_device(netloc, path)
     baudrate = opts.get("baudrate", DEFAULT_BAUDRATE)
     return SerialTransport(device, baudrate)  # type: ignore[arg-type]
