@@ -139,3 +139,17 @@ def test_interface_broadcast_names_what_it_cannot_find(monkeypatch: pytest.Monke
     monkeypatch.setattr(sys, "platform", "darwin")
     with pytest.raises(ValueError, match=r"broadcast address of 10\.0\.0\.1 needs Linux: give it"):
         interface_broadcast("10.0.0.1")
+
+
+def test_a_gcu_host_with_nothing_on_2337_is_reported_by_its_icmp_error(lan: Lan) -> None:
+    """Host A is up but nothing listens on 2337: its kernel answers every datagram with ICMP
+    port unreachable, and the client on host B says so (a warning naming host A), instead
+    of only timing out (docs/transports.md, "UDP errors and reopening")."""
+    if not sys.platform.startswith("linux"):
+        pytest.skip("ICMP errors on an unconnected socket are read on Linux only")
+    done = lan.cli(lan.host, "send", GCU_URL, "photo", "--timeout", "1")
+    assert done.returncode == 1, (done.stdout, done.stderr)
+    assert json.loads(done.stdout)["ok"] is False
+    expected = f"ICMP port unreachable from {GCU_ADDRESS} for a datagram to {GCU_ADDRESS}:2337"
+    assert expected in done.stderr, done.stderr
+    assert done.stderr.count("ICMP port unreachable") == 1, done.stderr  # one per episode

@@ -93,8 +93,10 @@ def down_line(gcu: GcuClient) -> str:
     link = gcu.link
     age = "no reply yet" if link.last_reply_age is None else (
         f"no reply for {link.last_reply_age:.1f} s")  # fmt: skip
-    return (f"link {'up' if link.up else 'DOWN'}: {age} | lost {link.lost_count} "
+    line = (f"link {'up' if link.up else 'DOWN'}: {age} | lost {link.lost_count} "
             f"restored {link.restored_count}")  # fmt: skip
+    error = getattr(gcu.transport, "last_error", None)  # UDP: the OS's last report (ICMP, ...)
+    return line if error is None else f"{line} | last error: {error}"
 
 
 async def _monitor(url: str, interval: float, count: int, timeout: float, as_json: bool,

@@ -534,7 +534,9 @@ class GcuClient(CommandMethods, WaitingMethods):
         return None if self._state is ClientState.CLOSED else self._closed_event
 
     def on_link_change(self, callback: LinkCallback) -> Callable[[], None]:
-        """Call ``callback(LinkEvent)`` when the link is lost or restored."""
+        """Call ``callback(LinkEvent)`` when the link is lost or restored, when the OS
+        reports an error on it (:attr:`~gcu_async.transport.LinkEventKind.ERROR`: once per
+        episode), when a new peer answers, and when :meth:`open` retries."""
         _check_callback(callback)
         self._link_callbacks.append(callback)
         return _unsubscriber(self._link_callbacks, callback, None)
@@ -694,6 +696,10 @@ class GcuClient(CommandMethods, WaitingMethods):
             self._dispatch()
             self._schedule()
         elif event.kind is LinkEventKind.PEER:
+            self._emit_link(event)
+        elif event.kind is LinkEventKind.ERROR:
+            log.warning("%s (the link stays open; link health decides whether it is up)",
+                        event.detail)  # fmt: skip
             self._emit_link(event)
 
     # -- events ----------------------------------------------------------------------------

@@ -214,8 +214,9 @@ class WaitingMethods(abc.ABC):
             unsubscribe()
 
     async def link_events(self) -> AsyncGenerator[LinkEvent, None]:
-        """Iterate over link events (lost, restored, a new peer) from now on; ends when the
-        client closes. Up to 256 unread events are kept (the oldest go first)."""
+        """Iterate over link events (lost, restored, an OS error, a new peer, a retried
+        open) from now on; ends when the client closes. Up to 256 unread events are kept
+        (the oldest go first)."""
         closed = self._closed()
         if closed is None or closed.is_set():
             raise LinkLost("the client is not open")

@@ -33,6 +33,11 @@ class LinkEventKind(enum.Enum):
     """A lost link is back (e.g. TCP reconnected)."""
     PEER = "peer"
     """Bytes came from a new peer address (UDP any-source discovery)."""
+    ERROR = "error"
+    """The OS reported an error that leaves the link open (UDP: an ICMP port unreachable —
+    nothing listens at the GCU's address yet —, no route, a full send buffer); the detail
+    says which. One event per episode: the next comes after data from the GCU arrived again.
+    Whether the link is up is decided by the replies, not by this."""
     RETRYING = "retrying"
     """An attempt of the client's :meth:`~gcu_async.client.GcuClient.open` failed and
     another follows (``open_timeout``); the detail says why and when."""

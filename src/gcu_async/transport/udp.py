@@ -35,26 +35,41 @@ Reading
     :attr:`UdpTransport.draining` is False.
 
 Errors
-    UDP is connectionless: send errors (``EMSGSIZE``, ICMP port unreachable reported as
-    ``ConnectionRefusedError``, ``BlockingIOError`` when the socket's send buffer is full:
-    that datagram is dropped, never queued) are counted in :attr:`UdpTransport.send_errors`
-    and kept in :attr:`UdpTransport.last_error`; the transport stays usable. An ICMP port
-    unreachable (a GCU not yet listening) may also be reported by a later *receive*: Windows
-    does so on any UDP socket (``ConnectionResetError``), Linux only on a connected one. It
-    is counted the same way and receiving goes on; on Windows the socket is told not to
-    report it at all (``SIO_UDP_CONNRESET`` off, see :func:`ignore_icmp_connreset`), since
-    the proactor loop of Python 3.10–3.12 stops reading a datagram socket after one.
-    Silence is detected by the session's link health, not here.
-    :meth:`~gcu_async.transport.Transport.reset` does nothing: no datagram is ever queued.
+    UDP is connectionless: send errors (``EMSGSIZE``, ``BlockingIOError`` when the socket's
+    send buffer is full: that datagram is dropped, never queued) and ICMP errors (port
+    unreachable: nothing listens at the GCU's address yet; host or network unreachable) are
+    counted in :attr:`UdpTransport.send_errors` and kept in :attr:`UdpTransport.last_error`;
+    the transport stays usable. The first error of an *episode* (since the socket was opened
+    or since the last datagram from the GCU) is reported as an :attr:`~LinkEventKind.ERROR`
+    link event, so an application learns at once that its GCU's port is unreachable instead
+    of seeing only silence. On Linux the socket reads ICMP errors from its error queue
+    (``IP_RECVERR``: an unconnected socket hears of none otherwise; see
+    :mod:`gcu_async.transport._datagram`), each named with its sender and the datagram's
+    destination. Windows reports an ICMP port unreachable by a later *receive*
+    (``ConnectionResetError``); there the socket is told not to (``SIO_UDP_CONNRESET`` off,
+    see :func:`ignore_icmp_connreset`), since the proactor loop of Python 3.10–3.12 stops
+    reading a datagram socket after one. Silence is detected by the session's link health,
+    not here. :meth:`~gcu_async.transport.Transport.reset` does nothing: no datagram is ever
+    queued.
+
+Reopening
+    Errors never close the socket. If it is closed all the same (by the event loop, after an
+    error it cannot handle), a :attr:`~LinkEventKind.LOST` event follows and, with
+    ``reconnect=True`` (default), a background task binds a new socket on the same local
+    address with :attr:`UdpTransport.backoff` (by default every 0–2 s for up to a minute),
+    then emits :attr:`~LinkEventKind.RESTORED`; when the schedule runs out it emits a final
+    ``LOST`` starting with ``"giving up"``, as TCP and serial do.
 """
 
 from __future__ import annotations
 
 import asyncio
 import ipaddress
+import random
 import socket
 from typing import Any
 
+from gcu_async._checks import check_bool, type_error
 from gcu_async.errors import LinkLost
 from gcu_async.transport._common import (
     call_guarded,
@@ -63,6 +78,7 @@ from gcu_async.transport._common import (
     same_address,
 )
 from gcu_async.transport._datagram import DrainingDatagramTransport
+from gcu_async.transport.backoff import Backoff, cancel_and_wait, giving_up, retry
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 GCU_UDP_PORT = 2337
@@ -164,6 +180,9 @@ class UdpTransport(Transport):
         discovery: bool = False,
         follow_peer: bool = False,
         reuse_port: bool | None = None,
+        reconnect: bool = True,
+        backoff: Backoff | None = None,
+        rng: random.Random | None = None,
     ) -> None:
         super().__init__()
         if not isinstance(host, str) or not host:
@@ -176,6 +195,20 @@ class UdpTransport(Transport):
         self._discovery = bool(discovery)
         self._follow_peer = bool(follow_peer)
         self._reuse_port = _reuse_port(reuse_port, self._local_port)
+        self._reconnect = check_bool("reconnect", reconnect)
+        if backoff is not None and not isinstance(backoff, Backoff):
+            raise type_error("backoff", "a Backoff or None", backoff)
+        self.backoff = backoff if backoff is not None else Backoff(max_attempts=None,
+                                                                   max_total=60.0)  # fmt: skip
+        """Schedule for binding a new socket after the socket was closed under us."""
+        self._rng = rng if rng is not None else random.Random()
+        self._task: asyncio.Task[None] | None = None
+        self._closing = False
+        self._erring = False  # an ERROR event was emitted and no datagram has arrived since
+        self.reconnect_attempts = 0
+        """Attempts to bind a new socket during the current (or last) loss."""
+        self.reconnects = 0
+        """Losses ended by binding a new socket."""
         self._proto: _UdpProtocol | None = None
         self._dtransport: asyncio.DatagramTransport | None = None
         self._remote: tuple[str, int] | None = None
@@ -271,12 +304,24 @@ class UdpTransport(Transport):
         """The bound (host, port) once open; useful with ``local_port=0``."""
         return self._local
 
+    @property
+    def reconnecting(self) -> bool:
+        """True while the socket is lost and the background task tries to bind a new one."""
+        return self._task is not None and not self._task.done() and not self.connected
+
     async def open(self) -> None:
         """Resolve the GCU address, bind the local socket and start receiving.
 
-        Raises :class:`LinkLost` if the host cannot be resolved or the port bound."""
+        Raises :class:`LinkLost` if the host cannot be resolved or the port bound. Stops a
+        running reopen task first."""
         if self.connected:
             return
+        self._closing = False
+        await self._stop_task()
+        await self._bind()
+
+    async def _bind(self, timeout: float | None = None) -> None:
+        """Bind a socket and start receiving (``timeout``: unused, for :func:`retry`)."""
         loop = asyncio.get_running_loop()
         try:
             infos = await loop.getaddrinfo(
@@ -312,6 +357,7 @@ class UdpTransport(Transport):
         self._peer = None if self._discovery else remote
         self._proto = proto
         self._dtransport = dtransport
+        self._erring = False
 
     def send(self, data: bytes) -> None:
         """Send one datagram to :attr:`remote_address`. Raises :class:`LinkLost` if closed.
@@ -344,7 +390,9 @@ class UdpTransport(Transport):
         return False
 
     async def close(self) -> None:
-        """Close the socket; returns once it is released. Idempotent."""
+        """Stop reopening, close the socket; returns once it is released. Idempotent."""
+        self._closing = True
+        await self._stop_task()
         dtransport, proto = self._dtransport, self._proto
         self._dtransport = None
         if dtransport is None or proto is None:
@@ -369,6 +417,8 @@ class UdpTransport(Transport):
             self.rejected_datagrams += 1
             return
         self.rx_datagrams += 1
+        if self._erring:
+            self._erring = False  # the episode is over: the next error is reported again
         try:  # call_guarded, inline: this runs for every datagram
             self._on_data(data)
         except Exception as exc:
@@ -379,6 +429,10 @@ class UdpTransport(Transport):
     def _error(self, exc: Exception) -> None:
         self.send_errors += 1
         self.last_error = exc
+        if not self._erring and self._dtransport is not None:
+            self._erring = True
+            event = LinkEvent(LinkEventKind.ERROR, f"{self.url}: {exc}")
+            call_guarded(self._on_event, event, "event")
 
     def _lost(self, proto: _UdpProtocol, exc: Exception | None) -> None:
         if proto is not self._proto or self._dtransport is None:
@@ -386,3 +440,34 @@ class UdpTransport(Transport):
         self._dtransport = None
         detail = f"{self.url}: socket closed" + (f": {exc}" if exc else "")
         call_guarded(self._on_event, LinkEvent(LinkEventKind.LOST, detail), "event")
+        if self._reconnect and not self._closing:
+            self._task = asyncio.get_running_loop().create_task(
+                self._reopen_loop(), name=f"gcu_async reopen {self.url}")  # fmt: skip
+
+    # -- binding a new socket after a loss --------------------------------------------------
+
+    async def _reopen_loop(self) -> None:
+        self.reconnect_attempts = 0
+
+        def counted(n: int) -> None:
+            self.reconnect_attempts = n
+
+        try:
+            # binding takes no time worth bounding (resolving might: getaddrinfo of a name)
+            last = await retry(self._bind, self.backoff, self._rng, 5.0, counted)
+            if self._closing:
+                return
+            if last is None:
+                self.reconnects += 1
+                detail = f"{self.url}: new socket after {self.reconnect_attempts} attempt(s)"
+                call_guarded(self._on_event, LinkEvent(LinkEventKind.RESTORED, detail), "event")
+            else:
+                call_guarded(self._on_event, giving_up(self.url, self.reconnect_attempts, last),
+                             "event")  # fmt: skip
+        finally:
+            if self._task is asyncio.current_task():
+                self._task = None
+
+    async def _stop_task(self) -> None:
+        task, self._task = self._task, None
+        await cancel_and_wait(task)
