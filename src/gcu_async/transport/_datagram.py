@@ -146,11 +146,12 @@ class DrainingDatagramTransport(asyncio.DatagramTransport):
         loop.add_reader(sock.fileno(), self._read_ready)  # NotImplementedError: no selector
 
     def _read_ready(self) -> None:
-        self.backlog = not self.read_all()
+        self.backlog = not self.read_all(woken=True)
 
-    def read_all(self) -> bool:
+    def read_all(self, *, woken: bool = False) -> bool:
         """Read and deliver every queued datagram (at most :attr:`max_per_event`); True if
-        the socket was found empty at the end."""
+        the socket was found empty at the end. ``woken``: called for a readiness event (one
+        that finds no datagram then reads the error queue)."""
         recv, view, protocol = self._sock.recvfrom_into, self._view, self._protocol
         for i in range(self.max_per_event):
             if self._closing:  # a handler closed us: the socket may be gone already
@@ -158,7 +159,7 @@ class DrainingDatagramTransport(asyncio.DatagramTransport):
             try:
                 n, addr = recv(view)
             except BlockingIOError:
-                if i == 0 and self.error_queue:  # woken with nothing to read: the error queue
+                if i == 0 and woken and self.error_queue:  # nothing to read: the error queue
                     self.read_errors()
                 return True  # drained
             except InterruptedError:
