@@ -203,7 +203,7 @@ async def test_replies_before_any_request_are_unroutable() -> None:
         # the upstream socket is connected to the simulator: play the GCU from its port
         assert proxy._up is not None
         local = proxy._up.get_extra_info("sockname")
-        await server.aclose()
+        await server.close()
         with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as gcu:
             gcu.bind(server.address)
             gcu.sendto(b"\x8a\x5e stray", local)
