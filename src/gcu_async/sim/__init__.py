@@ -5,6 +5,10 @@
 - :class:`GcuSimulator` — the model behind UDP / TCP / pty / serial / in-memory endpoints,
   with seeded fault injection (:class:`FaultPlan`, :class:`FaultConfig`), ``silence()``
   and ``stall()`` (:class:`StallSwitch`).
+
+The servers (:class:`UdpServer`, :class:`TcpServer`, :class:`SerialServer`,
+:class:`MemoryServer`) are given a :class:`ServerParts`, never the simulator: nothing in
+this package imports :mod:`gcu_async.sim.simulator` back (docs/architecture.md).
 """
 
 from gcu_async.sim.clock import Clock, ManualClock, MonotonicClock
