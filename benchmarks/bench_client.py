@@ -116,13 +116,13 @@ async def serve(kinds: Sequence[str]) -> int:
     servers = [sim.serve_udp(LOOPBACK, 0) if kind == "udp" else sim.serve_tcp(LOOPBACK, 0)
                for sim, kind in zip(sims, kinds, strict=True)]  # fmt: skip
     for server in servers:
-        await server.start()
+        await server.open()
     print(json.dumps({"urls": [server.url for server in servers]}), flush=True)
     stdin = asyncio.StreamReader()
     await loop.connect_read_pipe(lambda: asyncio.StreamReaderProtocol(stdin), sys.stdin)
     await stdin.read()  # until the parent closes it (or dies)
     for server in servers:
-        await server.aclose()
+        await server.close()
     stats = [{"executions": dict(sim.model.executions), "answered": sim.model.stats.answered}
              for sim in sims]  # fmt: skip
     with contextlib.suppress(BrokenPipeError):  # the parent is gone

@@ -29,9 +29,9 @@ import asyncio
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from types import TracebackType
 from typing import Any, NamedTuple
 
+from gcu_async._lifecycle import OpenClose
 from gcu_async.errors import RemoteProtocolError
 from gcu_async.protocol import (
     GcuPacket,
@@ -205,7 +205,7 @@ class _Endpoint(asyncio.DatagramProtocol):
             self.closed.set_result(None)
 
 
-class FaultProxy:
+class FaultProxy(OpenClose):
     """A UDP proxy between one host and ``upstream``, faults by policy per direction."""
 
     def __init__(
@@ -236,7 +236,7 @@ class FaultProxy:
         """Socket errors reported (ICMP unreachable and the like)."""
         return sum(p.errors for p in self._protocols)
 
-    async def start(self) -> None:
+    async def open(self) -> None:
         loop = asyncio.get_running_loop()
         down, down_protocol = await loop.create_datagram_endpoint(
             lambda: _Endpoint(self._from_host), local_addr=(self._host, 0)
@@ -253,7 +253,7 @@ class FaultProxy:
         host, port = down.get_extra_info("sockname")[:2]
         self.address = (str(host), int(port))
 
-    async def aclose(self) -> None:
+    async def close(self) -> None:
         """Cancel the delayed datagrams, close both sockets (idempotent, bounded)."""
         for timer, stats in self._timers.items():
             timer.cancel()
@@ -267,18 +267,6 @@ class FaultProxy:
         self._protocols = []
         if waits:
             await asyncio.wait_for(asyncio.gather(*waits), CLOSE_TIMEOUT)
-
-    async def __aenter__(self) -> FaultProxy:
-        await self.start()
-        return self
-
-    async def __aexit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        await self.aclose()
 
     # -- the two directions -------------------------------------------------------------------
     def _from_host(self, data: bytes, addr: Any) -> None:

@@ -76,11 +76,11 @@ def check_pair(client: Path, sim: Path) -> int:
 @contextlib.asynccontextmanager
 async def served(sim: GcuSimulator, listen: str) -> AsyncIterator[Any]:
     server = sim.serve(listen)
-    await server.start()
+    await server.open()
     try:
         yield server
     finally:
-        await server.aclose()
+        await server.close()
 
 
 @needs_tshark
@@ -141,7 +141,8 @@ async def test_serial_session_over_a_pty(tmp_path: Path) -> None:
 async def test_memory_link_and_a_shared_capture_object(tmp_path: Path) -> None:
     capture = PacketCapture(tmp_path / "memory.pcapng")
     sim = GcuSimulator()
-    async with sim.serve_memory() as transport:
+    async with sim.serve_memory() as server:
+        transport = server.transport
         async with GcuClient(transport, capture=capture) as gcu:
             await _session(gcu, 0.2)
             assert capture.active and capture.records > 0

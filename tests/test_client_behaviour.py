@@ -13,8 +13,14 @@ from typing import Any
 
 import pytest
 
-from gcu_async import CommandFailed, GcuClient, LinkLost, Mode, NightVisionMode, Opcode
-from gcu_async.protocol import CameraFlags, ExecutionStatus, PodStatus, ThermalFlags
+from gcu_async import CommandFailed, GcuClient, LinkLost, Mode, Opcode
+from gcu_async.protocol import (
+    CameraFlags,
+    ExecutionStatus,
+    NightVisionMode,
+    PodStatus,
+    ThermalFlags,
+)
 from gcu_async.pytest_plugin import TRANSPORTS, SimHandle
 
 

@@ -73,7 +73,7 @@ from gcu_async.protocol import (
 from gcu_async.protocol.gpstime import GPS_EPOCH
 from gcu_async.session import TelemetrySample
 from gcu_async.sim import GcuSimulator, SimulatorModel
-from gcu_async.sim.aircraft import AircraftState as SimAircraftState
+from gcu_async.sim.aircraft import ReceivedAircraft
 from gcu_async.transport.memory import MemoryTransport
 from gcu_async.transport.url import _SCHEMES
 
@@ -122,12 +122,12 @@ async def open_rig(**options: Any) -> AsyncIterator[Rig]:
 
     model.handle = spy  # type: ignore[method-assign]
     server = GcuSimulator(model).serve_memory()
-    await server.start()
+    await server.open()
     try:
         async with GcuClient(server.transport, **options) as gcu:
             yield Rig(gcu, model, received)
     finally:
-        await server.aclose()
+        await server.close()
 
 
 @pytest.fixture
@@ -513,7 +513,7 @@ add(P("set_aircraft", "state", "state", lambda rig, v: rig.gcu.set_aircraft(v), 
       valid=(AircraftState(), _STATE), read=_read_state,
       expected=lambda s: (s.attitude if s.ins_complete else Attitude(0.0, 0.0, 0.0),
                           s.position),
-      wrong=(None, AircraftState, {}, (), HostMainFrame(), SimAircraftState(), "state",
+      wrong=(None, AircraftState, {}, (), HostMainFrame(), ReceivedAircraft(), "state",
              object(), [AircraftState()], _STATE.main_frame())))  # fmt: skip
 
 

@@ -15,14 +15,18 @@ from gcu_async import (
     CommandTimeout,
     Feedback,
     GcuClient,
-    HostPacket,
     LinkLost,
     Opcode,
-    TakePhoto,
     UnsupportedCommandError,
+)
+from gcu_async.protocol import (
+    CameraMask,
+    GcuSubFrame,
+    HostPacket,
+    HostSubFrame,
+    TakePhoto,
     command_code,
 )
-from gcu_async.protocol import CameraMask, GcuSubFrame, HostSubFrame
 
 
 @pytest.fixture

@@ -16,9 +16,9 @@ from typing import Any, NamedTuple
 
 import pytest
 
-from gcu_async import CameraFlags, GcuClient, GcuSubFrame
+from gcu_async import GcuClient, GcuSubFrame
 from gcu_async.client.api import CommandMethods
-from gcu_async.protocol import Attitude, Command, ControlValues, Feedback, command_code
+from gcu_async.protocol import Attitude, CameraFlags, Command, ControlValues, Feedback, command_code
 from gcu_async.session import ControlKind
 
 README = Path(__file__).resolve().parents[1] / "README.md"

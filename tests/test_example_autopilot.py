@@ -23,7 +23,8 @@ from types import ModuleType
 
 import pytest
 
-from gcu_async import Attitude, GeoPosition, HostPacket, HostSubFrame, Mode, Opcode
+from gcu_async import Attitude, GeoPosition, Mode, Opcode
+from gcu_async.protocol import HostPacket, HostSubFrame
 from gcu_async.protocol.packets import GcuPacket
 from gcu_async.sim import GcuSimulator, SimulatorModel
 

@@ -185,11 +185,11 @@ async def test_closing_cancels_delayed_datagrams_and_frees_the_sockets(peer: Udp
     sim = GcuSimulator()
     async with sim.serve_udp(port=0) as server:
         proxy = FaultProxy(server.address, requests=lambda d: delayed(0.3))
-        await proxy.start()
+        await proxy.open()
         peer.send(tagged(1), proxy.address)
         await eventually(lambda: proxy.request_stats.delayed == 1)
-        await asyncio.wait_for(proxy.aclose(), 3.0)
-        await asyncio.wait_for(proxy.aclose(), 3.0)  # idempotent
+        await asyncio.wait_for(proxy.close(), 3.0)
+        await asyncio.wait_for(proxy.close(), 3.0)  # idempotent
         assert proxy.request_stats.cancelled == 1
         await asyncio.sleep(0.4)
         assert sim.model.stats.received == 0
@@ -203,7 +203,7 @@ async def test_replies_before_any_request_are_unroutable() -> None:
         # the upstream socket is connected to the simulator: play the GCU from its port
         assert proxy._up is not None
         local = proxy._up.get_extra_info("sockname")
-        await server.aclose()
+        await server.close()
         with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as gcu:
             gcu.bind(server.address)
             gcu.sendto(b"\x8a\x5e stray", local)

@@ -15,13 +15,7 @@ from typing import Any
 import pytest
 from pymavlink.dialects.v20 import common as mavlink2
 
-from gcu_async import (
-    AircraftState,
-    FieldRangeError,
-    HostPacket,
-    HostSubFrame,
-    decode_host_packet,
-)
+from gcu_async import AircraftState, FieldRangeError
 from gcu_async.mavlink import (
     MILLI_G,
     STANDARD_GRAVITY,
@@ -37,6 +31,7 @@ from gcu_async.mavlink import (
     convert_system_time,
     convert_velocity,
 )
+from gcu_async.protocol import HostPacket, HostSubFrame, decode_host_packet
 from gcu_async.protocol.units import Attitude, NorthEastUp
 
 G = STANDARD_GRAVITY

@@ -16,7 +16,8 @@ from gcu_async.transport import LinkEvent, LinkEventKind, MemoryTransport
 async def test_memory_link_answers_like_the_gcu() -> None:
     sim = GcuSimulator()
     received: asyncio.Queue[bytes] = asyncio.Queue()
-    async with sim.serve_memory() as transport:
+    async with sim.serve_memory() as server:
+        transport = server.transport
         assert isinstance(transport, MemoryTransport)
         transport.set_handlers(received.put_nowait)
         await transport.open()
@@ -32,10 +33,11 @@ async def test_memory_link_answers_like_the_gcu() -> None:
 async def test_closing_the_simulator_loses_the_link() -> None:
     events: list[LinkEvent] = []
     server = GcuSimulator().serve_memory()
-    transport = await server.__aenter__()
+    assert await server.__aenter__() is server  # async with gives the server itself
+    transport = server.transport
     transport.set_handlers(lambda data: None, events.append)
     await transport.open()
-    await server.aclose()
+    await server.close()
     assert [e.kind for e in events] == [LinkEventKind.LOST]
     with pytest.raises(LinkLost):
         transport.send(host_bytes())
@@ -44,7 +46,8 @@ async def test_closing_the_simulator_loses_the_link() -> None:
 
 async def test_a_reply_to_a_closed_client_is_counted_not_raised() -> None:
     sim = GcuSimulator(faults=FaultPlan(replies=FaultConfig(delay=0.05, seed=2)))
-    async with sim.serve_memory() as transport:
+    async with sim.serve_memory() as server:
+        transport = server.transport
         await transport.open()
         transport.send(host_bytes())
         await asyncio.sleep(0)  # delivered to the simulator; its reply is delayed
@@ -61,7 +64,8 @@ async def test_faults_apply_on_the_memory_link_too() -> None:
     sim = GcuSimulator(faults=FaultPlan(replies=FaultConfig(duplicate=1.0)))
     deframer = Deframer.for_gcu_packets()
     packets: list[bytes] = []
-    async with sim.serve_memory() as transport:
+    async with sim.serve_memory() as server:
+        transport = server.transport
         transport.set_handlers(lambda data: packets.extend(deframer.feed(data)))
         await transport.open()
         transport.send(host_bytes())

@@ -60,11 +60,11 @@ async def test_a_client_can_close_and_reopen_the_pty() -> None:
 
 async def test_closing_releases_the_pty() -> None:
     server = GcuSimulator().serve_pty()
-    await server.start()
+    await server.open()
     path = server.device_path
     assert os.stat(path)  # the follower node exists
-    await server.aclose()
-    await server.aclose()  # idempotent
+    await server.close()
+    await server.close()  # idempotent
     if sys.platform.startswith("linux"):
         with pytest.raises(FileNotFoundError):  # devpts removes the node with both ends closed
             os.stat(path)
@@ -86,4 +86,4 @@ async def test_serve_serial_opens_a_device_path() -> None:
 
 async def test_serve_serial_on_a_missing_device_fails() -> None:
     with pytest.raises(OSError, match="/dev/does-not-exist"):
-        await GcuSimulator().serve_serial("/dev/does-not-exist").start()
+        await GcuSimulator().serve_serial("/dev/does-not-exist").open()

@@ -105,7 +105,8 @@ async def test_pty_bytes_written_during_a_stall_are_answered_after_it() -> None:
 async def test_memory_link_has_no_os_buffer_the_exchange_holds_the_packets() -> None:
     sim, clock = manual_sim()
     received: asyncio.Queue[bytes] = asyncio.Queue()
-    async with sim.serve_memory() as transport:
+    async with sim.serve_memory() as server:
+        transport = server.transport
         transport.set_handlers(received.put_nowait)
         await transport.open()
         sim.stall(1.0)
@@ -199,10 +200,10 @@ async def test_closing_during_a_stall_releases_everything() -> None:
     peer = await UdpPeer.open()
     try:
         server = sim.serve_udp(port=0)
-        await server.start()
+        await server.open()
         sim.stall(60.0)
         peer.send(tagged(1), server.address)
-        await asyncio.wait_for(server.aclose(), 2.0)
+        await asyncio.wait_for(server.close(), 2.0)
     finally:
         await peer.close()
     assert sim.stalls._members == {}  # no endpoint or exchange left behind

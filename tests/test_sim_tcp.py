@@ -88,11 +88,11 @@ async def test_kill_connection_resets_the_client_and_serves_the_next() -> None:
 
 async def test_closing_the_server_disconnects_clients() -> None:
     server = GcuSimulator().serve_tcp(port=0)
-    await server.start()
+    await server.open()
     peer = await StreamPeer.connect(server.address)
     waiting = await StreamPeer.connect(server.address)
     await peer.request(host_bytes())
-    await asyncio.wait_for(server.aclose(), 3.0)
+    await asyncio.wait_for(server.close(), 3.0)
     try:
         leftover = await asyncio.wait_for(peer.reader.read(100), 2.0)
     except ConnectionResetError:

@@ -149,7 +149,7 @@ async def test_silence_stops_answers_for_n_seconds(peer: UdpPeer) -> None:
 async def test_bind_conflict_raises_oserror() -> None:
     async with GcuSimulator().serve_udp(port=0) as first:
         with pytest.raises(OSError, match=r"(?i)in use"):
-            await GcuSimulator().serve_udp(port=first.address[1]).start()
+            await GcuSimulator().serve_udp(port=first.address[1]).open()
 
 
 async def test_replies_go_to_the_senders_host_at_a_fixed_port(peer: UdpPeer) -> None:

@@ -32,15 +32,9 @@ from collections import Counter
 from collections.abc import Callable
 from typing import Any
 
-from gcu_async import (
-    CommandFailed,
-    CommandTimeout,
-    GazeAtCoordinates,
-    GcuClient,
-    LinkLost,
-    connect,
-)
+from gcu_async import CommandFailed, CommandTimeout, GcuClient, LinkLost, connect
 from gcu_async.mavlink import ACCELERATION_SOURCES, MILLI_G, MavlinkAircraftState
+from gcu_async.protocol import GazeAtCoordinates
 from gcu_async.transport import LinkEvent, LinkEventKind
 
 log = logging.getLogger("autopilot")

@@ -1,5 +1,13 @@
 """gcu_async — asyncio driver, simulator and sans-I/O codec for XF Robot gimbal GCUs
-(GCU private protocol V2.0.6)."""
+(GCU private protocol V2.0.6).
+
+The top level holds what an application needs: the client (:class:`GcuClient`,
+:func:`connect`), what it reports (telemetry, link health and events), the exceptions, and
+the value types the client takes and returns (docs/architecture.md, "The public surface").
+Everything else is imported from its subpackage: the protocol core from
+:mod:`gcu_async.protocol`, transports from :mod:`gcu_async.transport`, the simulator from
+:mod:`gcu_async.sim`, and so on.
+"""
 
 from gcu_async.client import GcuClient, LinkHealth, TelemetrySample
 from gcu_async.client.connect import connect
@@ -17,16 +25,22 @@ from gcu_async.errors import (
     UnsupportedCommandError,
     WaitTimeout,
 )
-from gcu_async.protocol import *  # noqa: F403
-from gcu_async.protocol import __all__ as _protocol_all
+from gcu_async.protocol.aircraft import AircraftState
+from gcu_async.protocol.enums import CameraMask, Mode, Opcode, PodModel
+from gcu_async.protocol.feedback import Feedback
+from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
+from gcu_async.protocol.pods import pod_name
+from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp
+from gcu_async.transport.base import LinkEvent, LinkEventKind
 
 __version__ = "0.1.0"
 """The package version: the only place it is written (pyproject.toml reads it from here)."""
 
-__all__ = [
-    "CommandError", "CommandFailed", "CommandLinkLost", "CommandTimeout", "FieldRangeError",
-    "GcuClient", "GcuError", "LinkHealth", "LinkLost", "LocalProtocolError", "Outcome",
-    "RemoteProtocolError", "TelemetrySample",
-    "UnsupportedCommandError", "WaitTimeout", "__version__", "connect",
-    *_protocol_all,
+__all__ = [  # the client, its reports, the exceptions, the values it takes and returns
+    "AircraftState", "Attitude", "CameraMask", "CommandError", "CommandFailed",
+    "CommandLinkLost", "CommandTimeout", "Feedback", "FieldRangeError", "GcuClient", "GcuError",
+    "GcuMainFrame", "GcuSubFrame", "GeoPosition", "LinkEvent", "LinkEventKind", "LinkHealth",
+    "LinkLost", "LocalProtocolError", "Mode", "NorthEastUp", "Opcode", "Outcome", "PodModel",
+    "RemoteProtocolError", "TelemetrySample", "UnsupportedCommandError", "WaitTimeout",
+    "__version__", "connect", "pod_name",
 ]  # fmt: skip

@@ -161,11 +161,11 @@ async def gcu_sim(
     model = SimulatorModel(gcu_sim_pod, seed=gcu_sim_seed, **gcu_sim_model_options)
     sim = GcuSimulator(model, faults=gcu_sim_faults)
     server = start_endpoint(sim, gcu_sim_transport)
-    await server.start()
+    await server.open()
     try:
         yield SimHandle(sim, server, gcu_sim_transport)
     finally:
-        await server.aclose()
+        await server.close()
 
 
 @_async_fixture

@@ -22,6 +22,7 @@ from typing import Any
 
 from gcu_async.capture import CaptureUnavailable, as_capture
 from gcu_async.cli._exit import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_USAGE
+from gcu_async.protocol.links import HOST_UDP_PORT
 from gcu_async.sim.faults import FaultConfig, FaultPlan
 from gcu_async.sim.listen import ListenSpec, parse_hostport, parse_listen_url
 from gcu_async.sim.model import DEFAULT_POD, SimulatorModel
@@ -29,7 +30,7 @@ from gcu_async.sim.serialport import SerialServer
 from gcu_async.sim.server import SimServer
 from gcu_async.sim.simulator import GcuSimulator
 from gcu_async.sim.tcp import TcpServer
-from gcu_async.sim.udp import HOST_UDP_PORT, interface_broadcast
+from gcu_async.sim.udp import interface_broadcast
 from gcu_async.transport._common import format_hostport
 
 PROG = "gcu-async sim"
@@ -223,7 +224,7 @@ async def _serve(
             loop.add_signal_handler(sig, stop.set)
     server = sim.serve(spec)
     try:
-        await server.start()
+        await server.open()
     except OSError as exc:
         capture = sim.capture
         if capture is not None and exc.filename is not None and Path(exc.filename) == capture.path:
@@ -241,7 +242,7 @@ async def _serve(
         print(f"{PROG}: {sim.model.profile.name} listening on {where}", flush=True)
         await stop.wait()
     finally:
-        await server.aclose()
+        await server.close()
     s = sim.model.stats
     log.info("stopped: %d packets answered, %d repeated, %d CRC errors, %d malformed, "
              "%d bytes discarded", s.answered, s.repeated, s.crc_errors, s.malformed,

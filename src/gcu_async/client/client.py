@@ -22,7 +22,6 @@ import time
 import warnings
 from collections.abc import AsyncGenerator, Callable
 from datetime import datetime
-from types import TracebackType
 from typing import Any, Final
 
 from gcu_async._checks import (
@@ -33,6 +32,7 @@ from gcu_async._checks import (
     check_real,
     type_error,
 )
+from gcu_async._lifecycle import OpenClose
 from gcu_async.capture.writer import PacketCapture
 from gcu_async.client.api import CommandMethods
 from gcu_async.client.telemetry import TelemetrySubscription
@@ -110,7 +110,7 @@ class ClientState(enum.Enum):
     CLOSING = "closing"
 
 
-class GcuClient(CommandMethods, WaitingMethods):
+class GcuClient(CommandMethods, WaitingMethods, OpenClose):
     """An asyncio session with one GCU.
 
     ``async with GcuClient(transport) as gcu:`` opens the transport, starts the heartbeat,
@@ -242,18 +242,6 @@ class GcuClient(CommandMethods, WaitingMethods):
         return self._state
 
     # -- lifecycle -------------------------------------------------------------------------
-    async def __aenter__(self) -> GcuClient:
-        await self.open()
-        return self
-
-    async def __aexit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        await self.close()
-
     async def open(self) -> None:
         """Open the transport, start the heartbeat, wait for the first reply.
 

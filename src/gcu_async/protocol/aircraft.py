@@ -23,6 +23,7 @@ from gcu_async.protocol.host_frames import (
     HostMainFrame,
     HostSubFrame,
 )
+from gcu_async.protocol.layout import S32
 from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp, check_tuple, quantize
 
 _ZERO_ATTITUDE = Attitude(0.0, 0.0, 0.0)
@@ -64,7 +65,7 @@ class AircraftState:
         check_int("satellites", self.satellites, 0, 255)
         check_int("gnss_week", self.gnss_week, 0, 32767)
         check_int("gnss_ms", self.gnss_ms, 0, MS_PER_WEEK - 1, "ms")
-        quantize("relative altitude", self.relative_altitude, 1000, -(2**31), 2**31 - 1, "m")
+        quantize("relative altitude", self.relative_altitude, 1000, *S32, "m")
         self.sub_frame()
 
     @staticmethod

@@ -21,14 +21,15 @@ from typing import Any, ClassVar, NamedTuple, TypeVar
 from gcu_async._checks import check_bool, check_int, type_error
 from gcu_async.errors import FieldRangeError, RemoteProtocolError
 from gcu_async.protocol.enums import CameraMask, NightVisionMode, Opcode, OsdCoordinates
+from gcu_async.protocol.layout import S16, S32
 from gcu_async.protocol.units import check_member, check_tuple, quantize
 
 _C = TypeVar("_C", bound="Command")
+_T = TypeVar("_T", bound="_Thresholds")
 
 IMAGE_SCALE = 10000  # image coordinates: U16 [0, 10000], origin top-left
 MAX_PARAMS = 0xFFFF - 72
 """Most parameter bytes a packet can carry (S, a U16, counts 72 bytes besides them)."""
-S32 = (-(2**31), 2**31 - 1)
 
 
 class ImagePoint(NamedTuple):
@@ -511,7 +512,7 @@ class AreaTemperature(Command):
         return cls(_switch("enabled", tt), _box(*box), CameraMask(kk))
 
 
-TEMPERATURE_RAW = (-32768, 32767)  # S16, 0.1 °C
+TEMPERATURE_RAW = S16  # 0.1 °C
 
 
 def _temps(high: float, low: float) -> tuple[int, int]:
@@ -524,10 +525,10 @@ def _temps(high: float, low: float) -> tuple[int, int]:
 
 
 @dataclass(frozen=True, slots=True)
-class TemperatureAlarm(Command):
-    """0x31: temperature alarm on/off with high/low thresholds in °C (0.1 °C resolution)."""
+class _Thresholds(Command):
+    """Body of the two threshold commands: on/off, high/low in °C (0.1 °C resolution, S16),
+    ``low`` not above ``high``, and the cameras."""
 
-    OPCODE = Opcode.TEMPERATURE_ALARM
     LAYOUT = struct.Struct("<BBhh")
     enabled: bool = True
     high: float = 0.0
@@ -539,30 +540,23 @@ class TemperatureAlarm(Command):
                 *_temps(self.high, self.low))  # fmt: skip
 
     @classmethod
-    def from_raw_params(cls, raw: tuple[int, ...]) -> TemperatureAlarm:
+    def from_raw_params(cls: type[_T], raw: tuple[int, ...]) -> _T:
         kk, tt, hh, ll = raw
         return cls(_switch("enabled", tt), hh / 10, ll / 10, CameraMask(kk))
 
 
 @dataclass(frozen=True, slots=True)
-class Isotherm(Command):
+class TemperatureAlarm(_Thresholds):
+    """0x31: temperature alarm on/off with high/low thresholds in °C (0.1 °C resolution)."""
+
+    OPCODE = Opcode.TEMPERATURE_ALARM
+
+
+@dataclass(frozen=True, slots=True)
+class Isotherm(_Thresholds):
     """0x32: isotherm off, or on in "inside the interval" mode with high/low thresholds (°C)."""
 
     OPCODE = Opcode.ISOTHERM
-    LAYOUT = struct.Struct("<BBhh")
-    enabled: bool = True
-    high: float = 0.0
-    low: float = 0.0
-    cameras: CameraMask | int = CameraMask.CAMERA_2
-
-    def raw_params(self) -> tuple[int, ...]:
-        return (_mask("cameras", self.cameras), int(check_bool("enabled", self.enabled)),
-                *_temps(self.high, self.low))  # fmt: skip
-
-    @classmethod
-    def from_raw_params(cls, raw: tuple[int, ...]) -> Isotherm:
-        kk, tt, hh, ll = raw
-        return cls(_switch("enabled", tt), hh / 10, ll / 10, CameraMask(kk))
 
 
 @dataclass(frozen=True, slots=True)

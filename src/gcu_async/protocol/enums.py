@@ -7,6 +7,7 @@ decoding never fails on a newer firmware (the raw integer always stays on the fr
 from __future__ import annotations
 
 from enum import IntEnum, IntFlag
+from typing import Any
 
 from gcu_async._checks import check_int
 
@@ -62,7 +63,16 @@ def opcode_name(opcode: int) -> str:
     return Opcode(opcode).name if opcode in _OPCODE_VALUES else f"UNKNOWN_0x{opcode:02X}"
 
 
-class Mode(IntEnum):
+class _UnknownIfUnlisted:
+    """Enum mixin: a value the enum does not list is its ``UNKNOWN`` member (decoding is
+    liberal: a new mode or pod model on the wire is not an error)."""
+
+    @classmethod
+    def _missing_(cls, value: object) -> Any:
+        return cls.__members__["UNKNOWN"]  # type: ignore[attr-defined]
+
+
+class Mode(_UnknownIfUnlisted, IntEnum):
     """Pod working mode (GCU main frame byte 5)."""
 
     UNKNOWN = -1
@@ -75,12 +85,8 @@ class Mode(IntEnum):
     TRACK = 0x17
     FPV = 0x1C
 
-    @classmethod
-    def _missing_(cls, value: object) -> Mode:
-        return cls.UNKNOWN
 
-
-class PodModel(IntEnum):
+class PodModel(_UnknownIfUnlisted, IntEnum):
     """Pod model codes (Appendix 7). Use :func:`gcu_async.protocol.pods.pod_name` for the
     vendor's spelling (``"D-90Pro(TA)"``)."""
 
@@ -105,10 +111,6 @@ class PodModel(IntEnum):
     D_90PRO_VA = 60
     D_90PRO_T = 61
     D_90PRO_V = 62
-
-    @classmethod
-    def _missing_(cls, value: object) -> PodModel:
-        return cls.UNKNOWN
 
 
 class HostFlags(IntFlag):

@@ -19,6 +19,7 @@ from gcu_async.protocol.enums import (
     PodStatus,
     ThermalFlags,
 )
+from gcu_async.protocol.layout import S16, S32, SUB_FRAME_HEADER
 from gcu_async.protocol.pods import pod_name
 from gcu_async.protocol.units import Attitude, AxisAngles, GeoPosition, check_tuple, quantize
 
@@ -27,10 +28,6 @@ GCU_MAIN = struct.Struct("<BHhhhhhhhHhhh7x")
 GCU_SUB = struct.Struct("<BBBHiiiiHHBHb2x")
 """Bytes 38–68 of a GCU packet when the sub frame header (byte 37) is 0x01."""
 
-S16 = (-32768, 32767)
-SUB_FRAME_HEADER = 0x01
-"""Byte 37 of a standard sub frame (the only one V2.0.6 defines)."""
-S32 = (-(2**31), 2**31 - 1)
 
 
 def _flag_names(flags: Any) -> list[str]:

@@ -12,6 +12,8 @@ from typing import Any, NamedTuple
 
 from gcu_async._checks import check_bool, check_instance, check_int, check_real
 from gcu_async.protocol.enums import HostFlags, SubFrameRequest
+from gcu_async.protocol.layout import S16, S32
+from gcu_async.protocol.layout import SUB_FRAME_HEADER as SUB_FRAME_HEADER  # re-exported
 from gcu_async.protocol.units import (
     Attitude,
     GeoPosition,
@@ -26,9 +28,6 @@ HOST_MAIN = struct.Struct("<hhhBhhHhhhhhhB6x")
 HOST_SUB = struct.Struct("<iiiBIhi8x")
 """Bytes 38–68 of a host packet when the sub frame header (byte 37) is 0x01."""
 
-S16 = (-32768, 32767)
-SUB_FRAME_HEADER = 0x01
-"""Byte 37 of a standard sub frame (the only one V2.0.6 defines)."""
 CONTROL_ANGLE_RAW = 18000  # 0.01°
 CONTROL_RATE_RAW = 1500  # 0.1 °/s ÷ zoom
 ZOOM_MAX = 6553.5
@@ -323,11 +322,11 @@ class HostSubFrame(NamedTuple):
         :mod:`gcu_async.protocol.gpstime`)."""
         lon = quantize("longitude", longitude, 1e7, -1_800_000_000, 1_800_000_000, "deg")
         lat = quantize("latitude", latitude, 1e7, -900_000_000, 900_000_000, "deg")
-        alt = quantize("altitude", altitude, 1000, -(2**31), 2**31 - 1, "m")
+        alt = quantize("altitude", altitude, 1000, *S32, "m")
         sats = check_int("satellites", satellites, 0, 255)
         ms = check_int("gnss_ms", gnss_ms, 0, MS_PER_WEEK - 1, "ms")
         week = check_int("gnss_week", gnss_week, 0, 32767)
-        rel = quantize("relative altitude", relative_altitude, 1000, -(2**31), 2**31 - 1, "m")
+        rel = quantize("relative altitude", relative_altitude, 1000, *S32, "m")
         check_bool("apply_leap_seconds", apply_leap_seconds)
         if gnss_time is not None:
             from gcu_async.protocol.gpstime import utc_to_gps

@@ -5,6 +5,10 @@
 - :class:`GcuSimulator` — the model behind UDP / TCP / pty / serial / in-memory endpoints,
   with seeded fault injection (:class:`FaultPlan`, :class:`FaultConfig`), ``silence()``
   and ``stall()`` (:class:`StallSwitch`).
+
+The servers (:class:`UdpServer`, :class:`TcpServer`, :class:`SerialServer`,
+:class:`MemoryServer`) are given a :class:`ServerParts`, never the simulator: nothing in
+this package imports :mod:`gcu_async.sim.simulator` back (docs/architecture.md).
 """
 
 from gcu_async.sim.clock import Clock, ManualClock, MonotonicClock
@@ -12,10 +16,11 @@ from gcu_async.sim.faults import FaultConfig, FaultDecision, FaultInjector, Faul
 from gcu_async.sim.listen import ListenSpec, parse_listen_url
 from gcu_async.sim.memory import MemoryServer
 from gcu_async.sim.model import DEFAULT_POD, ExecutionRecord, ModelStats, SimulatorModel
+from gcu_async.sim.parts import SimulatorStats
 from gcu_async.sim.profiles import PodProfile, profile_for
 from gcu_async.sim.serialport import SerialServer
-from gcu_async.sim.server import SimServer
-from gcu_async.sim.simulator import GcuSimulator, SimulatorStats
+from gcu_async.sim.server import ServerParts, SimServer
+from gcu_async.sim.simulator import GcuSimulator
 from gcu_async.sim.stall import StallSwitch
 from gcu_async.sim.state import SimState
 from gcu_async.sim.tcp import TcpServer
@@ -24,7 +29,7 @@ from gcu_async.sim.udp import UdpServer
 __all__ = [
     "DEFAULT_POD", "Clock", "ExecutionRecord", "FaultConfig", "FaultDecision", "FaultInjector",
     "FaultPlan", "FaultStats", "GcuSimulator", "ListenSpec", "ManualClock", "MemoryServer",
-    "ModelStats", "MonotonicClock", "PodProfile", "SerialServer", "SimServer", "SimState",
-    "SimulatorModel", "SimulatorStats", "StallSwitch", "TcpServer", "UdpServer",
+    "ModelStats", "MonotonicClock", "PodProfile", "SerialServer", "ServerParts", "SimServer",
+    "SimState", "SimulatorModel", "SimulatorStats", "StallSwitch", "TcpServer", "UdpServer",
     "parse_listen_url", "profile_for",
 ]  # fmt: skip

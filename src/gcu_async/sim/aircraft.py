@@ -12,7 +12,7 @@ DEFAULT_HEIGHT_M = 100.0
 
 
 @dataclass
-class AircraftState:
+class ReceivedAircraft:
     """Aircraft attitude, acceleration, velocity (host bytes 11–29) and GNSS data (host sub
     frame 38–60), as the host packets report them."""
 

@@ -17,14 +17,11 @@ from __future__ import annotations
 import asyncio
 import logging
 from collections.abc import Callable
-from typing import TYPE_CHECKING
 
 from gcu_async.errors import LinkLost
 from gcu_async.protocol.deframer import Deframer
 from gcu_async.sim.faults import FaultInjector
-
-if TYPE_CHECKING:
-    from gcu_async.sim.simulator import GcuSimulator
+from gcu_async.sim.parts import ExchangeHost
 
 log = logging.getLogger("gcu_async.sim")
 
@@ -35,7 +32,7 @@ class _Direction:
     """Faults of one direction. The injector is looked up on every packet, so
     :meth:`GcuSimulator.set_faults` acts at once."""
 
-    def __init__(self, sim: GcuSimulator, attribute: str) -> None:
+    def __init__(self, sim: ExchangeHost, attribute: str) -> None:
         self._sim = sim
         self._attribute = attribute
 
@@ -48,7 +45,7 @@ class _Direction:
 class Exchange:
     """Carries bytes from one peer into the model and the replies back."""
 
-    def __init__(self, sim: GcuSimulator, *, stream: bool) -> None:
+    def __init__(self, sim: ExchangeHost, *, stream: bool) -> None:
         self._sim = sim
         self._deframer = Deframer.for_host_packets() if stream else None
         self._requests = _Direction(sim, "request_faults")

@@ -1,19 +1,20 @@
 """Listen URLs of the simulator: ``udp://HOST[:PORT]``, ``tcp://HOST[:PORT]``, ``pty``,
-``serial:///dev/ttyX[?baudrate=N]``."""
+``serial:///dev/ttyX[?baudrate=N]``.
+
+They are taken apart by the client's own :func:`~gcu_async.transport.url.split_url`: a URL
+names the same place for a client and a simulator (the same schemes, hosts, default ports,
+serial devices and baud rates); a listen URL may also be ``pty``, and port 0 (any free port).
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from urllib.parse import parse_qs, urlsplit
 
-from gcu_async.sim.serialport import DEFAULT_BAUDRATE
-from gcu_async.sim.tcp import GCU_TCP_PORT
-from gcu_async.sim.udp import GCU_UDP_PORT
-from gcu_async.transport.url import serial_device
+from gcu_async.protocol.links import DEFAULT_BAUDRATE
+from gcu_async.transport.url import Converter, merge_options, split_hostport, split_url
 
-SERIAL_BAUDRATES = (115200, 250000, 500000, 1000000)
-_DEFAULT_PORTS = {"udp": GCU_UDP_PORT, "tcp": GCU_TCP_PORT}
 EXAMPLES = "udp://127.0.0.1:2337, tcp://127.0.0.1:2332, pty, serial:///dev/ttyUSB0?baudrate=115200"
+_OPTIONS: dict[str, dict[str, Converter]] = {"udp": {}, "tcp": {}, "pty": {}}
 
 
 @dataclass(frozen=True)
@@ -33,49 +34,24 @@ class ListenSpec:
 
 
 def parse_hostport(text: str, *, what: str = "address") -> tuple[str, int]:
-    """``HOST:PORT`` (IPv6 in brackets) → (host, port); ``ValueError`` naming the problem."""
-    parts = urlsplit(f"//{text}")
+    """``HOST:PORT`` (IPv6 in brackets, port 1-65535) → (host, port), by the URLs' rules;
+    ``ValueError`` naming ``what`` and the problem."""
     try:
-        port = parts.port
-    except ValueError:
-        raise ValueError(f"{what} {text!r}: port must be a number in 0-65535") from None
-    if not parts.hostname or port is None:
-        raise ValueError(f"{what} {text!r}: expected HOST:PORT")
-    return parts.hostname, port
+        return split_hostport(text, None)
+    except ValueError as exc:
+        raise ValueError(f"{what} {text!r}: {exc}") from None
 
 
 def parse_listen_url(url: str) -> ListenSpec:
-    """Parse a listen URL; raises ``ValueError`` with a one-line message on any problem."""
-    text = url.strip()
-    if text in ("pty", "pty:", "pty://"):
-        return ListenSpec("pty")
-    parts = urlsplit(text)
-    scheme = parts.scheme.lower()
-    if scheme in _DEFAULT_PORTS:
-        try:
-            port = parts.port
-        except ValueError:
-            raise ValueError(f"listen URL {url!r}: port must be a number in 0-65535") from None
-        if not parts.hostname:
-            raise ValueError(f"listen URL {url!r}: missing host (e.g. {scheme}://127.0.0.1)")
-        if parts.path not in ("", "/") or parts.query:
-            raise ValueError(f"listen URL {url!r}: unexpected path or query after the port")
-        return ListenSpec(scheme, parts.hostname,
-                          _DEFAULT_PORTS[scheme] if port is None else port)  # fmt: skip
-    if scheme == "serial":
-        try:
-            path = serial_device(parts.netloc, parts.path)  # the client's rule (COM3 too)
-        except ValueError as exc:
-            raise ValueError(f"listen URL {url!r}: {exc}") from None
-        query = parse_qs(parts.query)
-        unknown = set(query) - {"baudrate"}
-        if unknown:
-            raise ValueError(f"listen URL {url!r}: unknown option {sorted(unknown)[0]!r}")
-        baudrate = DEFAULT_BAUDRATE
-        if "baudrate" in query:
-            raw = query["baudrate"][-1]
-            if not raw.isdigit() or int(raw) <= 0:
-                raise ValueError(f"listen URL {url!r}: baudrate {raw!r} is not a positive number")
-            baudrate = int(raw)
-        return ListenSpec("serial", path=path, baudrate=baudrate)
-    raise ValueError(f"listen URL {url!r}: expected one of {EXAMPLES}")
+    """Parse a listen URL; raises ``ValueError`` with a one-line message on any problem
+    (``listen URL 'URL': FIELD: ...``)."""
+    try:
+        parts = split_url(url, listen=True)
+        options = merge_options(parts.scheme, parts.query, {}, _OPTIONS.get(parts.scheme))
+    except ValueError as exc:
+        raise ValueError(f"listen URL {url!r}: {exc}") from None
+    if parts.scheme == "serial":
+        baudrate = options.get("baudrate", DEFAULT_BAUDRATE)
+        assert isinstance(baudrate, int)
+        return ListenSpec("serial", path=parts.device, baudrate=baudrate)
+    return ListenSpec(parts.scheme, parts.host, parts.port)

@@ -23,7 +23,7 @@ from gcu_async.protocol.deframer import Deframer
 from gcu_async.protocol.enums import Mode, Opcode, PodModel, SubFrameRequest, opcode_name
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.packets import DEFAULT_VERSION, GcuPacket, HostPacket, decode_host_packet
-from gcu_async.sim.aircraft import AircraftState
+from gcu_async.sim.aircraft import ReceivedAircraft
 from gcu_async.sim.camera import CameraState
 from gcu_async.sim.clock import Clock, MonotonicClock
 from gcu_async.sim.executor import Executor
@@ -107,7 +107,7 @@ class SimulatorModel:
         self.clock: Clock = clock if clock is not None else MonotonicClock()
         self.rng = random.Random(seed)
         self.protocol_version = protocol_version
-        aircraft = AircraftState()
+        aircraft = ReceivedAircraft()
         self.state = SimState(
             aircraft=aircraft,
             gimbal=Gimbal(aircraft, mode=initial_mode, max_rate=max_slew_rate),

@@ -34,7 +34,7 @@ from gcu_async.protocol.commands import ImageBox, ImagePoint
 from gcu_async.protocol.enums import Mode
 from gcu_async.protocol.host_frames import ControlValues
 from gcu_async.protocol.units import Attitude, GeoPosition, wrap_degrees_180, wrap_degrees_360
-from gcu_async.sim.aircraft import AircraftState
+from gcu_async.sim.aircraft import ReceivedAircraft
 from gcu_async.sim.geometry import along, direction_to, ground_hit, offset
 from gcu_async.sim.profiles import ASPECT, HORIZONTAL_FOV_DEG
 
@@ -103,7 +103,7 @@ def _clamp(value: float, low: float, high: float) -> float:
 class Gimbal:
     """Mode, angles, setpoints and the work in progress (pan, track, gaze)."""
 
-    aircraft: AircraftState
+    aircraft: ReceivedAircraft
     mode: Mode = Mode.POINTING_FOLLOW
     max_rate: float = DEFAULT_MAX_RATE
     relative: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])

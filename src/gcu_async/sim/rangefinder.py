@@ -1,7 +1,7 @@
 """The simulated laser rangefinder: distance to flat ground along the line of sight.
 
 Simulator assumptions: flat ground at the aircraft's height (see
-:attr:`AircraftState.height`), a 3 km maximum range, ±0.2 m uniform noise from the model's
+:attr:`ReceivedAircraft.height`), a 3 km maximum range, ±0.2 m uniform noise from the model's
 seeded random generator. Off: distance 0. On without a hit: −1 m (raw −10), as the spec
 says the device reports. Distance *and* target coordinates valid (pod status B7) needs a
 hit and a known aircraft position.
@@ -13,7 +13,7 @@ import random
 from dataclasses import dataclass
 
 from gcu_async.protocol.units import Attitude, GeoPosition
-from gcu_async.sim.aircraft import AircraftState
+from gcu_async.sim.aircraft import ReceivedAircraft
 from gcu_async.sim.geometry import ground_hit, offset
 
 MAX_RANGE_M = 3_000.0
@@ -33,7 +33,7 @@ class Rangefinder:
         """Distance and target coordinates valid (pod status B7)."""
         return self.on and self.distance > 0 and self.position is not None
 
-    def measure(self, attitude: Attitude, aircraft: AircraftState, rng: random.Random) -> None:
+    def measure(self, attitude: Attitude, aircraft: ReceivedAircraft, rng: random.Random) -> None:
         """Take a reading for the camera's current ``attitude``."""
         self.position = None
         if not self.on:

@@ -4,12 +4,10 @@ from __future__ import annotations
 
 from gcu_async.protocol.enums import Mode, PodStatus
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
+from gcu_async.protocol.layout import S16, S32
 from gcu_async.protocol.units import wrap_degrees_360
 from gcu_async.sim.profiles import PodProfile
 from gcu_async.sim.state import SimState
-
-S16 = (-32768, 32767)
-S32 = (-(2**31), 2**31 - 1)
 
 
 def _clamp(value: int, low: int, high: int) -> int:

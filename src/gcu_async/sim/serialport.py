@@ -15,27 +15,24 @@ from __future__ import annotations
 import asyncio
 import logging
 import os
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
+from gcu_async.protocol.links import DEFAULT_BAUDRATE
 from gcu_async.sim.exchange import Exchange
-from gcu_async.sim.server import SimServer
-
-if TYPE_CHECKING:
-    from gcu_async.sim.simulator import GcuSimulator
+from gcu_async.sim.server import ServerParts, SimServer
 
 log = logging.getLogger("gcu_async.sim")
 
 READ_SIZE = 4096
-DEFAULT_BAUDRATE = 115200
 
 
 class SerialServer(SimServer):
     """Serial endpoint of a simulator; ``device_path`` is what a client opens."""
 
     def __init__(
-        self, sim: GcuSimulator, path: str | None = None, baudrate: int = DEFAULT_BAUDRATE
+        self, parts: ServerParts, path: str | None = None, baudrate: int = DEFAULT_BAUDRATE
     ) -> None:
-        self._sim = sim
+        self._parts = parts
         self._path = path
         self.baudrate = baudrate
         self.device_path: str = path or ""
@@ -50,21 +47,21 @@ class SerialServer(SimServer):
     def url(self) -> str:
         return f"serial://{self.device_path}"
 
-    async def start(self) -> None:
+    async def open(self) -> None:
         if self._fd is not None:
             return
-        if self._sim.capture is not None:
-            self._sim.capture.acquire()  # OSError if the file cannot be created
+        if self._parts.capture is not None:
+            self._parts.capture.acquire()  # OSError if the file cannot be created
         try:
             self._open()
         except BaseException:
-            if self._sim.capture is not None:
-                self._sim.capture.release()
+            if self._parts.capture is not None:
+                self._parts.capture.release()
             raise
-        self._exchange = Exchange(self._sim, stream=True)
+        self._exchange = self._parts.new_exchange(True)
         self._reading = False
-        self._sim.stalls.join(self)  # pauses at once during a stall
-        if not self._sim.stalled:
+        self._parts.stalls.join(self)  # pauses at once during a stall
+        if not self._parts.stalls.stalled:
             self.resume()
 
     def _open(self) -> None:
@@ -111,8 +108,8 @@ class SerialServer(SimServer):
             log.debug("serial read: %s", exc)
             return
         if data:
-            if self._sim.capture is not None:
-                self._sim.capture.serial(self.device_path, data, outbound=False)
+            if self._parts.capture is not None:
+                self._parts.capture.serial(self.device_path, data, outbound=False)
             exchange.feed(data, self._write)
 
     def _write(self, data: bytes) -> None:
@@ -129,20 +126,20 @@ class SerialServer(SimServer):
                     return
                 view = view[n:]
         finally:
-            if self._sim.capture is not None:  # what reached the terminal
-                self._sim.capture.serial(self.device_path, data[: len(data) - len(view)],
+            if self._parts.capture is not None:  # what reached the terminal
+                self._parts.capture.serial(self.device_path, data[: len(data) - len(view)],
                                          outbound=True)  # fmt: skip
 
-    async def aclose(self) -> None:
-        self._sim.stalls.leave(self)
+    async def close(self) -> None:
+        self._parts.stalls.leave(self)
         self.pause()
         fd, self._fd = self._fd, None
         if self._exchange is not None:
             self._exchange.close()
         if fd is None:
             return
-        if self._sim.capture is not None:
-            self._sim.capture.release()
+        if self._parts.capture is not None:
+            self._parts.capture.release()
         if self._serial is not None:
             self._serial.close()
             self._serial = None

@@ -5,31 +5,22 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
 
 from gcu_async.capture.writer import PacketCapture, as_capture
 from gcu_async.protocol.enums import PodModel
+from gcu_async.protocol.links import DEFAULT_BAUDRATE, GCU_TCP_PORT, GCU_UDP_PORT
 from gcu_async.sim.clock import Clock
+from gcu_async.sim.exchange import Exchange
 from gcu_async.sim.faults import FaultConfig, FaultInjector, FaultPlan
 from gcu_async.sim.listen import ListenSpec, parse_listen_url
 from gcu_async.sim.memory import MemoryServer
 from gcu_async.sim.model import DEFAULT_POD, SimulatorModel
-from gcu_async.sim.serialport import DEFAULT_BAUDRATE, SerialServer
-from gcu_async.sim.server import SimServer
+from gcu_async.sim.parts import SimulatorStats
+from gcu_async.sim.serialport import SerialServer
+from gcu_async.sim.server import ServerParts, SimServer
 from gcu_async.sim.stall import StallSwitch
-from gcu_async.sim.tcp import GCU_TCP_PORT, TcpServer
-from gcu_async.sim.udp import GCU_UDP_PORT, UdpServer
-
-
-@dataclass
-class SimulatorStats:
-    replies_sent: int = 0
-    send_errors: int = 0
-    ignored_while_silent: int = 0
-    """Requests that arrived while the GCU was silenced (not processed, not answered)."""
-    held_while_stalled: int = 0
-    """Requests that reached the model's side during a stall without waiting in an OS
-    buffer (held, then processed when the stall ended)."""
+from gcu_async.sim.tcp import TcpServer
+from gcu_async.sim.udp import UdpServer
 
 
 class GcuSimulator:
@@ -100,6 +91,13 @@ class GcuSimulator:
         return self.stalls.stalled
 
     # -- endpoints ----------------------------------------------------------------------------
+    def _parts(self) -> ServerParts:
+        """What a server gets of this simulator: new exchanges, the stalls, the capture."""
+        return ServerParts(self._new_exchange, self.stalls, self.capture)
+
+    def _new_exchange(self, stream: bool) -> Exchange:
+        return Exchange(self, stream=stream)
+
     def serve_udp(
         self,
         host: str = "127.0.0.1",
@@ -109,24 +107,25 @@ class GcuSimulator:
     ) -> UdpServer:
         """UDP endpoint (``async with``); port 0 picks a free port (see ``.address``).
         Replies go to the sender, to the sender's host at ``reply_port``, or to ``reply_to``."""
-        return UdpServer(self, host, port, reply_to, reply_port)
+        return UdpServer(self._parts(), host, port, reply_to, reply_port)
 
     def serve_tcp(self, host: str = "127.0.0.1", port: int = GCU_TCP_PORT) -> TcpServer:
         """TCP server endpoint (``async with``); port 0 picks a free port."""
-        return TcpServer(self, host, port)
+        return TcpServer(self._parts(), host, port)
 
     def serve_pty(self) -> SerialServer:
         """A pseudo-terminal; a client opens ``.device_path`` as its serial port (POSIX)."""
-        return SerialServer(self)
+        return SerialServer(self._parts())
 
     def serve_serial(self, path: str, baudrate: int = DEFAULT_BAUDRATE) -> SerialServer:
         """Answer on an existing serial device (8N1 at ``baudrate``)."""
-        return SerialServer(self, path, baudrate)
+        return SerialServer(self._parts(), path, baudrate)
 
     def serve_memory(self) -> MemoryServer:
-        """``async with sim.serve_memory() as transport`` — an in-memory
-        :class:`~gcu_async.transport.memory.MemoryTransport` whose peer is this simulator."""
-        return MemoryServer(self)
+        """``async with sim.serve_memory() as server`` — ``server.transport`` is an
+        in-memory :class:`~gcu_async.transport.memory.MemoryTransport` whose peer is this
+        simulator."""
+        return MemoryServer(self._parts())
 
     def serve(self, listen: str | ListenSpec) -> SimServer:
         """The endpoint a listen URL names: ``udp://HOST[:PORT]``, ``tcp://HOST[:PORT]``,

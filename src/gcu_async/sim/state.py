@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 from gcu_async.protocol.enums import Mode
 from gcu_async.protocol.units import Attitude, AxisAngles
-from gcu_async.sim.aircraft import AircraftState
+from gcu_async.sim.aircraft import ReceivedAircraft
 from gcu_async.sim.camera import CameraState
 from gcu_async.sim.motion import PITCH, ROLL, YAW, Gimbal
 from gcu_async.sim.rangefinder import Rangefinder
@@ -20,7 +20,7 @@ class SimState:
     ``camera.scene_temperature``, ``faults`` or ``inverted`` to stage a situation.
     """
 
-    aircraft: AircraftState
+    aircraft: ReceivedAircraft
     gimbal: Gimbal
     camera: CameraState
     rangefinder: Rangefinder

@@ -17,19 +17,18 @@ import collections
 import logging
 from typing import TYPE_CHECKING
 
+from gcu_async.protocol.links import GCU_TCP_PORT
 from gcu_async.sim.exchange import Exchange
-from gcu_async.sim.server import SimServer
+from gcu_async.sim.server import ServerParts, SimServer
 from gcu_async.sim.stall import TransportReading
 from gcu_async.transport._common import format_hostport
 
 if TYPE_CHECKING:
     from gcu_async.capture.synth import Address
     from gcu_async.capture.writer import PacketCapture
-    from gcu_async.sim.simulator import GcuSimulator
 
 log = logging.getLogger("gcu_async.sim")
 
-GCU_TCP_PORT = 2332
 CLOSE_TIMEOUT = 2.0
 
 
@@ -44,7 +43,7 @@ class _Connection(asyncio.Protocol):
         self.reading: TransportReading | None = None
         self.early = bytearray()  # read before its turn came (see connection_made)
         self.ends: tuple[Address, Address] | None = None  # (server, client), when captured
-        self.killed = False  # aborted by the server (kill_connection, aclose)
+        self.killed = False  # aborted by the server (kill_connection, close)
         self.closed: asyncio.Future[None] = asyncio.get_running_loop().create_future()
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
@@ -94,8 +93,8 @@ class _Connection(asyncio.Protocol):
 class TcpServer(SimServer):
     """TCP endpoint of a simulator; ``address`` is the bound (host, port)."""
 
-    def __init__(self, sim: GcuSimulator, host: str = "127.0.0.1", port: int = GCU_TCP_PORT):
-        self._sim = sim
+    def __init__(self, parts: ServerParts, host: str = "127.0.0.1", port: int = GCU_TCP_PORT):
+        self._parts = parts
         self._host = host
         self._port = port
         self._server: asyncio.Server | None = None
@@ -113,19 +112,19 @@ class TcpServer(SimServer):
     @property
     def capture(self) -> PacketCapture | None:
         """The simulator's capture file, if it writes one."""
-        return self._sim.capture
+        return self._parts.capture
 
     @property
     def client_connected(self) -> bool:
         """Is a client being served right now?"""
         return self._active is not None
 
-    async def start(self) -> None:
+    async def open(self) -> None:
         if self._server is not None:
             return
         self._closing = False
         loop = asyncio.get_running_loop()
-        capture = self._sim.capture
+        capture = self._parts.capture
         if capture is not None:
             capture.acquire()  # OSError if the file cannot be created: nothing bound yet
         try:
@@ -169,10 +168,10 @@ class TcpServer(SimServer):
         self._active = conn
         self.clients_served += 1
         log.info("TCP client %s connected", conn.peer)
-        conn.exchange = Exchange(self._sim, stream=True)
+        conn.exchange = self._parts.new_exchange(True)
         conn.reading = TransportReading(conn.transport)
-        self._sim.stalls.join(conn.reading)  # stalled: the kernel buffers what the client sends
-        capture = self._sim.capture
+        self._parts.stalls.join(conn.reading)  # stalled: the kernel buffers what the client sends
+        capture = self._parts.capture
         conn.ends = _ends(conn.transport) if capture is not None else None
         if capture is not None and conn.ends is not None:
             capture.tcp_open(conn.ends[1], conn.ends[0])
@@ -187,11 +186,11 @@ class TcpServer(SimServer):
         if conn is not self._active:
             return
         if conn.reading is not None:
-            self._sim.stalls.leave(conn.reading)
+            self._parts.stalls.leave(conn.reading)
         if conn.exchange is not None:
             conn.exchange.close()
         self._active = None
-        capture = self._sim.capture
+        capture = self._parts.capture
         if capture is not None and conn.ends is not None:
             server, client = conn.ends
             if conn.killed:
@@ -206,7 +205,7 @@ class TcpServer(SimServer):
                 self._serve(following)
                 break
 
-    async def aclose(self) -> None:
+    async def close(self) -> None:
         server, self._server = self._server, None
         if server is None:
             return
@@ -220,8 +219,8 @@ class TcpServer(SimServer):
                 await asyncio.wait([conn.closed for conn in connections], timeout=CLOSE_TIMEOUT)
             await asyncio.wait_for(server.wait_closed(), timeout=CLOSE_TIMEOUT)
         finally:
-            if self._sim.capture is not None:
-                self._sim.capture.release()  # after the connections' ends went into it
+            if self._parts.capture is not None:
+                self._parts.capture.release()  # after the connections' ends went into it
 
 
 def _ends(transport: asyncio.BaseTransport) -> tuple[Address, Address] | None:

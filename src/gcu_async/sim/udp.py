@@ -16,21 +16,16 @@ import logging
 import socket
 import struct
 import sys
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from gcu_async.capture.synth import source_address
+from gcu_async.protocol.links import GCU_UDP_PORT
 from gcu_async.sim.exchange import Exchange
-from gcu_async.sim.server import SimServer
+from gcu_async.sim.server import ServerParts, SimServer
 from gcu_async.sim.stall import TransportReading
 from gcu_async.transport._common import format_hostport
 
-if TYPE_CHECKING:
-    from gcu_async.sim.simulator import GcuSimulator
-
 log = logging.getLogger("gcu_async.sim")
-
-GCU_UDP_PORT = 2337
-HOST_UDP_PORT = 2338
 
 
 _SIOCGIFADDR = 0x8915  # Linux ioctls: an interface's (primary) IPv4 address,
@@ -92,7 +87,7 @@ class UdpServer(SimServer):
 
     def __init__(
         self,
-        sim: GcuSimulator,
+        parts: ServerParts,
         host: str = "127.0.0.1",
         port: int = GCU_UDP_PORT,
         reply_to: tuple[str, int] | None = None,
@@ -100,7 +95,7 @@ class UdpServer(SimServer):
     ) -> None:
         if reply_to is not None and reply_port is not None:
             raise ValueError("reply_to and reply_port: give at most one")
-        self._sim = sim
+        self._parts = parts
         self._host = host
         self._port = port
         self.reply_to = reply_to
@@ -117,12 +112,12 @@ class UdpServer(SimServer):
     def url(self) -> str:
         return f"udp://{format_hostport(*self.address)}"
 
-    async def start(self) -> None:
+    async def open(self) -> None:
         if self._transport is not None:
             return
         loop = asyncio.get_running_loop()
         self._closed = loop.create_future()
-        capture = self._sim.capture
+        capture = self._parts.capture
         if capture is not None:
             capture.acquire()  # OSError if the file cannot be created: nothing bound yet
         try:
@@ -136,9 +131,9 @@ class UdpServer(SimServer):
                 capture.release()
             raise
         self._transport = transport
-        self._exchange = Exchange(self._sim, stream=False)
+        self._exchange = self._parts.new_exchange(False)
         self._reading = TransportReading(transport)
-        self._sim.stalls.join(self._reading)  # stalled: the kernel queues the datagrams
+        self._parts.stalls.join(self._reading)  # stalled: the kernel queues the datagrams
         sockname = transport.get_extra_info("sockname")
         self.address = (str(sockname[0]), int(sockname[1]))
 
@@ -153,7 +148,7 @@ class UdpServer(SimServer):
             target = self.reply_to
         elif self.reply_port is not None:
             target = (addr[0], self.reply_port, *addr[2:])
-        capture = self._sim.capture
+        capture = self._parts.capture
         local = (source_address(peer, self.address[0]), self.address[1])
         if capture is not None:
             capture.udp(peer, local, data)
@@ -170,17 +165,17 @@ class UdpServer(SimServer):
         if self._closed is not None and not self._closed.done():
             self._closed.set_result(None)
 
-    async def aclose(self) -> None:
+    async def close(self) -> None:
         transport, self._transport = self._transport, None
         if self._reading is not None:
-            self._sim.stalls.leave(self._reading)
+            self._parts.stalls.leave(self._reading)
             self._reading = None
         if self._exchange is not None:
             self._exchange.close()
         if transport is None:
             return
-        if self._sim.capture is not None:
-            self._sim.capture.release()
+        if self._parts.capture is not None:
+            self._parts.capture.release()
         transport.close()
         if self._closed is not None:
             await asyncio.wait_for(asyncio.shield(self._closed), timeout=2.0)

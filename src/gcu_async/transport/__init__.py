@@ -1,5 +1,6 @@
 """Transports: serial, UDP, TCP and in-memory. Bytes in, bytes out; no protocol logic."""
 
+from gcu_async.protocol.links import BAUDRATES
 from gcu_async.transport.backoff import Backoff
 from gcu_async.transport.base import (
     DataHandler,
@@ -9,7 +10,7 @@ from gcu_async.transport.base import (
     Transport,
 )
 from gcu_async.transport.memory import MemoryTransport
-from gcu_async.transport.serial import BAUDRATES, SerialTransport
+from gcu_async.transport.serial import SerialTransport
 from gcu_async.transport.tcp import TcpTransport
 from gcu_async.transport.udp import UdpTransport
 from gcu_async.transport.url import open_transport

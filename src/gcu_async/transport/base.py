@@ -15,13 +15,11 @@ import abc
 import enum
 from collections.abc import Callable
 from dataclasses import dataclass
-from types import TracebackType
-from typing import TypeVar
 
+from gcu_async._lifecycle import OpenClose
 from gcu_async.transport._common import check_reason
 
 DataHandler = Callable[[bytes], None]
-_T = TypeVar("_T", bound="Transport")
 
 
 class LinkEventKind(enum.Enum):
@@ -61,7 +59,7 @@ def _ignore(event: LinkEvent) -> None:
     return None
 
 
-class Transport(abc.ABC):
+class Transport(OpenClose):
     """Base of serial, UDP, TCP and in-memory transports.
 
     Use as ``async with transport:`` or call :meth:`open` / :meth:`close`. Handlers are set
@@ -146,18 +144,6 @@ class Transport(abc.ABC):
     @abc.abstractmethod
     async def close(self) -> None:
         """Close the link and release every socket / fd. Idempotent."""
-
-    async def __aenter__(self: _T) -> _T:
-        await self.open()
-        return self
-
-    async def __aexit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        await self.close()
 
     def __repr__(self) -> str:
         state = "connected" if self.connected else "closed"

@@ -37,6 +37,7 @@ import serial_asyncio  # type: ignore[import-untyped]
 
 from gcu_async._checks import check_bool, type_error
 from gcu_async.errors import LinkLost
+from gcu_async.protocol.links import BAUDRATES, DEFAULT_BAUDRATE
 from gcu_async.transport._common import call_guarded, check_reason
 from gcu_async.transport.backoff import Backoff, cancel_and_wait, giving_up, retry
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
@@ -48,9 +49,6 @@ try:
 except ImportError:  # pragma: no cover - not POSIX
     _FLUSH_ERRORS = (OSError,)
 
-BAUDRATES = (115200, 250000, 500000, 1000000)
-"""The rates a GCU auto-detects (docs/protocol-notes.md §12 "Transports")."""
-DEFAULT_BAUDRATE = 115200
 
 _CLOSE_GRACE = 1.0
 """Seconds :meth:`SerialTransport.close` lets unsent bytes drain before aborting."""

@@ -36,6 +36,7 @@ import struct
 from typing import Any
 
 from gcu_async.errors import LinkLost
+from gcu_async.protocol.links import GCU_TCP_PORT
 from gcu_async.transport._common import (
     call_guarded,
     check_port,
@@ -45,9 +46,6 @@ from gcu_async.transport._common import (
 )
 from gcu_async.transport.backoff import Backoff, cancel_and_wait, giving_up, retry
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
-
-GCU_TCP_PORT = 2332
-"""Port the GCU's TCP server listens on (docs/protocol-notes.md §12 "Transports")."""
 
 _CLOSE_GRACE = 1.0
 """Seconds :meth:`TcpTransport.close` lets unsent bytes flush before aborting."""

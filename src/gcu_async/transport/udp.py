@@ -71,6 +71,7 @@ from typing import Any
 
 from gcu_async._checks import check_bool, type_error
 from gcu_async.errors import LinkLost
+from gcu_async.protocol.links import GCU_UDP_PORT, HOST_UDP_PORT
 from gcu_async.transport._common import (
     call_guarded,
     check_port,
@@ -81,10 +82,6 @@ from gcu_async.transport._datagram import DrainingDatagramTransport
 from gcu_async.transport.backoff import Backoff, cancel_and_wait, giving_up, retry
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
-GCU_UDP_PORT = 2337
-"""Port the GCU listens on (docs/protocol-notes.md §12 "Transports")."""
-HOST_UDP_PORT = 2338
-"""Port the host listens on; the GCU broadcasts to it (docs/protocol-notes.md §12 "Transports")."""
 MAX_DATAGRAM = 65536
 """Receive buffer size: no UDP payload is larger. (On the fallback path, asyncio's default
 of 256 KiB is above glibc's mmap threshold: an mmap/mremap/munmap per received datagram.)"""

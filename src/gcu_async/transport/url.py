@@ -21,6 +21,11 @@ name, a path, or a fragment. Options per scheme:
 - serial: ``baudrate`` (115200, 250000, 500000 or 1000000)
 
 Every error is a one-line ValueError that starts with the URL and names the field.
+
+:func:`split_url` holds the rules for the scheme, host, port and device: the simulator's
+listen URLs (:func:`gcu_async.sim.parse_listen_url`) are taken apart by the same function,
+so a URL means the same place to both (a listen URL may also say ``pty``, and port 0 for
+"any free port").
 """
 
 from __future__ import annotations
@@ -29,13 +34,15 @@ import ipaddress
 import random
 import re
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from urllib.parse import parse_qsl, unquote, urlsplit
 
+from gcu_async.protocol.links import DEFAULT_BAUDRATE, GCU_TCP_PORT, GCU_UDP_PORT
 from gcu_async.transport.backoff import Backoff
 from gcu_async.transport.base import Transport
-from gcu_async.transport.serial import DEFAULT_BAUDRATE, SerialTransport
-from gcu_async.transport.tcp import GCU_TCP_PORT, TcpTransport
-from gcu_async.transport.udp import GCU_UDP_PORT, UdpTransport
+from gcu_async.transport.serial import SerialTransport, check_baudrate
+from gcu_async.transport.tcp import TcpTransport
+from gcu_async.transport.udp import UdpTransport
 
 Converter = Callable[[str, object, bool], object]
 """(field, value, value is query text) → the option's value, or ValueError."""
@@ -142,7 +149,11 @@ _BACKOFF_FIELDS = (
     ("backoff_base", "base"), ("backoff_factor", "factor"), ("backoff_cap", "cap"),
     ("max_attempts", "max_attempts"), ("max_total", "max_total"),
 )  # fmt: skip
-_SERIAL_OPTIONS: dict[str, Converter] = {"baudrate": _as_int}
+def _as_baudrate(field: str, value: object, text: bool) -> object:
+    return check_baudrate(_as_int(field, value, text))
+
+
+_SERIAL_OPTIONS: dict[str, Converter] = {"baudrate": _as_baudrate}
 _SCHEMES: dict[str, dict[str, Converter]] = {
     "udp": _UDP_OPTIONS,
     "tcp": _TCP_OPTIONS,
@@ -165,26 +176,69 @@ def open_transport(url: str, **options: object) -> Transport:
         raise ValueError(f"{url or repr(url)}: {exc}") from exc
 
 
-def _build(url: str, kwargs: Mapping[str, object]) -> Transport:
+@dataclass(frozen=True)
+class UrlParts:
+    """A URL taken apart by :func:`split_url`."""
+
+    scheme: str
+    """``udp``, ``tcp``, ``serial`` (or, for a listen URL, ``pty``), in lower case."""
+    host: str = ""
+    """udp/tcp: the host name or address (an IPv6 address without its brackets)."""
+    port: int = 0
+    """udp/tcp: the port, or the GCU's default for the scheme when the URL gives none."""
+    device: str = ""
+    """serial: the device (``/dev/ttyUSB0``, ``COM3``; see :func:`serial_device`)."""
+    query: str = ""
+    """The query string, still to be read as options."""
+
+
+_DEFAULT_PORTS = {"udp": GCU_UDP_PORT, "tcp": GCU_TCP_PORT}
+_PTY_FORMS = ("pty", "pty:", "pty://")
+
+
+def split_url(url: str, *, listen: bool = False) -> UrlParts:
+    """Take a GCU URL apart: the rules shared by the client's transports and the
+    simulator's listen URLs.
+
+    Schemes ``udp``, ``tcp`` and ``serial`` (any case); with ``listen``, also ``pty``. A
+    udp/tcp URL is ``scheme://HOST[:PORT]`` (IPv6 in brackets; no user name or path), the
+    port 1-65535 (with ``listen`` 0-65535: 0 binds any free port), by default the GCU's
+    (UDP 2337, TCP 2332: docs/protocol-notes.md §12 "Transports"). A serial URL names its
+    device as :func:`serial_device` says. No fragment. Raises ValueError naming the field
+    (``scheme``, ``host``, ``port``, ``path``, ``device``, ``fragment``); the caller adds
+    the URL in front.
+    """
+    if listen and url.strip().lower() in _PTY_FORMS:
+        return UrlParts("pty")
     try:
         parts = urlsplit(url)
     except ValueError as exc:
         raise ValueError(f"host: cannot parse ({exc})") from None
     scheme = parts.scheme.lower()
+    allowed = "udp://, tcp://, serial:// or pty" if listen else "udp://, tcp:// or serial://"
     if not scheme:
-        raise ValueError("scheme: missing (use udp://, tcp:// or serial://)")
+        raise ValueError(f"scheme: missing (use {allowed})")
     if scheme not in _SCHEMES:
-        raise ValueError(
-            f"scheme: {parts.scheme!r} is not supported (allowed: udp://, tcp://, serial://)"
-        )
+        raise ValueError(f"scheme: {parts.scheme!r} is not supported (allowed: {allowed})")
     if parts.fragment:
         raise ValueError(f"fragment: {parts.fragment!r} is not allowed")
-    opts = _merge_options(scheme, parts.query, kwargs)
     if scheme == "serial":
-        return _serial(parts.netloc, parts.path, opts)
+        return UrlParts(scheme, device=serial_device(parts.netloc, parts.path), query=parts.query)
     if parts.path not in ("", "/"):
         raise ValueError(f"path: {parts.path!r} is not allowed (use {scheme}://HOST[:PORT])")
-    host, port = _host_port(parts.netloc, GCU_UDP_PORT if scheme == "udp" else GCU_TCP_PORT)
+    lowest = 0 if listen else 1
+    host, port = split_hostport(parts.netloc, _DEFAULT_PORTS[scheme], lowest_port=lowest)
+    return UrlParts(scheme, host, port, query=parts.query)
+
+
+def _build(url: str, kwargs: Mapping[str, object]) -> Transport:
+    parts = split_url(url)
+    scheme = parts.scheme
+    opts = merge_options(scheme, parts.query, kwargs)
+    if scheme == "serial":
+        baudrate = opts.get("baudrate", DEFAULT_BAUDRATE)
+        return SerialTransport(parts.device, baudrate)  # type: ignore[arg-type]
+    host, port = parts.host, parts.port
     if scheme == "udp":
         return UdpTransport(host, port, **opts)  # type: ignore[arg-type]
     backoff_opts = {field: opts.pop(name) for name, field in _BACKOFF_FIELDS if name in opts}
@@ -192,8 +246,15 @@ def _build(url: str, kwargs: Mapping[str, object]) -> Transport:
     return TcpTransport(host, port, backoff=backoff, **opts)  # type: ignore[arg-type]
 
 
-def _merge_options(scheme: str, query: str, kwargs: Mapping[str, object]) -> dict[str, object]:
-    allowed = _SCHEMES[scheme]
+def merge_options(
+    scheme: str,
+    query: str,
+    kwargs: Mapping[str, object],
+    allowed: Mapping[str, Converter] | None = None,
+) -> dict[str, object]:
+    """The options of a URL's query and of keyword arguments, converted; ``allowed``: the
+    options a URL of ``scheme`` takes (default: a transport's)."""
+    allowed = _SCHEMES[scheme] if allowed is None else allowed
     names = ", ".join(sorted(allowed))
     query_names = ", ".join(sorted(set(allowed) - _KEYWORD_ONLY))
     raw: dict[str, tuple[object, bool]] = {}
@@ -220,7 +281,12 @@ def _merge_options(scheme: str, query: str, kwargs: Mapping[str, object]) -> dic
     return {name: allowed[name](name, value, text) for name, (value, text) in raw.items()}
 
 
-def _host_port(netloc: str, default_port: int) -> tuple[str, int]:
+def split_hostport(
+    netloc: str, default_port: int | None, *, lowest_port: int = 1
+) -> tuple[str, int]:
+    """``HOST[:PORT]`` (an IPv6 address in brackets) → (host, port); the port must be in
+    ``lowest_port``-65535, and is required when ``default_port`` is ``None``. Raises
+    ValueError naming the field (``host`` or ``port``)."""
     if "@" in netloc:
         raise ValueError("host: user information ('...@') is not allowed")
     port_text: str | None = None
@@ -246,9 +312,11 @@ def _host_port(netloc: str, default_port: int) -> tuple[str, int]:
             raise ValueError("host: missing (use scheme://HOST[:PORT])")
         check_host("host", host)
     if port_text is None:
+        if default_port is None:
+            raise ValueError(f"port: missing (use HOST:PORT, port {lowest_port}-65535)")
         return host, default_port
-    if not port_text.isdigit() or not 1 <= int(port_text) <= 65535:
-        raise ValueError(f"port: {port_text!r} is not a valid port (allowed 1-65535)")
+    if not port_text.isdigit() or not lowest_port <= int(port_text) <= 65535:
+        raise ValueError(f"port: {port_text!r} is not a valid port (allowed {lowest_port}-65535)")
     return host, int(port_text)
 
 
@@ -278,8 +346,3 @@ def serial_device(netloc: str, path: str) -> str:
         raise ValueError("device: missing (use serial:///dev/ttyUSB0, or serial://COM3 on Windows)")
     return device
 
-
-def _serial(netloc: str, path: str, opts: dict[str, object]) -> Transport:
-    device = serial_device(netloc, path)
-    baudrate = opts.get("baudrate", DEFAULT_BAUDRATE)
-    return SerialTransport(device, baudrate)  # type: ignore[arg-type]
