@@ -36,12 +36,15 @@ from gcu_async.bridge.commands import (
 from gcu_async.bridge.links import MavlinkLink
 from gcu_async.bridge.view import Control, GcuView
 from gcu_async.client.client import ClientState, GcuClient
+from gcu_async.errors import GcuError
 from gcu_async.protocol.enums import Mode
 
 log = logging.getLogger("gcu_async.bridge")
 
 IN_PROGRESS_AFTER = 0.5
 """Seconds a GCU command may take before the bridge acknowledges IN_PROGRESS."""
+OPEN_RETRY_SECONDS = 2.0
+"""Pause between attempts to open the GCU link."""
 
 
 class MavlinkBridge:
@@ -156,10 +159,22 @@ class MavlinkBridge:
             await asyncio.sleep(max(0.0, next_at - loop.time()))
 
     async def _open_client(self) -> None:
-        try:
-            await self.client.open()
-        except Exception as exc:
-            log.error("bridge: could not open the GCU link: %s", exc)
+        """Open the client, retrying every :data:`OPEN_RETRY_SECONDS` until it opens (a GCU
+        powered after the bridge); each failure is logged once per outage."""
+        failed = False
+        while True:
+            try:
+                await self.client.open()
+            except (GcuError, OSError) as exc:
+                if not failed:
+                    log.warning("bridge: GCU link not up yet (%s); retrying every %g s", exc,
+                                OPEN_RETRY_SECONDS)  # fmt: skip
+                failed = True
+                await asyncio.sleep(OPEN_RETRY_SECONDS)
+            else:
+                if failed:
+                    log.warning("bridge: GCU link up")
+                return
 
     # -- the view ---------------------------------------------------------------------------
     def view(self) -> GcuView:
