@@ -424,3 +424,62 @@ def test_autopilot_feed_home_altitude_and_utc() -> None:
     assert feed.utc_usec(12.0) == 0
     feed.update(mavlink.MAVLink_system_time_message(1_700_000_000_000_000, 0), now=12.0)
     assert feed.utc_usec(12.5) == 1_700_000_000_500_000
+
+
+# -- streams --------------------------------------------------------------------------------
+def test_stream_schedule_defaults_intervals_and_stops() -> None:
+    from gcu_async.bridge import streams
+
+    served = set(dispatch.builders(gimbal.COMPONENT, CONFIG))
+    schedule = streams.StreamSchedule(served, start=0.0)
+    att, status = streams.ATTITUDE, mavlink.MAVLINK_MSG_ID_GIMBAL_MANAGER_STATUS
+    sent = [mid for t in range(100) for mid in schedule.due(t / 100)]  # 1 s at 100 Hz
+    assert sent.count(att) == 10 and sent.count(status) == 5
+    schedule.set(att, 0.5, now=1.0)
+    schedule.set(status, math.inf, now=1.0)
+    sent = [mid for t in range(100, 200) for mid in schedule.due(t / 100)]
+    assert sent.count(att) == 2 and sent.count(status) == 0
+    assert schedule.next_time() == pytest.approx(2.0)
+    schedule.set(status, None, now=2.0)  # back to the default
+    assert schedule.interval(status) == pytest.approx(0.2)
+    info = mavlink.MAVLINK_MSG_ID_GIMBAL_DEVICE_INFORMATION
+    schedule.set(info, 1.0, now=2.0)  # any served message can be streamed
+    assert schedule.explicit(info) and info in schedule.due(2.0)
+    schedule.set(info, None, now=3.0)
+    assert schedule.interval(info) == math.inf
+    with pytest.raises(ValueError, match="not served"):
+        schedule.set(mavlink.MAVLINK_MSG_ID_CAMERA_INFORMATION, 1.0, now=3.0)
+    # a late loop sends once and plans from now: no burst
+    assert schedule.due(10.0).count(att) == 1 and att not in schedule.due(10.01)
+
+
+@pytest.mark.parametrize(("value", "expected"), [(-1, math.inf), (0, None), (500_000, 0.5),
+                                                 (10_000, 0.01)])  # fmt: skip
+def test_message_interval_requests(value: float, expected: float | None) -> None:
+    from gcu_async.bridge import streams
+
+    assert streams.interval_from_request(value) == expected
+
+
+@pytest.mark.parametrize("value", [NAN, -2, 1, 9_999, 0.5, math.inf])
+def test_bad_message_intervals_are_denied(value: float) -> None:
+    plan = dispatch.plan(cmd(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL,
+                             mavlink.MAVLINK_MSG_ID_GIMBAL_MANAGER_STATUS, value),
+                         gimbal.COMPONENT, view(), CONFIG)  # fmt: skip
+    assert plan.result == DENIED
+
+
+def test_message_interval_for_another_components_message_is_unsupported() -> None:
+    plan = dispatch.plan(cmd(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL,
+                             mavlink.MAVLINK_MSG_ID_CAMERA_SETTINGS, 0),
+                         gimbal.COMPONENT, view(), CONFIG)  # fmt: skip
+    assert plan.result == UNSUPPORTED
+
+
+def test_tracking_rectangle_is_reported_with_its_start_size() -> None:
+    status = GcuMainFrame.build(mode=Mode.TRACK, pod_status=PodStatus.TRACKING_OK,
+                                miss_distance=(0, 0))  # fmt: skip
+    msg = camera.tracking_status(GcuView(status=status, tracking_mode=2,
+                                         tracking_box=(0.1, 0.2, 0.3, 0.6)))  # fmt: skip
+    assert (msg.rec_top_x, msg.rec_top_y, msg.rec_bottom_x, msg.rec_bottom_y) == (
+        pytest.approx((0.4, 0.3, 0.6, 0.7)))

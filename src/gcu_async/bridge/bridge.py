@@ -2,10 +2,9 @@
 :class:`~gcu_async.bridge.view.GcuView` when it needs one, and carries out what the pure
 planners decide on a :class:`~gcu_async.client.GcuClient` (docs/mavlink-bridge.md).
 
-Streams (all to every link): HEARTBEAT of both components at 1 Hz;
-GIMBAL_DEVICE_ATTITUDE_STATUS at ``attitude_rate_hz`` (10 Hz); GIMBAL_MANAGER_STATUS,
-and CAMERA_TRACKING_IMAGE_STATUS while tracking (plus one IDLE when it ends), at half that;
-CAMERA_SETTINGS, CAMERA_CAPTURE_STATUS and CAMERA_FOV_STATUS at 1 Hz.
+Everything it sends goes to every link: HEARTBEAT of both components at 1 Hz, the streams
+of :mod:`~gcu_async.bridge.streams` (adjustable with MAV_CMD_SET_MESSAGE_INTERVAL),
+acknowledgements and requested messages.
 """
 
 from __future__ import annotations
@@ -20,7 +19,7 @@ from dataclasses import replace
 from types import TracebackType
 from typing import Any
 
-from gcu_async.bridge import camera, dispatch, gimbal
+from gcu_async.bridge import camera, dispatch, gimbal, streams
 from gcu_async.bridge._mavlink import mavlink
 from gcu_async.bridge.autopilot import AutopilotFeed
 from gcu_async.bridge.camera import CameraConfig
@@ -57,8 +56,8 @@ class MavlinkBridge:
             ``udpin:HOST:PORT``, ``tcp:HOST:PORT``, ``/dev/ttyACM0,115200``).
         system_id: the vehicle's MAVLink system id (the autopilot's); the components use it.
         camera: what the GCU does not report about the camera (:class:`CameraConfig`).
-        attitude_rate_hz: GIMBAL_DEVICE_ATTITUDE_STATUS rate (≥ 10 as the issue asks).
-        open_timeout: keep trying to open the GCU link for this long (seconds).
+        autopilot_component: the autopilot's component id (its messages feed the GCU).
+        in_progress_after: seconds before a running command is acknowledged IN_PROGRESS.
     """
 
     def __init__(
@@ -68,7 +67,6 @@ class MavlinkBridge:
         *,
         system_id: int = 1,
         camera: CameraConfig | None = None,
-        attitude_rate_hz: float = 10.0,
         autopilot_component: int = mavlink.MAV_COMP_ID_AUTOPILOT1,
         in_progress_after: float = IN_PROGRESS_AFTER,
     ) -> None:
@@ -76,13 +74,9 @@ class MavlinkBridge:
             raise ValueError("connections: give at least one MAVLink connection")
         if not 1 <= system_id <= 255:
             raise ValueError(f"system_id: {system_id!r} is outside the allowed range [1, 255]")
-        if not 10.0 <= attitude_rate_hz <= 100.0:
-            raise ValueError(f"attitude_rate_hz: {attitude_rate_hz!r} is outside the allowed "
-                             "range [10, 100] Hz")  # fmt: skip
         self.client = client
         self.system_id = system_id
         self.camera = camera if camera is not None else CameraConfig()
-        self.attitude_period = 1.0 / attitude_rate_hz
         self.in_progress_after = in_progress_after
         self.links = [MavlinkLink(url, source_system=system_id,
                                   source_component=gimbal.COMPONENT)
@@ -91,10 +85,15 @@ class MavlinkBridge:
         self._packers = {c: mavlink.MAVLink(None, srcSystem=system_id, srcComponent=c)
                          for c in dispatch.COMPONENTS}  # fmt: skip
         self._started = time.monotonic()
+        self.schedules = {
+            c: streams.StreamSchedule(set(dispatch.builders(c, self.camera)), self._started)
+            for c in dispatch.COMPONENTS}  # fmt: skip
+        """Component → its :class:`~gcu_async.bridge.streams.StreamSchedule`."""
         self._control = Control()
         self._bridge_mode: Mode | None = None
         self._pending_mode: Mode | None = None
         self._tracking_mode = 0
+        self._tracking_box: tuple[float, float, float, float] | None = None
         self._camera_mode = 0
         self._images = 0
         self._recording: bool | None = None
@@ -145,18 +144,19 @@ class MavlinkBridge:
     async def _run(self) -> None:
         if self.client.state is ClientState.CLOSED:
             self._spawn(self._open_client())
-        tick = 0
-        loop = asyncio.get_running_loop()
-        next_at = loop.time()
+        next_heartbeat = time.monotonic()
         while True:
+            now = time.monotonic()
             try:
-                self._stream(tick)
+                if now >= next_heartbeat:
+                    self._heartbeat(now)
+                    next_heartbeat = max(next_heartbeat + 1.0, now)
+                self._stream(now)
             except Exception:
                 self.stats["handler_errors"] += 1
                 log.exception("bridge: streaming step failed")
-            tick += 1
-            next_at += self.attitude_period
-            await asyncio.sleep(max(0.0, next_at - loop.time()))
+            wake = min(next_heartbeat, *(s.next_time() for s in self.schedules.values()))
+            await asyncio.sleep(min(1.0, max(0.0, wake - time.monotonic())))
 
     async def _open_client(self) -> None:
         """Open the client, retrying every :data:`OPEN_RETRY_SECONDS` until it opens (a GCU
@@ -195,7 +195,8 @@ class MavlinkBridge:
             recording=recording, recording_since_ms=self._recording_since,
             images_captured=self._images, control=self._control,
             bridge_mode=self._bridge_mode, pending_mode=self._pending_mode,
-            tracking_mode=self._tracking_mode, camera_mode=self._camera_mode,
+            tracking_mode=self._tracking_mode, tracking_box=self._tracking_box,
+            camera_mode=self._camera_mode,
         )  # fmt: skip
 
     def _ms(self, now: float) -> int:
@@ -211,27 +212,29 @@ class MavlinkBridge:
         for link in self.links:
             link.send(data)
 
-    def _stream(self, tick: int) -> None:
+    def _heartbeat(self, now: float) -> None:
         view = self.view()
-        per_second = max(1, round(1.0 / self.attitude_period))
-        attitude = gimbal.device_attitude_status(view)
-        if attitude is not None:
-            self.send(gimbal.COMPONENT, attitude)
-        if tick % 2 == 0:
-            self.send(gimbal.COMPONENT, gimbal.manager_status(view))
-            tracking = view.mode is Mode.TRACK
-            if tracking or self._was_tracking:
-                self.send(camera.COMPONENT, camera.tracking_status(view))
-            self._was_tracking = tracking
-        if tick % per_second == 0:
-            self.send(gimbal.COMPONENT, gimbal.heartbeat(view, mavlink.MAV_TYPE_GIMBAL))
-            self.send(camera.COMPONENT, gimbal.heartbeat(view, mavlink.MAV_TYPE_CAMERA))
-            self.send(camera.COMPONENT, camera.camera_settings(view, self.camera))
-            self.send(camera.COMPONENT, camera.capture_status(view, self.camera))
-            self.send(camera.COMPONENT, camera.fov_status(view, self.camera))
-            now = time.monotonic()
-            for link in self.links:
-                link.check_silence(now)
+        self.send(gimbal.COMPONENT, gimbal.heartbeat(view, mavlink.MAV_TYPE_GIMBAL))
+        self.send(camera.COMPONENT, gimbal.heartbeat(view, mavlink.MAV_TYPE_CAMERA))
+        for link in self.links:
+            link.check_silence(now)
+
+    def _stream(self, now: float) -> None:
+        due = {c: s.due(now) for c, s in self.schedules.items()}
+        if not any(due.values()):
+            return
+        view = self.view()
+        tracking = view.mode is Mode.TRACK
+        for component, messages in due.items():
+            builders = dispatch.builders(component, self.camera)
+            for mid in messages:
+                if mid == streams.TRACKING and not self.schedules[component].explicit(mid):
+                    if not (tracking or self._was_tracking):
+                        continue  # by default only while tracking, plus one IDLE after
+                    self._was_tracking = tracking
+                message = builders[mid](view)
+                if message is not None:
+                    self.send(component, message)
 
     def _ack(self, component: int, cmd: CommandIn, result: int, param2: int = 0,
              progress: int = 0) -> None:  # fmt: skip
@@ -296,7 +299,7 @@ class MavlinkBridge:
                 log.info("bridge: command %d refused (%d): %s", cmd.command, plan.result,
                          plan.reason)  # fmt: skip
             if plan.result == ACCEPTED:
-                self._take(plan)
+                self._take(plan, component)
             self._ack(component, cmd, plan.result)
             for reply in plan.replies:
                 self.send(component, reply)
@@ -304,7 +307,9 @@ class MavlinkBridge:
         self._inflight.add(key)
         self._spawn(self._command_call(cmd, component, plan, key))
 
-    def _take(self, plan: Plan) -> None:
+    def _take(self, plan: Plan, component: int) -> None:
+        if plan.interval is not None:
+            self.schedules[component].set(*plan.interval, time.monotonic())
         if plan.control is not None:
             self._control = plan.control
         if plan.camera_mode is not None:
@@ -362,6 +367,7 @@ class MavlinkBridge:
                 self._bridge_mode = call.mode
             if call.method == "track":
                 self._tracking_mode = call.tracking_mode
+                self._tracking_box = call.kwargs["box"]
         finally:
             if self._pending_mode is call.mode:
                 self._pending_mode = None

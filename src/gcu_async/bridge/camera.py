@@ -97,9 +97,13 @@ def _char_array(value: str, size: int = 32) -> list[int]:
 
 
 def capabilities(view: GcuView, config: CameraConfig) -> int:
-    """CAMERA_CAP_FLAGS for the pod model (everything while the model is unknown)."""
+    """CAMERA_CAP_FLAGS for the pod model (everything while the model is unknown). The GCU
+    has no photo/video modes: photos and recording work at any time, so both "in the other
+    mode" flags are set (ground stations refuse otherwise)."""
     flags: int = (mavlink.CAMERA_CAP_FLAGS_CAPTURE_IMAGE | mavlink.CAMERA_CAP_FLAGS_CAPTURE_VIDEO
-             | mavlink.CAMERA_CAP_FLAGS_HAS_BASIC_ZOOM)  # fmt: skip
+                  | mavlink.CAMERA_CAP_FLAGS_CAN_CAPTURE_IMAGE_IN_VIDEO_MODE
+                  | mavlink.CAMERA_CAP_FLAGS_CAN_CAPTURE_VIDEO_IN_IMAGE_MODE
+                  | mavlink.CAMERA_CAP_FLAGS_HAS_BASIC_ZOOM)  # fmt: skip
     if view.supports(Opcode.FOCUS):
         flags |= mavlink.CAMERA_CAP_FLAGS_HAS_BASIC_FOCUS
     if view.supports(Opcode.TRACK):
@@ -171,6 +175,15 @@ def video_stream_information(view: GcuView, config: CameraConfig) -> Any | None:
         text("XF video"), text(url, 160), 0, 0)
 
 
+def video_stream_status(view: GcuView, config: CameraConfig) -> Any | None:
+    """VIDEO_STREAM_STATUS of the configured stream (``None`` without one): running, the
+    rest unknown (0), as in VIDEO_STREAM_INFORMATION."""
+    if config.video_url is None:
+        return None
+    return mavlink.MAVLink_video_stream_status_message(
+        1, mavlink.VIDEO_STREAM_STATUS_FLAGS_RUNNING, 0.0, 0, 0, 0, 0, 0, 0)
+
+
 def camera_q(view: GcuView) -> tuple[float, float, float, float]:
     """The camera's earth-frame attitude while the INS data are valid, else NaN."""
     status = view.status
@@ -216,7 +229,8 @@ def tracking_status(view: GcuView) -> Any:
     """CAMERA_TRACKING_IMAGE_STATUS: ACTIVE while the pod tracks and reports the target
     (pod status B0), ERROR while in tracking mode without it, IDLE otherwise; the target
     point from the miss distances (centre 0, ±1000 at the edges; right and down
-    positive); radius and rectangle unknown (NaN)."""
+    positive). The GCU reports only the centre: a rectangle track is reported with the
+    size it was started with around that centre; the radius is unknown (NaN)."""
     status = view.status
     nan = math.nan
     if status is None or status.mode is not Mode.TRACK:
@@ -230,9 +244,16 @@ def tracking_status(view: GcuView) -> Any:
             nan, 0)
     x = 0.5 + status.miss_x / 2000
     y = 0.5 + status.miss_y / 2000
+    box = view.tracking_box
+    if mode == mavlink.CAMERA_TRACKING_MODE_RECTANGLE and box is not None:
+        half_w, half_h = (box[2] - box[0]) / 2, (box[3] - box[1]) / 2
+        rect = (max(0.0, x - half_w), max(0.0, y - half_h), min(1.0, x + half_w),
+                min(1.0, y + half_h))  # fmt: skip
+    else:
+        rect = (nan, nan, nan, nan)
     return mavlink.MAVLink_camera_tracking_image_status_message(
         mavlink.CAMERA_TRACKING_STATUS_FLAGS_ACTIVE, mode,
-        mavlink.CAMERA_TRACKING_TARGET_DATA_IN_STATUS, x, y, nan, nan, nan, nan, nan, 0)
+        mavlink.CAMERA_TRACKING_TARGET_DATA_IN_STATUS, x, y, nan, *rect, 0)
 
 
 def image_captured(view: GcuView, index: int) -> Any:
@@ -257,6 +278,7 @@ MESSAGES = {
     mavlink.MAVLINK_MSG_ID_CAMERA_CAPTURE_STATUS: capture_status,
     mavlink.MAVLINK_MSG_ID_STORAGE_INFORMATION: storage_information,
     mavlink.MAVLINK_MSG_ID_VIDEO_STREAM_INFORMATION: video_stream_information,
+    mavlink.MAVLINK_MSG_ID_VIDEO_STREAM_STATUS: video_stream_status,
     mavlink.MAVLINK_MSG_ID_CAMERA_FOV_STATUS: fov_status,
     mavlink.MAVLINK_MSG_ID_CAMERA_TRACKING_IMAGE_STATUS: (
         lambda view, config: tracking_status(view)),
@@ -270,6 +292,7 @@ LEGACY_REQUESTS = {
     mavlink.MAV_CMD_REQUEST_CAMERA_CAPTURE_STATUS: mavlink.MAVLINK_MSG_ID_CAMERA_CAPTURE_STATUS,
     mavlink.MAV_CMD_REQUEST_VIDEO_STREAM_INFORMATION:
         mavlink.MAVLINK_MSG_ID_VIDEO_STREAM_INFORMATION,
+    mavlink.MAV_CMD_REQUEST_VIDEO_STREAM_STATUS: mavlink.MAVLINK_MSG_ID_VIDEO_STREAM_STATUS,
 }
 """The deprecated request commands some ground stations still send → the message id."""
 
@@ -396,6 +419,12 @@ def command_plan(cmd: CommandIn, view: GcuView, config: CameraConfig) -> Plan | 
         return track_plan(cmd, view)
     if c == mavlink.MAV_CMD_CAMERA_STOP_TRACKING:
         return _unsupported(view, Opcode.TRACK) or run(GcuCall("stop_tracking"))
+    if c == mavlink.MAV_CMD_VIDEO_START_STREAMING:
+        if config.video_url is None:
+            return refuse(UNSUPPORTED, "no video stream configured")
+        return Plan(ACCEPTED)  # the GCU's stream runs all the time
+    if c == mavlink.MAV_CMD_VIDEO_STOP_STREAMING:
+        return refuse(UNSUPPORTED, "the GCU's video stream cannot be stopped")
     if c == mavlink.MAV_CMD_SET_CAMERA_MODE:
         mode = cmd.param(2)
         if mode not in (mavlink.CAMERA_MODE_IMAGE, mavlink.CAMERA_MODE_VIDEO):

@@ -103,6 +103,9 @@ class Plan:
     """New gimbal controllers, taken when the plan is accepted (CONFIGURE)."""
     camera_mode: int | None = None
     """New CAMERA_MODE reported in CAMERA_SETTINGS (SET_CAMERA_MODE)."""
+    interval: tuple[int, float | None] | None = None
+    """(message id, seconds) for the component's stream schedule (SET_MESSAGE_INTERVAL;
+    ``math.inf`` stops the message, ``None`` restores its default)."""
 
     def __post_init__(self) -> None:
         if (self.result is None) == (self.call is None):

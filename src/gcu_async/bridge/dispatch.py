@@ -15,14 +15,27 @@ import math
 from collections.abc import Callable
 from typing import Any
 
-from gcu_async.bridge import camera, gimbal
+from gcu_async.bridge import camera, gimbal, streams
 from gcu_async.bridge._mavlink import mavlink
 from gcu_async.bridge.camera import CameraConfig
-from gcu_async.bridge.commands import DENIED, UNSUPPORTED, CommandIn, Plan, accept, refuse
+from gcu_async.bridge.commands import (
+    ACCEPTED,
+    DENIED,
+    UNSUPPORTED,
+    CommandIn,
+    Plan,
+    accept,
+    refuse,
+)
 from gcu_async.bridge.view import GcuView
 
 COMPONENTS = (gimbal.COMPONENT, camera.COMPONENT)
 REQUEST_MESSAGE = mavlink.MAV_CMD_REQUEST_MESSAGE
+
+
+def builders(component: int, config: CameraConfig) -> dict[int, Callable[[GcuView], Any]]:
+    """Message id → ``builder(view)`` (``None`` when unavailable) of a component."""
+    return _builders(component, config)
 
 
 def _builders(component: int, config: CameraConfig) -> dict[int, Callable[[GcuView], Any]]:
@@ -61,6 +74,20 @@ def components_for(cmd: CommandIn, system_id: int, config: CameraConfig) -> tupl
     return tuple(c for c in COMPONENTS if wanted in _builders(c, config))
 
 
+def interval_plan(cmd: CommandIn, component: int, config: CameraConfig) -> Plan:
+    """MAV_CMD_SET_MESSAGE_INTERVAL (param1 message id, param2 µs; :mod:`.streams`): for a
+    message this component serves; UNSUPPORTED for others, DENIED for a bad interval."""
+    value = cmd.param(1)
+    message = int(value) if math.isfinite(value) else -1
+    if message not in _builders(component, config):
+        return refuse(UNSUPPORTED, f"message {value:g} is not served by component {component}")
+    try:
+        seconds = streams.interval_from_request(cmd.param(2))
+    except ValueError as exc:
+        return refuse(DENIED, str(exc))
+    return Plan(ACCEPTED, interval=(message, seconds))
+
+
 def plan(cmd: CommandIn, component: int, view: GcuView, config: CameraConfig) -> Plan:
     """The plan of ``component`` for ``cmd``. Malformed parameters (NaN where a number is
     needed, values out of every range) are DENIED, never raised."""
@@ -71,6 +98,8 @@ def plan(cmd: CommandIn, component: int, view: GcuView, config: CameraConfig) ->
 
 
 def _plan(cmd: CommandIn, component: int, view: GcuView, config: CameraConfig) -> Plan:
+    if cmd.command == mavlink.MAV_CMD_SET_MESSAGE_INTERVAL:
+        return interval_plan(cmd, component, config)
     wanted = requested_id(cmd)
     if wanted is not None:
         builder = _builders(component, config).get(wanted)

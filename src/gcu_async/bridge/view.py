@@ -67,6 +67,8 @@ class GcuView:
     """The mode of a mode command the bridge has sent and not yet seen answered."""
     tracking_mode: int = 0
     """CAMERA_TRACKING_MODE of the last tracking command the GCU accepted (0: none)."""
+    tracking_box: tuple[float, float, float, float] | None = None
+    """The box (left, top, right, bottom fractions) the last accepted track started with."""
     camera_mode: int = 0
     """CAMERA_MODE last set with MAV_CMD_SET_CAMERA_MODE (0: image); reported as video
     while recording."""
