@@ -30,6 +30,7 @@ commands.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any
 
 from gcu_async.bridge._mavlink import mavlink
@@ -388,6 +389,8 @@ def command_plan(cmd: CommandIn, view: GcuView) -> Plan | None:
         control = configure(cmd, view.control)
         if control is None:
             return refuse(DENIED, "invalid controller ids")
-        return Plan(ACCEPTED, control=control)
+        # the new controllers at once, not at the next streamed status
+        return Plan(ACCEPTED, control=control,
+                    replies=(manager_status(replace(view, control=control)),))
     return None
 
