@@ -158,3 +158,35 @@ async def test_hostile_mavlink_input_never_stops_the_bridge() -> None:
                             -25, 0, math.nan, math.nan, mavlink.GIMBAL_MANAGER_FLAGS_YAW_LOCK)
         assert ack.result == ACCEPTED
         await rig.until(lambda: abs(rig.state.attitude.pitch + 25) < 0.5, what="pitch -25")
+
+
+async def test_long_commands_are_in_progress_first_and_retransmissions_run_once() -> None:
+    async with bridge_rig(in_progress_after=0.1) as rig:
+        gcs = rig.gcs
+        gcs.messages.clear()
+        rig.sim.stall(0.6)  # the GCU freezes: the command waits for its feedback
+        focus = mavlink.MAV_CMD_SET_CAMERA_FOCUS
+        gcs.command(CAMERA, focus, mavlink.FOCUS_TYPE_AUTO)
+        first = await gcs.ack(CAMERA, focus, final=False)
+        assert first.result == mavlink.MAV_RESULT_IN_PROGRESS and first.progress == 255
+        gcs.command(CAMERA, focus, mavlink.FOCUS_TYPE_AUTO)  # the station retransmits
+        final = await gcs.ack(CAMERA, focus)
+        assert final.result == ACCEPTED
+        await gcs.collect(0.3)
+        acks = [m.result for m in gcs.messages if m.get_type() == "COMMAND_ACK"]
+        assert acks.count(ACCEPTED) == 1 and mavlink.MAV_RESULT_IN_PROGRESS in acks
+        assert rig.state.camera.focus_count == 1
+
+
+async def test_autopilot_state_for_gimbal_device_feeds_attitude_and_velocity() -> None:
+    from gcu_async.bridge.geometry import quaternion_from_euler
+
+    async with bridge_rig() as rig:
+        q = quaternion_from_euler(2.0, -3.0, 123.0)
+        for _ in range(5):
+            rig.autopilot.conn.mav.autopilot_state_for_gimbal_device_send(
+                SYSTEM, GIMBAL, 0, q, 0, 4.0, -2.0, 1.0, 0, 0.0, 0, 0)
+            await asyncio.sleep(0.05)
+        aircraft = rig.bridge.client.aircraft
+        assert aircraft.attitude == pytest.approx((2.0, -3.0, 123.0), abs=0.01)
+        assert aircraft.velocity == pytest.approx((4.0, -2.0, -1.0))
