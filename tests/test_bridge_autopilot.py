@@ -190,3 +190,38 @@ async def test_autopilot_state_for_gimbal_device_feeds_attitude_and_velocity() -
         aircraft = rig.bridge.client.aircraft
         assert aircraft.attitude == pytest.approx((2.0, -3.0, 123.0), abs=0.01)
         assert aircraft.velocity == pytest.approx((4.0, -2.0, -1.0))
+
+
+async def test_a_gcu_that_answers_late_is_picked_up(caplog: pytest.LogCaptureFixture) -> None:
+    from _bridge_rig import GCS, Peer
+    from gcu_async.bridge import MavlinkBridge
+    from gcu_async.client.connect import connect
+    from gcu_async.sim import GcuSimulator
+
+    sim = GcuSimulator()
+    gcs = Peer(*GCS)
+    try:
+        async with sim.serve_udp("127.0.0.1", 0) as server:
+            sim.silence(1.0)  # not answering yet: the first open attempt fails
+            client = connect(server.url, local_port=0, connect_timeout=0.5)
+            async with MavlinkBridge(client, [gcs.url]):
+                hb = await gcs.wait("HEARTBEAT", lambda m: m.get_srcComponent() == GIMBAL)
+                assert hb.system_status == mavlink.MAV_STATE_CRITICAL
+                await gcs.wait("HEARTBEAT", lambda m: m.get_srcComponent() == GIMBAL
+                               and m.system_status == mavlink.MAV_STATE_ACTIVE, timeout=6.0)
+        assert "GCU link not up yet" in caplog.text and "GCU link up" in caplog.text
+    finally:
+        gcs.close()
+
+
+def test_bad_bridge_options_are_refused() -> None:
+    from gcu_async.bridge import MavlinkBridge
+    from gcu_async.client.connect import connect
+
+    client = connect("udp://127.0.0.1:9")
+    with pytest.raises(ValueError, match="connections"):
+        MavlinkBridge(client, [])
+    with pytest.raises(ValueError, match="system_id"):
+        MavlinkBridge(client, ["udpout:127.0.0.1:9"], system_id=0)
+    with pytest.raises(ValueError, match="in_progress_after"):
+        MavlinkBridge(client, ["udpout:127.0.0.1:9"], in_progress_after=0)

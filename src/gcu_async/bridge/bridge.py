@@ -74,6 +74,9 @@ class MavlinkBridge:
             raise ValueError("connections: give at least one MAVLink connection")
         if not 1 <= system_id <= 255:
             raise ValueError(f"system_id: {system_id!r} is outside the allowed range [1, 255]")
+        if not (isinstance(in_progress_after, (int, float)) and 0 < in_progress_after < 60):
+            raise ValueError(f"in_progress_after: {in_progress_after!r} is outside the allowed "
+                             "range (0, 60) s")  # fmt: skip
         self.client = client
         self.system_id = system_id
         self.camera = camera if camera is not None else CameraConfig()
@@ -129,7 +132,8 @@ class MavlinkBridge:
         self._main = asyncio.ensure_future(self._run())
 
     async def close(self) -> None:
-        """Stop streaming, cancel running commands, close the links and the client."""
+        """Stop streaming, cancel running commands, close the links and the client (each
+        link's reader stops within about 0.1 s; :mod:`~gcu_async.bridge.links`)."""
         tasks = [t for t in (self._main, *self._tasks) if t is not None]
         for task in tasks:
             task.cancel()
