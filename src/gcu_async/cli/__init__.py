@@ -8,7 +8,7 @@ import sys
 from collections.abc import Sequence
 
 from gcu_async import __version__
-from gcu_async.cli import decode, demo, monitor, send, sim, wireshark
+from gcu_async.cli import decode, demo, mavlink_bridge, monitor, send, sim, wireshark
 
 VERBOSE_HELP = ("log the library's lifecycle to stderr (INFO); -vv: every packet in and out "
                 "too (DEBUG, the gcu_async.wire logger)")  # fmt: skip
@@ -27,6 +27,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim.register(sub)
     demo.register(sub)
     wireshark.register(sub)
+    mavlink_bridge.register(sub)
     for command in sub.choices.values():
         command.add_argument("-v", "--verbose", action="count", default=0, help=VERBOSE_HELP)
     return parser
