@@ -13,6 +13,7 @@ from gcu_async.errors import (
     LinkLost,
     LocalProtocolError,
     Outcome,
+    ProtocolErrorReason,
     RemoteProtocolError,
     UnsupportedCommandError,
     WaitTimeout,
@@ -26,7 +27,7 @@ __version__ = "0.1.0"
 __all__ = [
     "CommandError", "CommandFailed", "CommandLinkLost", "CommandTimeout", "FieldRangeError",
     "GcuClient", "GcuError", "LinkHealth", "LinkLost", "LocalProtocolError", "Outcome",
-    "RemoteProtocolError", "TelemetrySample",
+    "ProtocolErrorReason", "RemoteProtocolError", "TelemetrySample",
     "UnsupportedCommandError", "WaitTimeout", "__version__", "connect",
     *_protocol_all,
 ]  # fmt: skip
