@@ -110,6 +110,14 @@ def test_two_status_bytes_decode_kept_and_flagged() -> None:
     assert packet.encode() == wire
 
 
+def test_extra_status_bytes_are_checked_when_encoding() -> None:
+    main = decode_gcu_packet(GCU_EXAMPLE).main
+    with pytest.raises(TypeError, match="extra_status"):
+        GcuPacket(main, None, Feedback(0x20, 0, "05")).encode()  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="needs a status byte"):
+        GcuPacket(main, None, Feedback(0x20, None, b"\x05")).encode()
+
+
 def test_version_3_decodes_kept_and_flagged_both_directions() -> None:
     for decode, header, example in ((decode_host_packet, HOST_HEADER, HOST_EXAMPLE),
                                     (decode_gcu_packet, GCU_HEADER, GCU_EXAMPLE)):  # fmt: skip

@@ -164,6 +164,8 @@ class GcuPacket(NamedTuple):
         check_int("feedback opcode", self.feedback.opcode, 0, 255)
         status = self.feedback.status
         extra = self.feedback.extra_status
+        if not isinstance(extra, (bytes, bytearray)):
+            raise type_error("feedback extra_status", "bytes", extra)
         if extra and status is None:
             raise ValueError("feedback: extra_status needs a status byte before it")
         n = BASE_LENGTH if status is None else BASE_LENGTH + 1 + len(extra)
