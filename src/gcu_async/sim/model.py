@@ -60,7 +60,8 @@ class ModelStats:
     (:class:`~gcu_async.errors.ProtocolErrorReason` ``HEADER`` / ``SHORT``): no answer."""
     anomalous: int = 0
     """Answered packets whose command had parameters V2.0.6 does not allow (an
-    :class:`~gcu_async.protocol.AnomalousCommand`): not executed, failure status."""
+    :class:`~gcu_async.protocol.AnomalousCommand`): not executed, answered with its failure
+    status — except a null command with parameter bytes, still the separator (no status)."""
     other_versions: int = 0
     """Answered packets with a version byte other than 1 or 2 (decoded with the V2.0.6
     layout; the first one is logged as a warning)."""
@@ -201,7 +202,9 @@ class SimulatorModel:
         self.state.aircraft.update(main, packet.sub)
         self.advance(now)
         opcode = command_code(packet.command)
-        if opcode == Opcode.NULL:
+        if isinstance(packet.command, AnomalousCommand):
+            self.stats.anomalous += 1
+        if opcode == Opcode.NULL:  # with parameter bytes too (flagged): still the separator
             feedback = Feedback(Opcode.NULL)
         elif opcode == self.last_opcode:
             self.stats.repeated += 1
@@ -210,7 +213,6 @@ class SimulatorModel:
                 feedback = Feedback(opcode, self.executor.calibration_status(now))
         else:
             if isinstance(packet.command, AnomalousCommand):
-                self.stats.anomalous += 1
                 log.info("not executed: %s", packet.command.error())
             status = self.executor.execute(packet.command, main, now)
             self.executions[opcode] += 1
