@@ -298,7 +298,11 @@ COMMAND_STRATEGIES: dict[type[Command], st.SearchStrategy[Command]] = {
 }
 
 commands = st.one_of(*COMMAND_STRATEGIES.values())
-feedbacks = st.builds(Feedback, opcode=U8, status=st.one_of(st.none(), U8))
+feedbacks = st.one_of(
+    st.builds(Feedback, opcode=U8, status=st.one_of(st.none(), U8), extra_status=st.just(b"")),
+    # more status bytes than V2.0.6 defines (kept, flagged): GCU_MAX_LENGTH allows 15 more
+    st.builds(Feedback, opcode=U8, status=U8, extra_status=st.binary(min_size=1, max_size=15)),
+)
 
 host_packets = st.builds(
     HostPacket, main=host_main_frames, sub=host_subs, command=commands, version=VERSIONS

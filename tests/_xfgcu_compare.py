@@ -9,6 +9,11 @@ value is true; ``*_hex`` is a bytes field without the suffix. The exceptions are
 leaf or be one of the :data:`DISPLAY_ONLY` fields (checked on their own here), and every
 value must agree: integers and strings exactly, reals as the same double *and* printed with
 the digits decode prints (Python's repr) in the item's label.
+
+Anomalies (docs/client.md, "Liberal receive, strict send"): decode's ``anomalies`` list and the
+dissector's ``xfgcu.anomaly`` fields carry the same messages in the same order. For a command
+decode flags (an ``AnomalousCommand``: raw parameters only), the dissector's engineering-unit
+parameter fields are display-only; the raw parameters must still agree.
 """
 
 from __future__ import annotations
@@ -102,13 +107,15 @@ def _same(field: Field, value: Any) -> bool:
 def compare(obj: dict[str, Any], item: Item) -> list[str]:
     """Every disagreement between one decoded packet and one dissected item (empty: none)."""
     problems: list[str] = []
-    if "error" in obj:
-        if not item.has("xfgcu.malformed"):
-            problems.append(f"decode says malformed ({obj['error']}), the dissector does not")
-        return problems
-    if item.has("xfgcu.malformed"):
-        reasons = [f.show for f in item.named("xfgcu.malformed")]
-        problems.append(f"the dissector says malformed ({reasons}), decode does not")
+    want = [a["message"] for a in obj.get("anomalies", ())]
+    got_anomalies = [f.show for f in item.named("xfgcu.anomaly")]
+    if got_anomalies != want:
+        problems.append(f"anomalies: decode {want}, dissector {got_anomalies}")
+    if want and not item.has("xfgcu.anomaly.expert"):
+        problems.append("anomalies without their expert info")
+    # an AnomalousCommand has raw parameters only: the dissector's unit fields are extra
+    unit_params = ("xfgcu.host.command.params."
+                   if "command" in obj and "params" not in obj["command"] else None)  # fmt: skip
     expected, absent, flags = expected_fields(obj)
     seen: dict[str, list[Field]] = defaultdict(list)
     for f in item.fields:
@@ -142,8 +149,10 @@ def compare(obj: dict[str, Any], item: Item) -> list[str]:
         if (name in expected or name in flag_fields or name in DISPLAY_ONLY
                 or _CAMERA_BITS.match(name)):  # fmt: skip
             continue
-        if name.endswith((".bad", ".expert", ".nonzero", ".truncated")):
-            continue  # expert info
+        if name.endswith((".bad", ".expert", ".nonzero", ".truncated")) or name == "xfgcu.anomaly":
+            continue  # expert info, anomalies (compared above)
+        if unit_params is not None and name.startswith(unit_params):
+            continue
         problems.append(f"{name}: shown by the dissector, not in decode's JSON")
     problems += check_display_only(obj, seen)
     return problems

@@ -2,11 +2,12 @@
 
 :func:`corpus` has a packet of every command (with parameters away from their defaults), GCU
 replies of every sub frame and feedback kind, odd but valid values (unknown modes and pod
-codes, negative distances and time zones, reserved bits, version 1), and malformed packets
-with a valid CRC (version 3, wrong parameter lengths, parameters out of range, two status
-bytes). :func:`write_capture` writes packets through :class:`PacketCapture` as UDP datagrams
-(some holding several packets, junk, or a packet whose CRC fails), a TCP connection whose
-segments cut packets anywhere, and a serial link read in random chunks.
+codes, negative distances and time zones, reserved bits, version 1), and anomalous packets
+with a valid CRC that decode flags (version 3, wrong parameter lengths, parameters out of
+range, extra status bytes, statuses a command never answers). :func:`write_capture` writes
+packets through :class:`PacketCapture` as UDP datagrams (some holding several packets,
+junk, or a packet whose CRC fails), a TCP connection whose segments cut packets anywhere,
+and a serial link read in random chunks.
 """
 
 from __future__ import annotations
@@ -147,8 +148,8 @@ def gcu_packets() -> list[bytes]:
     return out
 
 
-def malformed_packets() -> list[bytes]:
-    """CRC-valid packets that break the protocol (decode reports an error for each)."""
+def anomalous_packets() -> list[bytes]:
+    """CRC-valid packets with values V2.0.6 does not expect (each decodes, flagged)."""
     body = bytes(64)
     return [
         seal(HOST_HEADER, body + b"\x00", version=3),
@@ -173,6 +174,13 @@ def malformed_packets() -> list[bytes]:
         seal(HOST_HEADER, body + b"\x15" + bytes(4) + (-900_000_001).to_bytes(4, "little",
                                                                           signed=True) + bytes(4)),
         seal(GCU_HEADER, body + b"\x20\x00\x00"),  # two execution-status bytes
+        seal(GCU_HEADER, body + b"\x20\x05\x01\x7f", version=9),  # three, a status 5, version 9
+        seal(GCU_HEADER, body + b"\x2a\x01"),  # palette fails with 0x02, not 0x01
+        seal(GCU_HEADER, body + b"\x01\x03"),  # calibration: 0x00, 0x01, 0x02
+        seal(HOST_HEADER, body + b"\x2b\x00\x07"),  # night vision: mask 0 and mode 7
+        seal(HOST_HEADER, body + b"\x07\x02"),  # image auto-flip byte 2
+        seal(HOST_HEADER, body + b"\x30\x00\x03" + (10001).to_bytes(2, "little") * 2
+             + bytes(4)),  # area temperature: every box check
     ]  # fmt: skip
 
 
@@ -194,7 +202,7 @@ def junk(rng: random.Random) -> bytes:
 
 
 def corpus() -> list[bytes]:
-    return host_packets() + gcu_packets() + malformed_packets()
+    return host_packets() + gcu_packets() + anomalous_packets()
 
 
 def _chunks(data: bytes, rng: random.Random) -> list[bytes]:

@@ -9,6 +9,7 @@ import subprocess
 
 import pytest
 
+from _protocol_strategies import seal
 from _sim_process import CLI, SimProcess
 from gcu_async import GcuClient
 from gcu_async.client.wirelog import describe_gcu, describe_host
@@ -21,6 +22,7 @@ from gcu_async.protocol import (
     GcuSubFrame,
     HostPacket,
     TakePhoto,
+    TimeZone,
     ZoomTo,
 )
 from gcu_async.pytest_plugin import SimHandle
@@ -42,6 +44,24 @@ def test_describe_gcu_names_the_feedback_mode_attitude_and_zoom() -> None:
     assert line == ("fb TAKE_PHOTO SUCCESS | mode EULER_CONTROL | att r+0.00 p-30.00 y45.00"
                     " | zoom 4.0x | v2")  # fmt: skip
     assert describe_gcu(b"\x8a\x5e\x00").startswith("undecodable: ")
+
+
+def test_describe_shows_the_anomalies_of_a_packet() -> None:
+    """Liberal receive (docs/client.md, "Liberal receive, strict send"): the line names what
+    is flagged, and an anomalous command shows its raw bytes instead of raising."""
+    reply = GcuPacket(GcuMainFrame(), None, Feedback(0x20, 0x05, b"\x01"), 3).encode()
+    line = describe_gcu(reply)
+    assert line.startswith("fb TAKE_PHOTO FAILED | ")
+    assert line.endswith(" | v3 | flagged: version: 3 is outside the allowed range [1, 2] (V2.0.6 "
+                         "defines versions 1 and 2; decoded with its layout) | flagged: status: 5 "
+                         "is outside the allowed range [0, 1] (0x00 = success, 0x01 = failure) | "
+                         "flagged: status length: 2 is outside the allowed range [1, 1] bytes "
+                         "(V2.0.6 defines one status byte; extra 01)")  # fmt: skip
+    host = bytearray(HostPacket(AircraftState().main_frame(), None, TimeZone(8)).encode())
+    host[70] = 15
+    line = describe_host(seal(bytes(host[:2]), bytes(host[5:-2])))
+    assert line.startswith("TIME_ZONE 0f (0x08) | ")
+    assert line.endswith(" | flagged: offset_hours: 15 is outside the allowed range [-12, 14] h")
 
 
 async def test_every_packet_in_and_out_is_logged_at_debug_and_nothing_at_info(

@@ -50,9 +50,7 @@ ALLOWED: Mapping[str, frozenset[str]] = {
 }  # fmt: skip
 """unit → the units it may import (``gcu_async``: the package's own ``__init__``)."""
 
-PENDING: Mapping[tuple[str, str], str] = {
-    ("errors", "protocol"): "issue 10 item 2 (structured errors) removes it",
-}
+PENDING: Mapping[tuple[str, str], str] = {}
 """Edges the layering forbids that are still there, each with the work that removes it:
 tolerated here, and :func:`test_pending_edges_are_still_there` fails once one is gone, so
 the entry is deleted with it."""

@@ -223,13 +223,36 @@ def test_garbage_file_exits_1(tmp_path: Path) -> None:
     assert_one_line_failure(run_cli("--file", str(path)), "no valid packet in 1024 bytes")
 
 
-def test_framed_but_undecodable_packet_is_reported_and_exits_1() -> None:
+def test_anomalous_packets_decode_flagged_and_exit_0() -> None:
+    """Liberal receive (docs/client.md, "Liberal receive, strict send"): a version-3 reply
+    and a time zone of +15 decode, flagged in the JSON and on stderr; exit status 0."""
     v3 = GcuPacket(GcuMainFrame(), version=3).encode()
-    proc = run_cli(v3.hex())
-    assert_one_line_failure(proc, "no valid packet in 72 bytes")
-    [obj] = json_lines(proc.stdout)
-    assert "protocol version 3" in obj["error"]
-    assert bytes.fromhex(obj["hex"]) == v3
+    tz15 = _seal_host(HostPacket(HostMainFrame()).encode()[:69] + b"\x08\x0f")
+    proc = run_cli(v3.hex() + tz15.hex())
+    assert proc.returncode == 0, proc.stderr
+    gcu, host = json_lines(proc.stdout)
+    assert gcu["version"] == 3
+    assert [(a["field"], a["value"], a["low"], a["high"]) for a in gcu["anomalies"]] == [
+        ("version", 3, 1, 2)
+    ]
+    assert host["command"]["command"] == "TIME_ZONE"
+    assert host["command"]["params_raw"] == [15]
+    [anomaly] = host["anomalies"]
+    assert (anomaly["field"], anomaly["value"], anomaly["low"], anomaly["high"]) == (
+        "offset_hours", 15, -12, 14)
+    lines = proc.stderr.splitlines()
+    assert lines == [
+        "gcu-async decode: packet 1 (gcu_to_host): flagged: version: 3 is outside the allowed "
+        "range [1, 2] (V2.0.6 defines versions 1 and 2; decoded with its layout)",
+        "gcu-async decode: packet 2 (host_to_gcu): flagged: offset_hours: 15 is outside the "
+        "allowed range [-12, 14] h",
+    ]
+
+
+def _seal_host(head: bytes) -> bytes:
+    from _protocol_strategies import seal
+
+    return seal(head[:2], head[5:])
 
 
 def test_decode_into_a_closed_pipe_exits_quietly() -> None:

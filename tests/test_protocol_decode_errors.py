@@ -1,5 +1,7 @@
-"""Malformed packets raise RemoteProtocolError naming the problem; unknown opcodes and sub
-frames are kept byte for byte; an all-zero sub frame is "none"."""
+"""Malformed packets (too short, bad header, length or CRC) raise RemoteProtocolError naming
+the problem, with its reason as data; anything else decodes (liberal receive: unexpected
+versions, status bytes and parameters are flagged, tests/test_protocol_liberal.py); unknown
+opcodes and sub frames are kept byte for byte; an all-zero sub frame is "none"."""
 
 from __future__ import annotations
 
@@ -10,11 +12,12 @@ from hypothesis import strategies as st
 
 from _protocol_strategies import seal
 from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
-from gcu_async.errors import GcuError, RemoteProtocolError
+from gcu_async.errors import GcuError, ProtocolErrorReason, RemoteProtocolError
 from gcu_async.protocol import (
     COMMAND_TYPES,
     GCU_HEADER,
     HOST_HEADER,
+    AnomalousCommand,
     Feedback,
     GcuMainFrame,
     GcuPacket,
@@ -49,8 +52,9 @@ def test_bad_header(direction: str) -> None:
     decode, header, vec = DECODERS[direction]
     for bad in (b"\x00\x00", header[::-1], HOST_HEADER if header == GCU_HEADER else GCU_HEADER):
         packet = _crc(bad + vec[2:-2])
-        with pytest.raises(RemoteProtocolError, match=r"^header .* is not"):
+        with pytest.raises(RemoteProtocolError, match=r"^header .* is not") as info:
             decode(packet)
+        assert info.value.reason is ProtocolErrorReason.HEADER
 
 
 @pytest.mark.parametrize("direction", DECODERS)
@@ -60,16 +64,18 @@ def test_wrong_length_field(direction: str, length: int) -> None:
     packet = _crc(vec[:2] + length.to_bytes(2, "little") + vec[4:-2])
     with pytest.raises(
         RemoteProtocolError, match=f"length field says {length} bytes, packet has {len(vec)}"
-    ):
+    ) as info:
         decode(packet)
+    assert info.value.reason is ProtocolErrorReason.LENGTH
 
 
 @pytest.mark.parametrize("direction", DECODERS)
 def test_truncated_packet(direction: str) -> None:
     decode, _, vec = DECODERS[direction]
     for n in (0, 1, 4, 71):
-        with pytest.raises(RemoteProtocolError, match="shorter than the minimum 72"):
+        with pytest.raises(RemoteProtocolError, match="shorter than the minimum 72") as info:
             decode(vec[:n])
+        assert info.value.reason is ProtocolErrorReason.SHORT
 
 
 @pytest.mark.parametrize("direction", DECODERS)
@@ -78,33 +84,53 @@ def test_crc_mismatch(direction: str) -> None:
     for i in (4, 20, 60, len(vec) - 2, len(vec) - 1):
         bad = bytearray(vec)
         bad[i] ^= 0x40
-        with pytest.raises(RemoteProtocolError, match="CRC mismatch"):
+        with pytest.raises(RemoteProtocolError, match="CRC mismatch") as info:
             decode(bytes(bad))
+        assert info.value.reason is ProtocolErrorReason.CRC
 
 
 @pytest.mark.parametrize("direction", DECODERS)
 @pytest.mark.parametrize("version", [0, 3, 0x20, 255])
-def test_unsupported_version(direction: str, version: int) -> None:
+def test_other_version_decodes_flagged(direction: str, version: int) -> None:
     decode, _, vec = DECODERS[direction]
     packet = _crc(vec[:4] + bytes([version]) + vec[5:-2])
-    with pytest.raises(RemoteProtocolError, match=f"protocol version {version} is not "):
-        decode(packet)
-    # the encoder can produce such packets (for tests); the decoder refuses them
-    encoded = decode(_crc(vec[:-2]))._replace(version=version).encode()
-    assert encoded == packet
+    decoded = decode(packet)
+    assert decoded.version == version
+    assert decoded == decode(vec)._replace(version=version)  # the V2.0.6 layout
+    [anomaly] = decoded.anomalies
+    assert (anomaly.field, anomaly.value, anomaly.low, anomaly.high) == ("version", version, 1, 2)
+    # the encoder writes any version 0-255 (a test can act as other firmware)
+    assert decoded.encode() == packet
 
 
 @pytest.mark.parametrize("version", [1, 2])
 def test_versions_1_and_2_accepted(version: int) -> None:
     for decode, _, vec in DECODERS.values():
-        assert decode(_crc(vec[:4] + bytes([version]) + vec[5:-2])).version == version
+        decoded = decode(_crc(vec[:4] + bytes([version]) + vec[5:-2]))
+        assert decoded.version == version
+        assert decoded.anomalies == ()
 
 
 def test_gcu_feedback_longer_than_one_status_byte() -> None:
-    packet = seal(GCU_HEADER, GCU_EXAMPLE[5:-2] + b"\x00")
-    assert len(packet) == 74
-    with pytest.raises(RemoteProtocolError, match="execution status of 2 bytes"):
-        decode_gcu_packet(packet)
+    packet = seal(GCU_HEADER, GCU_EXAMPLE[5:-2] + b"\x01\x7f")
+    assert len(packet) == 75
+    decoded = decode_gcu_packet(packet)
+    assert decoded.feedback == Feedback(GCU_EXAMPLE[69], GCU_EXAMPLE[70], b"\x01\x7f")
+    [anomaly] = decoded.anomalies
+    assert (anomaly.field, anomaly.value, anomaly.low, anomaly.high) == ("status length", 3, 1, 1)
+    assert "01 7f" in anomaly.detail
+    assert decoded.encode() == packet  # kept byte for byte
+
+
+def test_remote_protocol_error_carries_its_reason() -> None:
+    err = RemoteProtocolError(ProtocolErrorReason.CRC, "CRC mismatch")
+    assert (err.reason, str(err)) == (ProtocolErrorReason.CRC, "CRC mismatch")
+    import pickle
+
+    copy = pickle.loads(pickle.dumps(err))
+    assert (copy.reason, str(copy)) == (ProtocolErrorReason.CRC, "CRC mismatch")
+    with pytest.raises(TypeError, match="reason"):
+        RemoteProtocolError("crc", "CRC mismatch")  # type: ignore[arg-type]
 
 
 def test_remote_protocol_error_is_a_gcu_value_error() -> None:
@@ -121,44 +147,65 @@ def _host_with(opcode: int, params: bytes) -> bytes:
 def test_wrong_parameter_length_for_known_opcode(cls: type) -> None:
     size = cls.LAYOUT.size
     for n in {size + 1, size + 7, max(size - 1, 0)} - {size}:
-        packet = _host_with(int(cls.OPCODE), bytes([1]) * n)
-        with pytest.raises(
-            RemoteProtocolError,
-            match=f"^{cls.OPCODE.name}: expected {size} parameter bytes, got {n}$",
-        ):
-            decode_host_packet(packet)
+        params = bytes([1]) * n
+        packet = _host_with(int(cls.OPCODE), params)
+        decoded = decode_host_packet(packet)
+        assert decoded.command == AnomalousCommand(int(cls.OPCODE), params, decoded.anomalies)
+        [anomaly] = decoded.anomalies
+        assert (anomaly.field, anomaly.value, anomaly.low, anomaly.high) == ("params", n, size,
+                                                                             size)  # fmt: skip
+        assert decoded.command.raw is None  # type: ignore[attr-defined]
 
 
 @pytest.mark.parametrize(
-    ("opcode", "params", "match"),
+    ("opcode", "params", "flagged"),
     [
-        (0x08, b"\x0f", "offset_hours: 15"),  # time zone 15
-        (0x08, b"\xf3", "offset_hours: -13"),
-        (0x06, b"\x02", "coordinates: 2"),
-        (0x07, b"\x02", "auto flip off: parameter byte 0x02"),
-        (0x17, b"\x01\x02" + bytes(8), "enter: parameter byte 0x02"),
-        (0x17, b"\x01\x01" + (5000).to_bytes(2, "little") * 2 + bytes(4), "box.right"),
-        (0x17, b"\x01\x01" + bytes(4) + (10001).to_bytes(2, "little") * 2, "box.right"),
-        (0x1A, b"\x01" + (10001).to_bytes(2, "little") + bytes(2), "point.x"),
-        (0x20, b"\x00", "cameras: 0"),
-        (0x25, b"\x01\x00\x00", r"value 0 is in neither \[-32768, -10\] nor \[1, 10000\]"),
-        (0x25, b"\x01" + (-9).to_bytes(2, "little", signed=True), "value -9"),
-        (0x25, b"\x01" + (10001).to_bytes(2, "little"), "value 10001"),
-        (0x2A, b"\x02\x0b", "palette: 11"),  # palette 11
-        (0x2B, b"\x01\x03", "mode: 3"),
-        (0x31, b"\x02\x01" + (10).to_bytes(2, "little") + (20).to_bytes(2, "little"), "low: 2"),
-        (0x32, b"\x02\x05" + bytes(4), "enabled: parameter byte 0x05"),
-        (0x33, b"\x02\x01" + (20000).to_bytes(2, "little") + bytes(2), "point.x"),
-        (0x73, b"\x02", "enabled: parameter byte 0x02"),
-        (0x74, b"\x05", "mode: 5"),  # PiP 5
-        (0x81, b"\x01", r"enabled: parameter byte 0x01 is neither 0x00 nor 0x02"),
+        (0x08, b"\x0f", [("offset_hours", 15, -12, 14)]),  # time zone 15
+        (0x08, b"\xf3", [("offset_hours", -13, -12, 14)]),
+        (0x06, b"\x02", [("coordinates", 2, 0, 1)]),
+        (0x07, b"\x02", [("enabled", 2, 0, 1)]),
+        (0x17, b"\x01\x02" + bytes(8), [("enter", 2, 0, 1)]),
+        (0x17, b"\x01\x01" + (5000).to_bytes(2, "little") * 2 + bytes(4),
+         [("box.right", 0, 5000, 10000), ("box.bottom", 0, 5000, 10000)]),
+        (0x17, b"\x01\x01" + bytes(4) + (10001).to_bytes(2, "little") * 2,
+         [("box.right", 10001, 0, 10000), ("box.bottom", 10001, 0, 10000)]),
+        (0x1A, b"\x01" + (10001).to_bytes(2, "little") + bytes(2), [("point.x", 10001, 0, 10000)]),
+        (0x20, b"\x00", [("cameras", 0, 1, 255)]),
+        (0x25, b"\x01\x00\x00", [("raw_value", 0, -32768, 10000)]),
+        (0x25, b"\x01" + (-9).to_bytes(2, "little", signed=True),
+         [("raw_value", -9, -32768, 10000)]),
+        (0x25, b"\x00" + (10001).to_bytes(2, "little"),
+         [("cameras", 0, 1, 255), ("raw_value", 10001, -32768, 10000)]),
+        (0x2A, b"\x02\x0b", [("palette", 11, 0, 10)]),  # palette 11
+        (0x2B, b"\x01\x03", [("mode", 3, 0, 2)]),
+        (0x31, b"\x02\x01" + (10).to_bytes(2, "little") + (20).to_bytes(2, "little"),
+         [("low", 20, -32768, 10)]),
+        (0x32, b"\x02\x05" + bytes(4), [("enabled", 5, 0, 1)]),
+        (0x33, b"\x02\x01" + (20000).to_bytes(2, "little") + bytes(2),
+         [("point.x", 20000, 0, 10000)]),
+        (0x73, b"\x02", [("enabled", 2, 0, 1)]),
+        (0x74, b"\x05", [("mode", 5, 0, 4)]),  # PiP 5
+        (0x81, b"\x01", [("enabled", 1, 0, 2)]),  # ranging: only 0x00 or 0x02
+        (0x15, (1_800_000_001).to_bytes(4, "little") + (-900_000_001).to_bytes(4, "little",
+                                                                               signed=True)
+         + bytes(4), [("longitude", 1_800_000_001, -1_800_000_000, 1_800_000_000),
+                      ("latitude", -900_000_001, -900_000_000, 900_000_000)]),
     ],
-)
-def test_parameter_value_out_of_range_on_the_wire(opcode: int, params: bytes, match: str) -> None:
-    with pytest.raises(RemoteProtocolError, match=match):
-        decode_host_packet(_host_with(opcode, params))
-    with pytest.raises(RemoteProtocolError, match=match):
-        decode_command(opcode, params)
+)  # fmt: skip
+def test_parameter_value_out_of_range_on_the_wire(
+    opcode: int, params: bytes, flagged: list[tuple[str, int, int, int]]
+) -> None:
+    """Each out-of-range field is listed (all of them, not only the first), raw value and
+    raw range; the bytes are kept."""
+    packet = decode_host_packet(_host_with(opcode, params))
+    command = decode_command(opcode, params)
+    assert packet.command == command
+    assert isinstance(command, AnomalousCommand)
+    assert (command.code, command.params) == (opcode, params)
+    assert command.raw == COMMAND_TYPES[opcode].LAYOUT.unpack(params)
+    got = [(a.field, a.value, a.low, a.high) for a in command.anomalies]
+    assert got == flagged
+    assert packet.anomalies == command.anomalies
 
 
 def test_known_parameter_bytes_decode() -> None:

@@ -104,9 +104,11 @@ def test_feedback_as_dict() -> None:
 
 
 def test_command_failed_message() -> None:
-    err = CommandFailed(0x25, 0x03, 0x03)
+    err = CommandFailed(0x25, 0x03, CameraMask(0x03), name="ZOOM_TO")
     assert isinstance(err, GcuError)
     assert err.failed_cameras == CameraMask.CAMERA_1 | CameraMask.CAMERA_2
-    assert str(err).startswith("ZOOM_TO (0x25) failed: status 0x03, failed cameras ")
-    assert str(CommandFailed(0x2A, 0x02)) == "PALETTE (0x2A) failed: status 0x02"
-    assert str(CommandFailed(0x03, None)) == "CENTRE (0x03) failed: status none"
+    assert str(err) == "ZOOM_TO (0x25) failed: status 0x03, failed cameras 0x03"
+    assert str(CommandFailed(0x2A, 0x02, name="PALETTE")) == "PALETTE (0x2A) failed: status 0x02"
+    assert str(CommandFailed(0x03, None, name="CENTRE")) == "CENTRE (0x03) failed: status none"
+    # errors.py imports nothing of the package: without a name, the opcode names itself
+    assert str(CommandFailed(0x03, None)) == "opcode 0x03 failed: status none"

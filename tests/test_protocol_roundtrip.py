@@ -28,6 +28,7 @@ from _protocol_strategies import (
 )
 from gcu_async.protocol import (
     COMMAND_TYPES,
+    AnomalousCommand,
     Command,
     ControlValues,
     GcuMainFrame,
@@ -75,7 +76,8 @@ def test_command_types_cover_every_opcode_and_every_public_command_class() -> No
         if not c.__name__.startswith("_")
         and getattr(sys.modules[c.__module__], c.__name__, None) is c
     }
-    assert concrete == set(ALL_COMMAND_CLASSES)
+    # AnomalousCommand is decode-only (it never encodes): tests/test_protocol_liberal.py
+    assert concrete == {*ALL_COMMAND_CLASSES, AnomalousCommand}
 
 
 # --- commands ------------------------------------------------------------------------------
@@ -131,7 +133,8 @@ def test_gcu_frames_roundtrip(
     packet = GcuPacket(main, sub, feedback, version)  # type: ignore[arg-type]
     wire = packet.encode()
     assert wire[:2] == b"\x8a\x5e"
-    assert len(wire) == (72 if packet.feedback.status is None else 73)
+    status = packet.feedback.status
+    assert len(wire) == (72 if status is None else 73 + len(packet.feedback.extra_status))
     assert decode_gcu_packet(wire) == packet
     assert decode_packet(wire) == packet
 

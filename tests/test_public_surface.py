@@ -24,8 +24,8 @@ PINNED = [
     "GcuClient", "connect", "TelemetrySample", "LinkHealth", "LinkEvent", "LinkEventKind",
     # the exceptions
     "GcuError", "CommandError", "CommandFailed", "CommandLinkLost", "CommandTimeout",
-    "FieldRangeError", "LinkLost", "LocalProtocolError", "Outcome", "RemoteProtocolError",
-    "UnsupportedCommandError", "WaitTimeout",
+    "FieldRangeError", "LinkLost", "LocalProtocolError", "Outcome",
+    "ProtocolErrorReason", "RemoteProtocolError", "UnsupportedCommandError", "WaitTimeout",
     # the values the client takes and returns
     "AircraftState", "Attitude", "CameraMask", "Feedback", "GcuMainFrame", "GcuSubFrame",
     "GeoPosition", "Mode", "NorthEastUp", "Opcode", "PodModel", "pod_name",

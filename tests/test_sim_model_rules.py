@@ -146,13 +146,20 @@ def test_bad_crc_is_not_answered() -> None:
     assert not model.executions
 
 
-def test_malformed_parameters_are_not_answered() -> None:
+def test_out_of_range_parameters_are_answered_with_a_failure() -> None:
+    """Liberal receive: ZZ ZZ = 0 lies in neither defined range; the GCU answers every
+    CRC-valid packet, so the simulator answers it with the zoom failure status (the named
+    cameras) and leaves the zoom alone."""
     model = SimulatorModel()
-    packet = bytearray(host_bytes(ZoomTo(ratio=2.0)))
-    packet[71:73] = struct.pack("<h", 0)  # ZZ ZZ = 0 lies in neither defined range
-    assert model.receive(_with_crc(packet)) == []
-    assert model.stats.malformed == 1
-    assert not model.executions
+    zoom = model.state.camera.main_zoom
+    packet = bytearray(host_bytes(ZoomTo(ratio=2.0, cameras=3)))
+    packet[71:73] = struct.pack("<h", 0)
+    [reply] = model.receive(_with_crc(packet))
+    feedback = decode_gcu_packet(reply).feedback
+    assert (feedback.opcode, feedback.status) == (0x25, 0x03)
+    assert (model.stats.anomalous, model.stats.malformed, model.stats.answered) == (1, 0, 1)
+    model.advance(model.clock.now() + 5.0)
+    assert model.state.camera.main_zoom == zoom
 
 
 def test_any_chunking_gives_the_same_reply() -> None:

@@ -16,7 +16,7 @@ from pathlib import Path
 from _tshark import dissect, needs_tshark, verbose
 from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
 from _xfgcu_compare import compare, compare_capture, packets_by_stream
-from _xfgcu_corpus import GCU, HOST, corpus, malformed_packets, write_capture
+from _xfgcu_corpus import GCU, HOST, anomalous_packets, corpus, write_capture
 from gcu_async.capture import PacketCapture
 from gcu_async.capture.synth import TcpFlow
 from gcu_async.cli.decode import decode_capture
@@ -49,7 +49,7 @@ def test_every_packet_kind_over_udp_tcp_and_serial(tmp_path: Path) -> None:
         == [(f.number, [[(x.name, x.show) for x in i.fields] for i in f.items]) for f in two_pass]
 
 
-def test_junk_crc_failures_and_malformed_packets_are_flagged(tmp_path: Path) -> None:
+def test_junk_crc_failures_and_anomalous_packets_are_flagged(tmp_path: Path) -> None:
     path = tmp_path / "bad.pcapng"
     capture = PacketCapture(path)
     capture.acquire()
@@ -57,7 +57,7 @@ def test_junk_crc_failures_and_malformed_packets_are_flagged(tmp_path: Path) -> 
     bad[30] ^= 0x10
     capture.udp(GCU, HOST, b"\x00junk" + bytes(bad) + GCU_EXAMPLE)  # junk, CRC error, good
     capture.udp(GCU, HOST, GCU_EXAMPLE[:50])  # truncated
-    for packet in malformed_packets():
+    for packet in anomalous_packets():
         capture.udp(HOST if packet[:2] == b"\xa8\xe5" else GCU, GCU, packet)
     capture.release()
     frames = dissect(path)
@@ -67,13 +67,19 @@ def test_junk_crc_failures_and_malformed_packets_are_flagged(tmp_path: Path) -> 
     assert first.items[1].has("xfgcu.crc.bad")
     assert not first.items[2].has("xfgcu.crc.bad")
     assert frames[1].items[0].kind == "junk" and frames[1].items[0].has("xfgcu.truncated")
-    malformed = frames[2:]
-    assert len(malformed) == len(malformed_packets())
-    for frame in malformed:
+    anomalous = frames[2:]
+    assert len(anomalous) == len(anomalous_packets())
+    objs = decode_capture(path.read_bytes())
+    flagged = [o for o in objs if o["capture"]["frame"] > 2]
+    assert len(flagged) == len(anomalous_packets())
+    for frame, obj in zip(anomalous, flagged, strict=True):
         assert [item.kind for item in frame.items] == ["packet"]
         item = frame.items[0]
-        assert item.has("xfgcu.malformed") and item.has("xfgcu.malformed.expert")
-    compare_capture(decode_capture(path.read_bytes()), frames)
+        assert item.has("xfgcu.anomaly") and item.has("xfgcu.anomaly.expert")
+        # liberal receive, as in decode: the same messages, in the same order
+        assert [f.show for f in item.named("xfgcu.anomaly")] == [
+            a["message"] for a in obj["anomalies"]]
+    compare_capture(objs, frames)
 
 
 def test_random_bytes_never_raise_a_lua_error(tmp_path: Path) -> None:

@@ -21,6 +21,7 @@ from gcu_async.errors import (
     LinkLost,
     LocalProtocolError,
     Outcome,
+    ProtocolErrorReason,
     RemoteProtocolError,
     UnsupportedCommandError,
     WaitTimeout,
@@ -41,6 +42,7 @@ __all__ = [  # the client, its reports, the exceptions, the values it takes and 
     "CommandLinkLost", "CommandTimeout", "Feedback", "FieldRangeError", "GcuClient", "GcuError",
     "GcuMainFrame", "GcuSubFrame", "GeoPosition", "LinkEvent", "LinkEventKind", "LinkHealth",
     "LinkLost", "LocalProtocolError", "Mode", "NorthEastUp", "Opcode", "Outcome", "PodModel",
-    "RemoteProtocolError", "TelemetrySample", "UnsupportedCommandError", "WaitTimeout",
+    "ProtocolErrorReason", "RemoteProtocolError", "TelemetrySample", "UnsupportedCommandError",
+    "WaitTimeout",
     "__version__", "connect", "pod_name",
 ]  # fmt: skip

@@ -65,8 +65,33 @@ class UnsupportedCommandError(LocalProtocolError):
         super().__init__(f"{pod_model} does not support {command} (protocol Appendix 8)")
 
 
+class ProtocolErrorReason(enum.Enum):
+    """Why bytes are not a packet (:attr:`RemoteProtocolError.reason`). Only the envelope can
+    make a packet invalid: a CRC-valid packet with unexpected values decodes, flagged
+    (docs/client.md, "Liberal receive, strict send")."""
+
+    SHORT = "short"
+    """Fewer bytes than the shortest packet (72)."""
+    HEADER = "header"
+    """The first two bytes are not the header of the expected direction."""
+    LENGTH = "length"
+    """The length field (bytes 2–3) disagrees with the number of bytes."""
+    CRC = "crc"
+    """The CRC-16/XMODEM (last two bytes) does not match."""
+
+
 class RemoteProtocolError(GcuError, ValueError):
-    """The peer sent bytes that are not a valid packet of this protocol."""
+    """The peer sent bytes that are not a valid packet of this protocol. ``reason`` says
+    why, as a :class:`ProtocolErrorReason` (never parse the message)."""
+
+    def __init__(self, reason: ProtocolErrorReason, message: str) -> None:
+        if not isinstance(reason, ProtocolErrorReason):
+            raise TypeError(f"reason: expected a ProtocolErrorReason, got {reason!r}")
+        self.reason = reason
+        super().__init__(message)
+
+    def __reduce__(self) -> tuple[object, ...]:
+        return (type(self), (self.reason, str(self)))
 
 
 class Outcome(enum.Enum):
@@ -106,21 +131,19 @@ class CommandFailed(CommandError):
 
     ``opcode`` is the command's opcode, ``status`` the raw execution-status byte and
     ``failed_cameras`` the camera mask of the cameras that failed (zoom commands only;
-    an empty mask otherwise).
+    an empty mask otherwise), ``name`` the command's protocol name for the message.
     """
 
     def __init__(
         self, opcode: int, status: int | None, failed_cameras: int = 0, *,
-        command: object | None = None,
+        command: object | None = None, name: str | None = None,
     ) -> None:  # fmt: skip
-        from gcu_async.protocol.enums import CameraMask, opcode_name
-
         self.status = status
-        self.failed_cameras = CameraMask(failed_cameras)
-        cams = f", failed cameras {self.failed_cameras!r}" if failed_cameras else ""
+        self.failed_cameras = failed_cameras
+        cams = f", failed cameras 0x{failed_cameras:02X}" if failed_cameras else ""
         status_txt = "none" if status is None else f"0x{status:02X}"
-        name = opcode_name(opcode)
-        super().__init__(f"{name} (0x{opcode:02X}) failed: status {status_txt}{cams}",
+        label = f"opcode 0x{opcode:02X}" if name is None else f"{name} (0x{opcode:02X})"
+        super().__init__(f"{label} failed: status {status_txt}{cams}",
                          outcome=Outcome.FAILED, opcode=opcode, command=command)  # fmt: skip
 
 

@@ -1,5 +1,9 @@
 """``gcu-async decode``: hex, a raw binary capture or a pcap/pcapng capture in, one JSON
-object per packet out."""
+object per packet out.
+
+Every packet that frames (header, length, CRC) decodes: values V2.0.6 does not expect are
+shown as an ``anomalies`` list in its JSON object and one line each on stderr, and do not
+change the exit status (docs/client.md, "Liberal receive, strict send")."""
 
 from __future__ import annotations
 
@@ -12,7 +16,6 @@ from typing import Any
 
 from gcu_async.capture.reader import is_capture
 from gcu_async.cli._exit import EXIT_FAILED, EXIT_OK, EXIT_USAGE
-from gcu_async.errors import RemoteProtocolError
 from gcu_async.protocol.deframer import Deframer
 from gcu_async.protocol.packets import (
     GCU_HEADER,
@@ -66,21 +69,19 @@ def decode_spans(data: bytes) -> list[tuple[int, int, dict[str, Any]]]:
         offset = 0
         for raw in [*deframer.feed(data), *deframer.flush()]:
             offset = data.find(raw, offset)
-            try:
-                obj = decoder(raw).as_dict()
-            except RemoteProtocolError as exc:
-                obj = {"error": str(exc), "hex": raw.hex(" ")}
-            found.append((offset, len(raw), obj))
+            # the deframer checked header, length and CRC: nothing else makes decode raise
+            found.append((offset, len(raw), decoder(raw).as_dict()))
             offset += len(raw)
     found.sort(key=lambda item: item[0])
     return found
 
 
 def decode_stream(data: bytes) -> tuple[list[dict[str, Any]], dict[str, int]]:
-    """Decode every packet of both directions in ``data``, in stream order."""
+    """Decode every packet of both directions in ``data``, in stream order; the counts say
+    how many packets there are and how many of them carry anomalies."""
     spans = decode_spans(data)
-    errors = sum(1 for _, _, obj in spans if "error" in obj)
-    return [obj for _, _, obj in spans], {"decode_errors": errors}
+    flagged = sum(1 for _, _, obj in spans if "anomalies" in obj)
+    return [obj for _, _, obj in spans], {"packets": len(spans), "flagged": flagged}
 
 
 def decode_capture(data: bytes) -> list[dict[str, Any]]:
@@ -112,6 +113,13 @@ def _silence_stdout() -> None:
     os.close(devnull)
 
 
+def _report_anomalies(number: int, obj: dict[str, Any]) -> None:
+    """One stderr line per anomaly of packet ``number`` (1-based, in output order)."""
+    for anomaly in obj.get("anomalies", ()):
+        print(f"gcu-async decode: packet {number} ({obj['direction']}): flagged: "
+              f"{anomaly['message']}", file=sys.stderr)  # fmt: skip
+
+
 def run(args: argparse.Namespace) -> int:
     try:
         if args.file is not None:
@@ -129,15 +137,15 @@ def run(args: argparse.Namespace) -> int:
     except (OSError, ValueError) as exc:  # unreadable file, not hex: a usage error
         print(f"gcu-async decode: {exc}", file=sys.stderr)
         return EXIT_USAGE
-    valid = [p for p in packets if "error" not in p]
     try:
-        for obj in packets:
+        for number, obj in enumerate(packets, 1):
             print(json.dumps(obj, indent=args.indent))
+            _report_anomalies(number, obj)
         sys.stdout.flush()
     except BrokenPipeError:  # e.g. piped into `head`: the reader has all it wants
         _silence_stdout()
-        return EXIT_OK if valid else EXIT_FAILED
-    if not valid:
+        return EXIT_OK if packets else EXIT_FAILED
+    if not packets:
         print(f"gcu-async decode: no valid packet in {len(data)} bytes of input", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK

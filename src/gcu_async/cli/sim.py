@@ -244,8 +244,9 @@ async def _serve(
     finally:
         await server.close()
     s = sim.model.stats
-    log.info("stopped: %d packets answered, %d repeated, %d CRC errors, %d malformed, "
-             "%d bytes discarded", s.answered, s.repeated, s.crc_errors, s.malformed,
+    log.info("stopped: %d packets answered (%d anomalous, %d of other versions), %d repeated, "
+             "%d CRC errors, %d malformed, %d bytes discarded", s.answered, s.anomalous,
+             s.other_versions, s.repeated, s.crc_errors, s.malformed,
              s.bytes_discarded)  # fmt: skip
     return EXIT_INTERRUPTED  # only a signal ends it
 

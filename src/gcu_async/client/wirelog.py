@@ -15,7 +15,8 @@ from __future__ import annotations
 import logging
 
 from gcu_async.errors import RemoteProtocolError
-from gcu_async.protocol.commands import command_code
+from gcu_async.protocol.anomalies import Anomaly
+from gcu_async.protocol.commands import AnomalousCommand, command_code
 from gcu_async.protocol.gcu_frames import GcuSubFrame
 from gcu_async.protocol.packets import decode_gcu_packet, decode_host_packet
 
@@ -30,7 +31,7 @@ def describe_host(data: bytes) -> str:
     except RemoteProtocolError as exc:
         return f"undecodable: {exc}"
     command = packet.command
-    params = command.encode_params()
+    params = command.params if isinstance(command, AnomalousCommand) else command.encode_params()
     name = command.as_dict()["command"]
     what = f"{name} {params.hex()}" if params else name
     main = packet.main
@@ -40,7 +41,8 @@ def describe_host(data: bytes) -> str:
     else:
         control = "control invalid"
     ins = "ins valid" if main.ins_valid else "ins invalid"
-    return f"{what} (0x{command_code(command):02x}) | {control} | {ins} | v{packet.version}"
+    line = f"{what} (0x{command_code(command):02x}) | {control} | {ins} | v{packet.version}"
+    return line + _flags(packet.anomalies)
 
 
 def describe_gcu(data: bytes) -> str:
@@ -58,7 +60,12 @@ def describe_gcu(data: bytes) -> str:
             f"p{a.pitch:+.2f} y{a.yaw:.2f}")  # fmt: skip
     if type(packet.sub) is GcuSubFrame:
         line += f" | zoom {packet.sub.camera1_zoom:.1f}x"
-    return f"{line} | v{packet.version}"
+    return f"{line} | v{packet.version}{_flags(packet.anomalies)}"
+
+
+def _flags(anomalies: tuple[Anomaly, ...]) -> str:
+    """The anomalies of a decoded packet (docs/client.md, "Liberal receive, strict send")."""
+    return "".join(f" | flagged: {a}" for a in anomalies)
 
 
 def log_packet(url: str, outgoing: bool, data: bytes) -> None:

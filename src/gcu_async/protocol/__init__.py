@@ -23,15 +23,19 @@ the range applies to the rounded value). Errors are ``TypeError`` or ``ValueErro
 type, and the value. Frames, packets and ``ControlValues`` are NamedTuples that can be
 built raw and cannot check themselves on construction: ``validate()`` / ``encode()`` check
 them, and :meth:`ControlValues.check` is what a consumer calls before storing one.
-Decoding is liberal by design: ``decode_*`` accept whatever the wire can carry.
+Decoding is liberal by design: ``decode_*`` accept whatever the wire can carry; only a
+wrong header, length or CRC raises, any other unexpected value is kept and flagged as an
+:class:`Anomaly` (docs/client.md, "Liberal receive, strict send").
 """
 
 from gcu_async.protocol.aircraft import AircraftState
+from gcu_async.protocol.anomalies import Anomaly
 from gcu_async.protocol.camera_axes import axes_to_euler, euler_to_axes
 from gcu_async.protocol.commands import (
     COMMAND_TYPES,
     MODE_COMMANDS,
     AngleControl,
+    AnomalousCommand,
     AreaTemperature,
     Calibration,
     Centre,
@@ -129,6 +133,8 @@ __all__ = [
     "POD_NAMES",
     "AircraftState",
     "AngleControl",
+    "AnomalousCommand",
+    "Anomaly",
     "AreaTemperature",
     "Attitude",
     "AxisAngles",

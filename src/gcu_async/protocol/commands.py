@@ -7,7 +7,10 @@ only ``int`` (camera masks 1–255, ``CameraMask`` members welcome), real fields
 ``int``/``float`` inside the wire range, enum fields a member or its exact value,
 ``box``/``point`` an :class:`ImageBox` / :class:`ImagePoint` (or a plain tuple, stored as
 the NamedTuple) checked element by element. ``encode_params()`` gives the parameter bytes;
-:func:`decode_command` turns opcode + parameter bytes back into the typed command.
+:func:`decode_command` turns opcode + parameter bytes back into the typed command — or, when
+they hold a value outside its range or have the wrong length, into an
+:class:`AnomalousCommand` that keeps the bytes and lists the :class:`Anomaly` of each field
+(receive is liberal, send is strict: docs/client.md, "Liberal receive, strict send").
 The first parameter byte of many commands is a camera mask (docs/protocol-notes.md §3 "Camera
 masks"): it is the ``cameras`` field, defaulting to the value the document shows.
 """
@@ -19,8 +22,15 @@ from dataclasses import dataclass, field, fields
 from typing import Any, ClassVar, NamedTuple, TypeVar
 
 from gcu_async._checks import check_bool, check_int, type_error
-from gcu_async.errors import FieldRangeError, RemoteProtocolError
-from gcu_async.protocol.enums import CameraMask, NightVisionMode, Opcode, OsdCoordinates
+from gcu_async.errors import FieldRangeError
+from gcu_async.protocol.anomalies import Anomaly, check_raw
+from gcu_async.protocol.enums import (
+    CameraMask,
+    NightVisionMode,
+    Opcode,
+    OsdCoordinates,
+    opcode_name,
+)
 from gcu_async.protocol.layout import S16, S32
 from gcu_async.protocol.units import check_member, check_tuple, quantize
 
@@ -81,9 +91,42 @@ def _store(command: Command, name: str, value: object) -> None:
 
 def _switch(name: str, value: int, on: int = 1) -> bool:
     if value not in (0, on):
-        raise RemoteProtocolError(f"{name}: parameter byte 0x{value:02X} is neither 0x00 nor "
-                                  f"0x{on:02X}")  # fmt: skip
+        raise ValueError(f"{name}: parameter byte 0x{value:02X} is neither 0x00 nor 0x{on:02X}")
     return value == on
+
+
+# --- raw checks of decoded parameters (the receive side: each gives the anomalies) -----------
+IMAGE_UNIT = "1/10000 of the image"
+TEMPERATURE_UNIT = "0.1 degC"
+
+
+def _mask_raw(value: int) -> tuple[Anomaly, ...]:
+    return check_raw("cameras", value, 1, 0xFF, "camera mask", "0x00 selects no camera")
+
+
+def _switch_raw(name: str, value: int, on: int = 1, meaning: str = "") -> tuple[Anomaly, ...]:
+    if value in (0, on):
+        return ()
+    meaning = meaning or f"0x00 = off, 0x{on:02X} = on"
+    return (Anomaly(name, value, 0, on, "", f"only {meaning}"),)
+
+
+def _point_raw(name: str, x: int, y: int) -> tuple[Anomaly, ...]:
+    return (check_raw(f"{name}.x", x, 0, IMAGE_SCALE, IMAGE_UNIT)
+            + check_raw(f"{name}.y", y, 0, IMAGE_SCALE, IMAGE_UNIT))  # fmt: skip
+
+
+def _box_raw_anomalies(name: str, x0: int, y0: int, x1: int, y1: int) -> tuple[Anomaly, ...]:
+    found: tuple[Anomaly, ...] = ()
+    for edge, value in (("left", x0), ("top", y0), ("right", x1), ("bottom", y1)):
+        found += check_raw(f"{name}.{edge}", value, 0, IMAGE_SCALE, IMAGE_UNIT)
+    if x1 < x0:
+        found += (Anomaly(f"{name}.right", x1, x0, IMAGE_SCALE, IMAGE_UNIT,
+                          "right edge must not be left of the left edge"),)  # fmt: skip
+    if y1 < y0:
+        found += (Anomaly(f"{name}.bottom", y1, y0, IMAGE_SCALE, IMAGE_UNIT,
+                          "bottom edge must not be above the top edge"),)  # fmt: skip
+    return found
 
 
 @dataclass(frozen=True, slots=True)
@@ -120,20 +163,25 @@ class Command:
         return self.LAYOUT.pack(*self.raw_params())
 
     @classmethod
-    def decode_params(cls: type[_C], params: bytes) -> _C:
-        """Inverse of :meth:`encode_params`; raises :class:`RemoteProtocolError` on a
-        wrong length or a value outside the parameter's range."""
-        if len(params) != cls.LAYOUT.size:
-            raise RemoteProtocolError(
-                f"{cls.OPCODE.name}: expected {cls.LAYOUT.size} parameter bytes, "
-                f"got {len(params)}"
-            )
+    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
+        """Every value of the raw parameters (as unpacked by ``LAYOUT``) outside its range:
+        empty exactly when :meth:`from_raw_params` accepts them."""
+        return ()
+
+    @classmethod
+    def decode_params(cls, params: bytes) -> Command:
+        """Inverse of :meth:`encode_params`. Parameters of the wrong length or with a value
+        outside its range give an :class:`AnomalousCommand` (bytes kept, fields flagged)."""
+        layout = cls.LAYOUT
+        if len(params) != layout.size:
+            found = Anomaly("params", len(params), layout.size, layout.size, "bytes",
+                            f"{cls.OPCODE.name} has {layout.size} parameter bytes")  # fmt: skip
+            return AnomalousCommand(int(cls.OPCODE), bytes(params), (found,))
+        raw = layout.unpack(params)
         try:
-            return cls.from_raw_params(cls.LAYOUT.unpack(params))
-        except ValueError as exc:
-            if isinstance(exc, RemoteProtocolError):
-                raise
-            raise RemoteProtocolError(f"{cls.OPCODE.name}: {exc}") from exc
+            return cls.from_raw_params(raw)
+        except ValueError:  # the slow path: out of range
+            return AnomalousCommand(int(cls.OPCODE), bytes(params), cls.raw_anomalies(raw))
 
     def as_dict(self) -> dict[str, Any]:
         """Name, opcode, parameters in units and raw, for JSON output."""
@@ -253,6 +301,12 @@ class GazeAtCoordinates(Command):
         lon, lat, alt = raw
         return cls(latitude=lat / 1e7, longitude=lon / 1e7, altitude=alt / 1000)
 
+    @classmethod
+    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
+        lon, lat, _ = raw
+        return (check_raw("longitude", lon, -1_800_000_000, 1_800_000_000, "1e-7 deg")
+                + check_raw("latitude", lat, -900_000_000, 900_000_000, "1e-7 deg"))  # fmt: skip
+
 
 @dataclass(frozen=True, slots=True)
 class Track(Command):
@@ -275,6 +329,12 @@ class Track(Command):
     def from_raw_params(cls, raw: tuple[int, ...]) -> Track:
         kk, tt, *box = raw
         return cls(_switch("enter", tt), _box(*box), CameraMask(kk))
+
+    @classmethod
+    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
+        kk, tt, x0, y0, x1, y1 = raw
+        return (_mask_raw(kk) + _switch_raw("enter", tt, meaning="0x00 = exit, 0x01 = enter")
+                + _box_raw_anomalies("box", x0, y0, x1, y1))  # fmt: skip
 
 
 @dataclass(frozen=True, slots=True)
@@ -302,6 +362,11 @@ class ClickToPan(Command):
         kk, x, y = raw
         return cls(ImagePoint(x / IMAGE_SCALE, y / IMAGE_SCALE), CameraMask(kk))
 
+    @classmethod
+    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
+        kk, x, y = raw
+        return _mask_raw(kk) + _point_raw("point", x, y)
+
 
 # --- camera commands ------------------------------------------------------------------
 @dataclass(frozen=True, slots=True)
@@ -322,6 +387,10 @@ class OsdCoordinatesCommand(Command):
     def from_raw_params(cls, raw: tuple[int, ...]) -> OsdCoordinatesCommand:
         return cls(OsdCoordinates(check_int("coordinates", raw[0], 0, 1)))
 
+    @classmethod
+    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
+        return check_raw("coordinates", raw[0], 0, 1, "", "0 = aircraft, 1 = target")
+
 
 @dataclass(frozen=True, slots=True)
 class ImageAutoFlip(Command):
@@ -337,6 +406,10 @@ class ImageAutoFlip(Command):
     @classmethod
     def from_raw_params(cls, raw: tuple[int, ...]) -> ImageAutoFlip:
         return cls(not _switch("auto flip off", raw[0]))
+
+    @classmethod
+    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
+        return _switch_raw("enabled", raw[0], meaning="0x00 = on, 0x01 = off")
 
 
 @dataclass(frozen=True, slots=True)
@@ -354,6 +427,10 @@ class TimeZone(Command):
     def from_raw_params(cls, raw: tuple[int, ...]) -> TimeZone:
         return cls(raw[0])
 
+    @classmethod
+    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
+        return check_raw("offset_hours", raw[0], -12, 14, "h")
+
 
 @dataclass(frozen=True, slots=True)
 class _MaskOnly(Command):
@@ -366,6 +443,10 @@ class _MaskOnly(Command):
     @classmethod
     def from_raw_params(cls: type[_C], raw: tuple[int, ...]) -> _C:
         return cls(CameraMask(raw[0]))  # type: ignore[call-arg]
+
+    @classmethod
+    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
+        return _mask_raw(raw[0])
 
 
 @dataclass(frozen=True, slots=True)
@@ -447,9 +528,16 @@ class ZoomTo(Command):
             return cls(ratio=-zz / 10, cameras=CameraMask(kk))
         if 1 <= zz <= ZOOM_FRACTION_RAW_MAX:
             return cls(fraction=zz / ZOOM_FRACTION_RAW_MAX, cameras=CameraMask(kk))
-        raise RemoteProtocolError(
-            f"ZOOM_TO: value {zz} is in neither [-32768, -10] nor [1, 10000]"
-        )
+        raise ValueError(f"ZOOM_TO: value {zz} is in neither [-32768, -10] nor [1, 10000]")
+
+    @classmethod
+    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
+        kk, zz = raw
+        found = _mask_raw(kk)
+        if not (zz <= -10 or 1 <= zz <= ZOOM_FRACTION_RAW_MAX):
+            detail = "a ratio -32768 to -10 (-0.1x) or a fraction 1 to 10000"
+            found += (Anomaly("raw_value", zz, -32768, ZOOM_FRACTION_RAW_MAX, "", detail),)
+        return found
 
 
 @dataclass(frozen=True, slots=True)
@@ -467,6 +555,10 @@ class Palette(Command):
     @classmethod
     def from_raw_params(cls, raw: tuple[int, ...]) -> Palette:
         return cls(raw[1], CameraMask(raw[0]))
+
+    @classmethod
+    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
+        return _mask_raw(raw[0]) + check_raw("palette", raw[1], 0, 10, "", "0 cycles")
 
 
 @dataclass(frozen=True, slots=True)
@@ -487,6 +579,10 @@ class NightVision(Command):
     @classmethod
     def from_raw_params(cls, raw: tuple[int, ...]) -> NightVision:
         return cls(NightVisionMode(check_int("mode", raw[1], 0, 2)), CameraMask(raw[0]))
+
+    @classmethod
+    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
+        return _mask_raw(raw[0]) + check_raw("mode", raw[1], 0, 2, "", "0 off, 1 on, 2 auto")
 
 
 @dataclass(frozen=True, slots=True)
@@ -511,8 +607,23 @@ class AreaTemperature(Command):
         kk, tt, *box = raw
         return cls(_switch("enabled", tt), _box(*box), CameraMask(kk))
 
+    @classmethod
+    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
+        kk, tt, x0, y0, x1, y1 = raw
+        return _mask_raw(kk) + _switch_raw("enabled", tt) + _box_raw_anomalies("box", x0, y0,
+                                                                               x1, y1)  # fmt: skip
+
 
 TEMPERATURE_RAW = S16  # 0.1 °C
+
+
+def _temps_raw(raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
+    kk, tt, hh, ll = raw
+    found = _mask_raw(kk) + _switch_raw("enabled", tt)
+    if ll > hh:
+        found += (Anomaly("low", ll, TEMPERATURE_RAW[0], hh, TEMPERATURE_UNIT,
+                          "low must not exceed high"),)  # fmt: skip
+    return found
 
 
 def _temps(high: float, low: float) -> tuple[int, int]:
@@ -543,6 +654,10 @@ class _Thresholds(Command):
     def from_raw_params(cls: type[_T], raw: tuple[int, ...]) -> _T:
         kk, tt, hh, ll = raw
         return cls(_switch("enabled", tt), hh / 10, ll / 10, CameraMask(kk))
+
+    @classmethod
+    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
+        return _temps_raw(raw)
 
 
 @dataclass(frozen=True, slots=True)
@@ -586,6 +701,11 @@ class SpotTemperature(Command):
         point = ImagePoint(x / IMAGE_SCALE, y / IMAGE_SCALE)
         return cls(_switch("enabled", tt), point, CameraMask(kk))
 
+    @classmethod
+    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
+        kk, tt, x, y = raw
+        return _mask_raw(kk) + _switch_raw("enabled", tt) + _point_raw("point", x, y)
+
 
 @dataclass(frozen=True, slots=True)
 class _Switch(Command):
@@ -598,6 +718,10 @@ class _Switch(Command):
     @classmethod
     def from_raw_params(cls: type[_C], raw: tuple[int, ...]) -> _C:
         return cls(_switch("enabled", raw[0]))  # type: ignore[call-arg]
+
+    @classmethod
+    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
+        return _switch_raw("enabled", raw[0])
 
 
 @dataclass(frozen=True, slots=True)
@@ -636,6 +760,10 @@ class PictureInPicture(Command):
     def from_raw_params(cls, raw: tuple[int, ...]) -> PictureInPicture:
         return cls(raw[0])
 
+    @classmethod
+    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
+        return check_raw("mode", raw[0], 0, 4, "", "0 cycles")
+
 
 @dataclass(frozen=True, slots=True)
 class FillLight(Command):
@@ -667,6 +795,10 @@ class Ranging(Command):
     @classmethod
     def from_raw_params(cls, raw: tuple[int, ...]) -> Ranging:
         return cls(_switch("enabled", raw[0], on=2))
+
+    @classmethod
+    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
+        return _switch_raw("enabled", raw[0], on=2)
 
 
 @dataclass(frozen=True, slots=True)
@@ -701,6 +833,66 @@ class UnknownCommand(Command):
                 "params_hex": bytes(self.params).hex(" ")}  # fmt: skip
 
 
+@dataclass(frozen=True, slots=True)
+class AnomalousCommand(Command):
+    """A known opcode whose parameter bytes V2.0.6 does not allow (a value outside its
+    range, or the wrong number of bytes), as decoded from a CRC-valid packet: the bytes are
+    kept (``params``), every offending field is listed (``anomalies``, raw values and raw
+    ranges). Receive is liberal, send is strict (docs/client.md, "Liberal receive, strict
+    send"): it is never re-encoded — :meth:`encode_params`, and so ``HostPacket.encode`` and
+    the client, raise the :class:`FieldRangeError` of its first anomaly."""
+
+    OPCODE = Opcode.NULL  # placeholder; the real opcode is ``code``
+    code: int = 0
+    params: bytes = b""
+    anomalies: tuple[Anomaly, ...] = ()
+
+    def __post_init__(self) -> None:
+        if check_int("opcode", self.code, 0, 255) not in COMMAND_TYPES:
+            raise ValueError(f"opcode: 0x{self.code:02X} is not a V2.0.6 command; use "
+                             "UnknownCommand")  # fmt: skip
+        if not isinstance(self.params, (bytes, bytearray)):
+            raise type_error("params", "bytes", self.params)
+        _store(self, "params", bytes(self.params))
+        anomalies = tuple(self.anomalies)
+        if not anomalies or not all(isinstance(a, Anomaly) for a in anomalies):
+            raise ValueError("anomalies: give at least one, each an Anomaly")
+        _store(self, "anomalies", anomalies)
+
+    @property
+    def opcode(self) -> Opcode:
+        return Opcode(self.code)
+
+    @property
+    def command_type(self) -> type[Command]:
+        """The command class its opcode names."""
+        return COMMAND_TYPES[self.code]
+
+    @property
+    def raw(self) -> tuple[int, ...] | None:
+        """The parameters unpacked with the command's layout (``None`` for a wrong length)."""
+        layout = self.command_type.LAYOUT
+        return layout.unpack(self.params) if len(self.params) == layout.size else None
+
+    def error(self) -> FieldRangeError:
+        """The error sending it raises: that of its first anomaly."""
+        return self.anomalies[0].error()
+
+    def raw_params(self) -> tuple[int, ...]:
+        raise self.error()
+
+    def encode_params(self) -> bytes:
+        raise self.error()
+
+    def as_dict(self) -> dict[str, Any]:
+        """Name, opcode, raw parameters (``None`` for a wrong length) and their bytes; the
+        anomalies are listed by the packet's ``as_dict``."""
+        raw = self.raw
+        return {"command": opcode_name(self.code), "opcode": self.code,
+                "params_raw": None if raw is None else list(raw),
+                "params_hex": self.params.hex(" ")}  # fmt: skip
+
+
 COMMAND_TYPES: dict[int, type[Command]] = {
     int(cls.OPCODE): cls
     for cls in (
@@ -721,8 +913,9 @@ MODE_COMMANDS: frozenset[Opcode] = frozenset({
 
 
 def command_code(command: Command) -> int:
-    """The opcode byte of ``command`` (works for :class:`UnknownCommand` too)."""
-    if isinstance(command, UnknownCommand):
+    """The opcode byte of ``command`` (works for :class:`UnknownCommand` and
+    :class:`AnomalousCommand` too)."""
+    if isinstance(command, (UnknownCommand, AnomalousCommand)):
         return command.code
     if not isinstance(command, Command):
         raise type_error("command", "a Command", command)
@@ -731,7 +924,9 @@ def command_code(command: Command) -> int:
 
 def decode_command(opcode: int, params: bytes) -> Command:
     """Typed command for ``opcode`` + parameter bytes; unknown opcodes give
-    :class:`UnknownCommand`. Raises :class:`RemoteProtocolError` on malformed parameters."""
+    :class:`UnknownCommand`, parameters V2.0.6 does not allow an :class:`AnomalousCommand`.
+    Never raises for bytes: receive is liberal (docs/client.md, "Liberal receive, strict
+    send")."""
     cls = COMMAND_TYPES.get(opcode)
     if cls is None:
         return UnknownCommand(code=opcode, params=bytes(params))

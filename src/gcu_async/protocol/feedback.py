@@ -4,6 +4,9 @@ The status is read per command (docs/protocol-notes.md §2 "Execution status per
 success everywhere; calibration answers 0x02 while in progress; zoom commands answer a camera mask
 naming the failed cameras; any other non-zero value is a failure (0x01 for most commands, 0x02 for
 palette/thermal).
+A status byte a command does not answer, and status bytes beyond the one V2.0.6 defines (kept
+in ``extra_status``), are flagged in :attr:`Feedback.anomalies` (docs/client.md, "Liberal
+receive, strict send").
 """
 
 from __future__ import annotations
@@ -11,6 +14,7 @@ from __future__ import annotations
 from typing import Any, NamedTuple
 
 from gcu_async._checks import check_int
+from gcu_async.protocol.anomalies import Anomaly
 from gcu_async.protocol.enums import CameraMask, ExecutionStatus, Opcode, opcode_name
 
 ZOOM_OPCODES = frozenset({Opcode.ZOOM_IN, Opcode.ZOOM_OUT, Opcode.ZOOM_STOP, Opcode.ZOOM_TO})
@@ -33,6 +37,27 @@ def failure_status(opcode: int, failed_cameras: int = CameraMask.CAMERA_1) -> in
     return 0x02 if opcode in THERMAL_OPCODES else 0x01
 
 
+_OPCODE_VALUES = frozenset(int(op) for op in Opcode)
+
+
+def status_anomalies(opcode: int, status: int | None) -> tuple[Anomaly, ...]:
+    """The status byte as an anomaly when ``opcode`` (a V2.0.6 command) never answers it
+    (docs/protocol-notes.md §2 "Execution status per command"): failure is 0x01, 0x02 for
+    palette and thermal commands, a camera mask for zoom; calibration adds 0x02."""
+    if status is None or status == 0 or opcode in ZOOM_OPCODES or opcode not in _OPCODE_VALUES:
+        return ()
+    if opcode in THERMAL_OPCODES:
+        if status == 0x02:
+            return ()
+        return (Anomaly("status", status, 0, 2, "", "0x00 = success, 0x02 = failure"),)
+    if status == 0x01 or (opcode == Opcode.CALIBRATION and status == CALIBRATION_IN_PROGRESS):
+        return ()
+    if opcode == Opcode.CALIBRATION:
+        return (Anomaly("status", status, 0, 2, "",
+                        "0x00 = success, 0x01 = failure, 0x02 = in progress"),)  # fmt: skip
+    return (Anomaly("status", status, 0, 1, "", "0x00 = success, 0x01 = failure"),)
+
+
 def read_status(opcode: int, status: int | None) -> ExecutionStatus:
     """Meaning of ``status`` for a feedback to ``opcode``."""
     if status is None:
@@ -51,6 +76,21 @@ class Feedback(NamedTuple):
     """Byte 69: opcode of the command this answers."""
     status: int | None = None
     """Byte 70: raw execution status, ``None`` when the packet carries none (S = 72)."""
+    extra_status: bytes = b""
+    """Bytes 71..S-3 of a reply longer than V2.0.6 defines (kept as received, flagged)."""
+
+    @property
+    def anomalies(self) -> tuple[Anomaly, ...]:
+        """What V2.0.6 does not expect here: a status byte this command never answers,
+        status bytes beyond the one it defines (docs/client.md, "Liberal receive, strict
+        send")."""
+        found = status_anomalies(self.opcode, self.status)
+        if self.extra_status:
+            n = 1 + len(self.extra_status)
+            extra = self.extra_status.hex(" ")
+            found += (Anomaly("status length", n, 1, 1, "bytes",
+                              f"V2.0.6 defines one status byte; extra {extra}"),)  # fmt: skip
+        return found
 
     @property
     def command(self) -> str:
@@ -79,4 +119,5 @@ class Feedback(NamedTuple):
             "status": self.result.name,
             "status_raw": self.status,
             "failed_cameras": int(self.failed_cameras),
+            **({"extra_status_hex": self.extra_status.hex(" ")} if self.extra_status else {}),
         }

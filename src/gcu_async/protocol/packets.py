@@ -3,6 +3,11 @@
 Layout (both directions): 0–1 header, 2–3 total length S (LE), 4 version, 5–36 main frame,
 37–68 sub frame, 69 opcode, 70..S-3 parameters (host) or execution status (GCU),
 S-2..S-1 CRC-16/XMODEM of bytes 0..S-3, **high byte first**.
+
+Receive is liberal, send is strict (docs/client.md, "Liberal receive, strict send"): only a
+wrong header, length or CRC (or too few bytes) makes bytes undecodable
+(:class:`RemoteProtocolError` with its :class:`ProtocolErrorReason`); any other unexpected
+value is kept and listed in the packet's ``anomalies``.
 """
 
 from __future__ import annotations
@@ -12,8 +17,10 @@ from binascii import crc_hqx
 from typing import Any, NamedTuple, NoReturn
 
 from gcu_async._checks import check_int, type_error
-from gcu_async.errors import FieldRangeError, RemoteProtocolError
+from gcu_async.errors import ProtocolErrorReason, RemoteProtocolError
+from gcu_async.protocol.anomalies import VERSION_DETAIL, Anomaly
 from gcu_async.protocol.commands import (
+    AnomalousCommand,
     Command,
     NullCommand,
     UnknownCommand,
@@ -48,6 +55,7 @@ MAX_LENGTH = 256
 """Longest packet ``Deframer(header)`` accepts by default (V2.0.6's longest is 84 bytes;
 the streaming deframers of each direction accept less: see :mod:`~gcu_async.protocol.deframer`)."""
 SUPPORTED_VERSIONS = frozenset({1, 2})
+"""Versions V2.0.6 defines; others decode with its layout, flagged (:func:`version_anomalies`)."""
 DEFAULT_VERSION = 2
 _ZERO_SUB = bytes(32)
 _OFFSET_SUB = 37
@@ -59,6 +67,13 @@ _HOST_BODY = struct.Struct("<2sHB" + HOST_MAIN.format[1:] + "B" + HOST_SUB.forma
 
 HostSub = HostSubFrame | UnknownSubFrame | None
 GcuSub = GcuSubFrame | UnknownSubFrame | None
+
+
+def version_anomalies(version: int) -> tuple[Anomaly, ...]:
+    """The version byte as an anomaly unless V2.0.6 defines it (1 or 2)."""
+    if version in SUPPORTED_VERSIONS:
+        return ()
+    return (Anomaly("version", version, 1, 2, "", VERSION_DETAIL),)
 
 
 class HostPacket(NamedTuple):
@@ -85,7 +100,7 @@ class HostPacket(NamedTuple):
             raise type_error("command", "a Command", command)
         if type(version) is not int or not 0 <= version <= 255:
             check_int("version", version, 0, 255)
-        params = command.encode_params()
+        params = command.encode_params()  # an AnomalousCommand raises here: send is strict
         if type(sub) is HostSubFrame and type(main) is HostMainFrame:  # bytes 0–69 at once
             body = _HOST_BODY.pack(
                 HOST_HEADER, BASE_LENGTH + len(params), version,
@@ -109,7 +124,17 @@ class HostPacket(NamedTuple):
             "main": self.main.as_dict(),
             "sub": None if self.sub is None else self.sub.as_dict(),
             "command": self.command.as_dict(),
+            **_anomalies_dict(self.anomalies),
         }
+
+    @property
+    def anomalies(self) -> tuple[Anomaly, ...]:
+        """Everything V2.0.6 does not expect in this packet: its version, its command's
+        parameters (an :class:`AnomalousCommand`); empty for an ordinary packet."""
+        found = version_anomalies(self.version)
+        if isinstance(self.command, AnomalousCommand):
+            found += self.command.anomalies
+        return found
 
 
 class GcuPacket(NamedTuple):
@@ -123,7 +148,9 @@ class GcuPacket(NamedTuple):
     version: int = DEFAULT_VERSION
 
     def encode(self) -> bytes:
-        """Validate every field and return the wire bytes."""
+        """Validate every field and return the wire bytes. The version (0–255) and the
+        feedback's ``extra_status`` bytes are written as they are, so a decoded reply
+        re-encodes to its own bytes (the simulator can act as other firmware)."""
         if not isinstance(self.main, GcuMainFrame):
             raise type_error("main", "a GcuMainFrame", self.main)
         self.main.validate()
@@ -136,7 +163,12 @@ class GcuPacket(NamedTuple):
             raise type_error("feedback", "a Feedback", self.feedback)
         check_int("feedback opcode", self.feedback.opcode, 0, 255)
         status = self.feedback.status
-        n = BASE_LENGTH if status is None else BASE_LENGTH + 1
+        extra = self.feedback.extra_status
+        if not isinstance(extra, (bytes, bytearray)):
+            raise type_error("feedback extra_status", "bytes", extra)
+        if extra and status is None:
+            raise ValueError("feedback: extra_status needs a status byte before it")
+        n = BASE_LENGTH if status is None else BASE_LENGTH + 1 + len(extra)
         buf = bytearray(n)
         PREFIX.pack_into(buf, 0, GCU_HEADER, n, self.version)
         GCU_MAIN.pack_into(buf, 5, *self.main)
@@ -144,6 +176,7 @@ class GcuPacket(NamedTuple):
         buf[_OFFSET_OPCODE] = self.feedback.opcode
         if status is not None:
             buf[70] = check_int("feedback status", status, 0, 255)
+            buf[71 : 71 + len(extra)] = extra
         return _seal(buf)
 
     def as_dict(self) -> dict[str, Any]:
@@ -153,7 +186,18 @@ class GcuPacket(NamedTuple):
             "main": self.main.as_dict(),
             "sub": None if self.sub is None else self.sub.as_dict(),
             "feedback": self.feedback.as_dict(),
+            **_anomalies_dict(self.anomalies),
         }
+
+    @property
+    def anomalies(self) -> tuple[Anomaly, ...]:
+        """Everything V2.0.6 does not expect in this reply: its version, its feedback
+        (:attr:`Feedback.anomalies`); empty for an ordinary reply."""
+        return version_anomalies(self.version) + self.feedback.anomalies
+
+
+def _anomalies_dict(anomalies: tuple[Anomaly, ...]) -> dict[str, Any]:
+    return {"anomalies": [a.as_dict() for a in anomalies]} if anomalies else {}
 
 
 def _pack_sub(buf: bytearray, sub: Any, layout: struct.Struct) -> None:
@@ -175,26 +219,30 @@ def _seal(buf: bytearray) -> bytes:
 def _envelope_error(data: bytes, header: bytes) -> NoReturn:
     """Raise the error :func:`_check_envelope` finds in ``data``."""
     _check_envelope(data, header)
-    raise RemoteProtocolError("malformed packet")  # pragma: no cover - _check_envelope raised
+    raise AssertionError("unreachable: _check_envelope raised")  # pragma: no cover
 
 
-def _check_envelope(data: bytes, header: bytes) -> int:
-    """Check header, length, version and CRC; return the version."""
+def _check_envelope(data: bytes, header: bytes) -> None:
+    """Check size, header, length and CRC: the only checks that make bytes no packet."""
     n = len(data)
     if n < BASE_LENGTH:
-        raise RemoteProtocolError(f"packet of {n} bytes is shorter than the minimum {BASE_LENGTH}")
-    hdr, length, version = PREFIX.unpack_from(data)
+        raise RemoteProtocolError(
+            ProtocolErrorReason.SHORT,
+            f"packet of {n} bytes is shorter than the minimum {BASE_LENGTH}",
+        )
+    hdr, length, _ = PREFIX.unpack_from(data)
     if hdr != header:
-        raise RemoteProtocolError(f"header {hdr.hex(' ')} is not {header.hex(' ')}")
+        raise RemoteProtocolError(ProtocolErrorReason.HEADER,
+                                  f"header {hdr.hex(' ')} is not {header.hex(' ')}")  # fmt: skip
     if length != n:
-        raise RemoteProtocolError(f"length field says {length} bytes, packet has {n}")
+        raise RemoteProtocolError(ProtocolErrorReason.LENGTH,
+                                  f"length field says {length} bytes, packet has {n}")  # fmt: skip
     crc = crc16_xmodem(memoryview(data)[:-2])
     sent = CRC_STRUCT.unpack_from(data, n - 2)[0]
     if crc != sent:
-        raise RemoteProtocolError(f"CRC mismatch: computed 0x{crc:04X}, packet has 0x{sent:04X}")
-    if version not in SUPPORTED_VERSIONS:
-        raise RemoteProtocolError(f"protocol version {version} is not supported (1 or 2)")
-    return int(version)
+        raise RemoteProtocolError(
+            ProtocolErrorReason.CRC, f"CRC mismatch: computed 0x{crc:04X}, packet has 0x{sent:04X}"
+        )
 
 
 _new = tuple.__new__
@@ -203,8 +251,9 @@ _new = tuple.__new__
 def decode_gcu_packet(data: bytes) -> GcuPacket:
     """Decode one complete GCU → host packet (as produced by a :class:`Deframer`).
 
-    Raises :class:`RemoteProtocolError` for a bad header, length, CRC, version or a
-    feedback longer than one status byte.
+    Raises :class:`RemoteProtocolError` (with its ``reason``) only for too few bytes, a bad
+    header, length or CRC; an unexpected version or status is kept and flagged
+    (:attr:`GcuPacket.anomalies`).
     """
     # Fast path of _check_envelope (same checks, one struct call); on any failure,
     # _check_envelope names the first problem. A CRC-16/XMODEM over a whole packet, its
@@ -213,12 +262,7 @@ def decode_gcu_packet(data: bytes) -> GcuPacket:
     if n < BASE_LENGTH:
         _envelope_error(data, GCU_HEADER)
     fields = _GCU_BODY.unpack_from(data)
-    if (
-        fields[0] != GCU_HEADER
-        or fields[1] != n
-        or crc_hqx(data, 0)
-        or fields[2] not in SUPPORTED_VERSIONS
-    ):
+    if fields[0] != GCU_HEADER or fields[1] != n or crc_hqx(data, 0):
         _envelope_error(data, GCU_HEADER)
     main = _new(GcuMainFrame, fields[3:16])
     sub_header = fields[16]
@@ -230,18 +274,23 @@ def decode_gcu_packet(data: bytes) -> GcuPacket:
     else:
         sub = UnknownSubFrame(sub_header, bytes(data[38:69]))
     if n == BASE_LENGTH:
-        feedback = _new(Feedback, (fields[30], None))
+        feedback = _new(Feedback, (fields[30], None, b""))
     elif n == BASE_LENGTH + 1:
-        feedback = _new(Feedback, (fields[30], data[70]))
-    else:
-        extra = n - BASE_LENGTH
-        raise RemoteProtocolError(f"execution status of {extra} bytes; V2.0.6 defines one")
+        feedback = _new(Feedback, (fields[30], data[70], b""))
+    else:  # more status bytes than V2.0.6 defines: kept, flagged
+        feedback = _new(Feedback, (fields[30], data[70], bytes(data[71:-2])))
     return _new(GcuPacket, (main, sub, feedback, fields[2]))
 
 
 def decode_host_packet(data: bytes) -> HostPacket:
-    """Decode one complete host → GCU packet, including the typed command."""
-    version = _check_envelope(data, HOST_HEADER)
+    """Decode one complete host → GCU packet, including the typed command.
+
+    Raises :class:`RemoteProtocolError` (with its ``reason``) only for too few bytes, a bad
+    header, length or CRC; an unexpected version or parameter is kept and flagged
+    (:attr:`HostPacket.anomalies`, :class:`AnomalousCommand`).
+    """
+    _check_envelope(data, HOST_HEADER)
+    version = data[4]
     main = _new(HostMainFrame, HOST_MAIN.unpack_from(data, 5))
     sub_header = data[_OFFSET_SUB]
     sub: HostSub
@@ -251,10 +300,7 @@ def decode_host_packet(data: bytes) -> HostPacket:
         sub = None
     else:
         sub = UnknownSubFrame(sub_header, bytes(data[38:69]))
-    try:
-        command = decode_command(data[_OFFSET_OPCODE], bytes(data[70:-2]))
-    except FieldRangeError as exc:
-        raise RemoteProtocolError(str(exc)) from exc
+    command = decode_command(data[_OFFSET_OPCODE], bytes(data[70:-2]))
     return _new(HostPacket, (main, sub, command, version))
 
 

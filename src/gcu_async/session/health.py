@@ -22,7 +22,10 @@ class LinkHealth:
     crc_errors: int
     length_errors: int
     bytes_discarded: int
-    decode_errors: int
+    other_versions: int
+    """Replies whose version byte is neither 1 nor 2: decoded with the V2.0.6 layout and
+    used like any other (docs/client.md, "Liberal receive, strict send"); the first one is
+    logged as a warning."""
     unmatched_feedback: int
     """Replies that answer no packet this session could still be waiting for."""
     ambiguous_feedback: int
@@ -34,7 +37,7 @@ class LinkHealth:
 class HealthTracker:
     """Counts and timestamps behind :class:`LinkHealth` (no I/O, no clock of its own)."""
 
-    __slots__ = ("_recent", "decode_errors", "last_reply", "lost_count", "packets_received",
+    __slots__ = ("_recent", "last_reply", "lost_count", "other_versions", "packets_received",
                  "packets_sent", "restored_count", "send_errors")  # fmt: skip
 
     def __init__(self) -> None:
@@ -43,7 +46,7 @@ class HealthTracker:
         self.packets_sent = 0
         self.packets_received = 0
         self.send_errors = 0
-        self.decode_errors = 0
+        self.other_versions = 0
         self.lost_count = 0
         self.restored_count = 0
 

@@ -22,6 +22,7 @@ from __future__ import annotations
 import enum
 import heapq
 import itertools
+import logging
 import math
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
@@ -47,7 +48,7 @@ from gcu_async.errors import (
     RemoteProtocolError,
 )
 from gcu_async.protocol.aircraft import AircraftState
-from gcu_async.protocol.commands import Command, NullCommand, command_code
+from gcu_async.protocol.commands import AnomalousCommand, Command, NullCommand, command_code
 from gcu_async.protocol.deframer import Deframer
 from gcu_async.protocol.enums import (
     CameraFlags,
@@ -68,6 +69,7 @@ from gcu_async.protocol.packets import (
     BASE_LENGTH,
     DEFAULT_VERSION,
     GCU_HEADER,
+    SUPPORTED_VERSIONS,
     HostPacket,
     decode_gcu_packet,
 )
@@ -86,6 +88,8 @@ from gcu_async.session.pacing import Pacer
 from gcu_async.session.recording import RecordingBelief
 from gcu_async.session.runs import RunLedger
 from gcu_async.session.tickets import Ticket, TicketState
+
+log = logging.getLogger("gcu_async.session")
 
 NULL = NullCommand()
 _RECORDING = int(CameraFlags.RECORDING)
@@ -267,6 +271,8 @@ class Session:
             else:
                 if self.trace is not None:
                     self.trace(data)
+                if packet.version not in SUPPORTED_VERSIONS:
+                    self._other_version(packet.version)
                 sub = packet.sub if type(packet.sub) is GcuSubFrame else None
                 self._on_reply(packet.main, sub, packet.feedback, now, arrived_after)
                 return
@@ -276,11 +282,9 @@ class Session:
         for raw in packets:
             if self.trace is not None:
                 self.trace(raw)
-            try:
-                packet = decode_gcu_packet(raw)
-            except RemoteProtocolError:
-                self._health.decode_errors += 1
-                continue
+            packet = decode_gcu_packet(raw)  # framed: header, length and CRC are right
+            if packet.version not in SUPPORTED_VERSIONS:
+                self._other_version(packet.version)
             sub = packet.sub if isinstance(packet.sub, GcuSubFrame) else None
             self._on_reply(packet.main, sub, packet.feedback, now, arrived_after)
 
@@ -315,6 +319,8 @@ class Session:
         ValueError for bad arguments.
         """
         check_instance("command", command, Command, "a Command")
+        if isinstance(command, AnomalousCommand):  # decoded, never sent: send is strict
+            raise command.error()
         if isinstance(command, NullCommand):
             raise ValueError("command: the null command is the session's own separator")
         opcode = command_code(command)
@@ -545,7 +551,7 @@ class Session:
             crc_errors=d.crc_errors,
             length_errors=d.length_errors,
             bytes_discarded=d.bytes_discarded,
-            decode_errors=h.decode_errors,
+            other_versions=h.other_versions,
             unmatched_feedback=r.unmatched,
             ambiguous_feedback=r.ambiguous,
             lost_count=h.lost_count,
@@ -557,6 +563,15 @@ class Session:
         self._health.send_errors += 1
 
     # -- internals: replies ----------------------------------------------------------------
+    def _other_version(self, version: int) -> None:
+        """A reply of a version V2.0.6 does not define: decoded with its layout, counted;
+        the first one of the session is logged as a warning."""
+        self._health.other_versions += 1
+        if self._health.other_versions == 1:
+            log.warning("%s: reply of protocol version %d (V2.0.6 defines 1 and 2): decoded "
+                        "with the V2.0.6 layout; further ones are only counted "
+                        "(link_health().other_versions)", self.name, version)  # fmt: skip
+
     def _on_reply(self, main: GcuMainFrame, sub: GcuSubFrame | None, feedback: Feedback,
                   now: float, earliest: float | None) -> None:  # fmt: skip
         self._health.on_reply(now)
@@ -589,8 +604,8 @@ class Session:
                 else:
                     ticket.feedback = feedback
                     error = CommandFailed(
-                        feedback.opcode, feedback.status, int(feedback.failed_cameras),
-                        command=ticket.command,
+                        feedback.opcode, feedback.status, feedback.failed_cameras,
+                        command=ticket.command, name=feedback.command,
                     )  # fmt: skip
                     self._finish(ticket, TicketState.FAILED, now, error)
         elif run is not None and ticket is None and run.opcode != Opcode.NULL:

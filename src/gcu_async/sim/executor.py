@@ -10,7 +10,10 @@ Interpretations the simulator makes:
   the others still zoom); palette/thermal commands need camera 2 in the mask;
 - gaze (0x15, 0x16) fails when the host packet's INS data are invalid (byte 11 B0 = 0);
 - centre fails in the modes the spec says ignore it; click-to-pan fails while tracking;
-- tracking fails for an empty target box; an unknown opcode fails with 0x01.
+- tracking fails for an empty target box; an unknown opcode fails with 0x01;
+- a command whose parameters V2.0.6 does not allow (an :class:`AnomalousCommand`: out of
+  range, wrong length) does nothing and answers its failure status (zoom: the cameras it
+  named, camera 1 when it named none).
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from collections.abc import Callable
 from typing import Any
 
 from gcu_async.protocol.commands import (
+    AnomalousCommand,
     AreaTemperature,
     ClickToPan,
     Command,
@@ -110,6 +114,9 @@ class Executor:
         opcode = command_code(command)
         if isinstance(command, UnknownCommand):
             return FAILED
+        if isinstance(command, AnomalousCommand):
+            named = command.params[0] if command.params else 0
+            return failure_status(opcode, named or 1)
         if not supports(self.profile.model, opcode):
             return failure_status(opcode, int(getattr(command, "cameras", 1)))
         handler = self._handlers.get(opcode)

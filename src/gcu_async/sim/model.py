@@ -17,12 +17,18 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 from gcu_async._checks import check_bool
-from gcu_async.errors import RemoteProtocolError
-from gcu_async.protocol.commands import Command, command_code
+from gcu_async.errors import ProtocolErrorReason, RemoteProtocolError
+from gcu_async.protocol.commands import AnomalousCommand, Command, command_code
 from gcu_async.protocol.deframer import Deframer
 from gcu_async.protocol.enums import Mode, Opcode, PodModel, SubFrameRequest, opcode_name
 from gcu_async.protocol.feedback import Feedback
-from gcu_async.protocol.packets import DEFAULT_VERSION, GcuPacket, HostPacket, decode_host_packet
+from gcu_async.protocol.packets import (
+    DEFAULT_VERSION,
+    SUPPORTED_VERSIONS,
+    GcuPacket,
+    HostPacket,
+    decode_host_packet,
+)
 from gcu_async.sim.aircraft import ReceivedAircraft
 from gcu_async.sim.camera import CameraState
 from gcu_async.sim.clock import Clock, MonotonicClock
@@ -47,8 +53,18 @@ class ModelStats:
     received: int = 0
     """CRC-valid host packets handed to the model."""
     answered: int = 0
+    """Packets answered: every CRC-valid host packet is (docs/client.md, "Liberal receive,
+    strict send")."""
     malformed: int = 0
-    """CRC-valid packets that did not decode (bad parameters, version, length): no answer."""
+    """Packets handed to :meth:`SimulatorModel.handle_bytes` with a wrong header, too short
+    (:class:`~gcu_async.errors.ProtocolErrorReason` ``HEADER`` / ``SHORT``): no answer."""
+    anomalous: int = 0
+    """Answered packets whose command had parameters V2.0.6 does not allow (an
+    :class:`~gcu_async.protocol.AnomalousCommand`): not executed, answered with its failure
+    status — except a null command with parameter bytes, still the separator (no status)."""
+    other_versions: int = 0
+    """Answered packets with a version byte other than 1 or 2 (decoded with the V2.0.6
+    layout; the first one is logged as a warning)."""
     crc_errors: int = 0
     length_errors: int = 0
     bytes_discarded: int = 0
@@ -158,15 +174,19 @@ class SimulatorModel:
         self.stats.bytes_discarded += deframer.stats.bytes_discarded - before
 
     def handle_bytes(self, packet: bytes) -> bytes | None:
-        """Answer one complete packet; ``None`` (counted) when it is not a valid host packet."""
+        """Answer one complete packet; ``None`` (counted by reason) only when its header,
+        length or CRC is wrong: any CRC-valid host packet is answered."""
         try:
             decoded = decode_host_packet(packet)
         except RemoteProtocolError as exc:
-            if "CRC" in str(exc):
-                self.stats.crc_errors += 1
+            stats = self.stats
+            if exc.reason is ProtocolErrorReason.CRC:
+                stats.crc_errors += 1
+            elif exc.reason is ProtocolErrorReason.LENGTH:
+                stats.length_errors += 1
             else:
-                self.stats.malformed += 1
-            self.stats.bytes_discarded += len(packet)
+                stats.malformed += 1
+            stats.bytes_discarded += len(packet)
             log.debug("ignored a malformed packet: %s", exc)
             return None
         return self.handle(decoded).encode()
@@ -176,11 +196,15 @@ class SimulatorModel:
         """Answer one host packet: advance time, run its command, take its control values."""
         now = self.clock.now()
         self.stats.received += 1
+        if packet.version not in SUPPORTED_VERSIONS:
+            self._other_version(packet.version)
         main = packet.main
         self.state.aircraft.update(main, packet.sub)
         self.advance(now)
         opcode = command_code(packet.command)
-        if opcode == Opcode.NULL:
+        if isinstance(packet.command, AnomalousCommand):
+            self.stats.anomalous += 1
+        if opcode == Opcode.NULL:  # with parameter bytes too (flagged): still the separator
             feedback = Feedback(Opcode.NULL)
         elif opcode == self.last_opcode:
             self.stats.repeated += 1
@@ -188,6 +212,8 @@ class SimulatorModel:
             if opcode == Opcode.CALIBRATION:
                 feedback = Feedback(opcode, self.executor.calibration_status(now))
         else:
+            if isinstance(packet.command, AnomalousCommand):
+                log.info("not executed: %s", packet.command.error())
             status = self.executor.execute(packet.command, main, now)
             self.executions[opcode] += 1
             if self.record_executions:
@@ -195,8 +221,10 @@ class SimulatorModel:
             feedback = Feedback(opcode, status)
             self._last_feedback = feedback
             if log.isEnabledFor(logging.INFO):
+                params = (packet.command.params if isinstance(packet.command, AnomalousCommand)
+                          else packet.command.encode_params())  # fmt: skip
                 log.info("executed %s %s -> status 0x%02X", opcode_name(opcode),
-                         packet.command.encode_params().hex(" ") or "-", status)  # fmt: skip
+                         params.hex(" ") or "-", status)  # fmt: skip
         self.last_opcode = opcode
         cam = self.state.camera
         self.state.gimbal.control_input(main.control, main.control_valid, cam.main_zoom)
@@ -209,6 +237,14 @@ class SimulatorModel:
             feedback,
             self.protocol_version,
         )
+
+    def _other_version(self, version: int) -> None:
+        """Count a packet of another version; warn about the first one only."""
+        self.stats.other_versions += 1
+        if self.stats.other_versions == 1:
+            log.warning("host packet of protocol version %d (V2.0.6 defines 1 and 2): decoded "
+                        "and answered with the V2.0.6 layout; further ones are only counted "
+                        "(stats.other_versions)", version)  # fmt: skip
 
     def advance(self, now: float | None = None) -> None:
         """Move the physics (angles, zoom, calibration) forward to ``now`` (default: the

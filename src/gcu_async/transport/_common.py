@@ -8,8 +8,17 @@ from collections.abc import Callable
 from typing import TypeVar
 
 from gcu_async._checks import type_error
+from gcu_async.errors import LinkLost
 
 T = TypeVar("T")
+
+
+def link_lost(where: str, doing: str, exc: BaseException) -> LinkLost:
+    """The one conversion of a transport's OS error (or timeout) into :class:`LinkLost`:
+    ``"<where>: <doing>: <error>"`` (without the error when it has no text, as a timeout).
+    Raise it ``from exc`` so the cause stays attached."""
+    text = str(exc)
+    return LinkLost(f"{where}: {doing}: {text}" if text else f"{where}: {doing}")
 
 
 def check_port(field: str, value: object, *, allow_zero: bool = False) -> int:

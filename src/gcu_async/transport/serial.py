@@ -38,7 +38,7 @@ import serial_asyncio  # type: ignore[import-untyped]
 from gcu_async._checks import check_bool, type_error
 from gcu_async.errors import LinkLost
 from gcu_async.protocol.links import BAUDRATES, DEFAULT_BAUDRATE
-from gcu_async.transport._common import call_guarded, check_reason
+from gcu_async.transport._common import call_guarded, check_reason, link_lost
 from gcu_async.transport.backoff import Backoff, cancel_and_wait, giving_up, retry
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
@@ -175,7 +175,7 @@ class SerialTransport(Transport):
                 xonxoff=False, rtscts=False, dsrdtr=False,
             )  # fmt: skip
         except OSError as exc:  # serial.SerialException is an OSError
-            raise LinkLost(f"serial {self._device}: cannot open: {exc}") from exc
+            raise link_lost(f"serial {self._device}", "cannot open", exc) from exc
         assert isinstance(stransport, asyncio.Transport)
         fd = stransport.get_extra_info("serial").fileno()
         os.set_blocking(fd, False)  # pyserial opens it so; send() and reads rely on it
@@ -203,7 +203,7 @@ class SerialTransport(Transport):
             n = 0
         except OSError as exc:
             proto.fail(exc)
-            raise LinkLost(f"serial {self._device}: write failed: {exc}") from exc
+            raise link_lost(f"serial {self._device}", "write failed", exc) from exc
         self.bytes_sent += len(data)
         if n < len(data):
             stransport.write(data[n:])  # pyserial-asyncio writes it when the port is ready

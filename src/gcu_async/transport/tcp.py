@@ -43,6 +43,7 @@ from gcu_async.transport._common import (
     check_positive,
     check_reason,
     format_hostport,
+    link_lost,
 )
 from gcu_async.transport.backoff import Backoff, cancel_and_wait, giving_up, retry
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
@@ -230,9 +231,9 @@ class TcpTransport(Transport):
         except asyncio.TimeoutError as exc:
             if made and made[0].attached:
                 return  # connected just as the timeout fired: keep it
-            raise LinkLost(f"{self.url}: connect timed out after {timeout:g} s") from exc
+            raise link_lost(self.url, f"connect timed out after {timeout:g} s", exc) from exc
         except OSError as exc:
-            raise LinkLost(f"{self.url}: cannot connect: {exc}") from exc
+            raise link_lost(self.url, "cannot connect", exc) from exc
         if not made or not made[0].attached:
             reason = "transport closed" if self._closing else "socket connected to itself"
             raise LinkLost(f"{self.url}: cannot connect: {reason}")

@@ -76,6 +76,7 @@ from gcu_async.transport._common import (
     call_guarded,
     check_port,
     format_hostport,
+    link_lost,
     same_address,
 )
 from gcu_async.transport._datagram import DrainingDatagramTransport
@@ -325,7 +326,7 @@ class UdpTransport(Transport):
                 self._host, self._port, type=socket.SOCK_DGRAM, proto=socket.IPPROTO_UDP
             )
         except OSError as exc:
-            raise LinkLost(f"{self.url}: cannot resolve {self._host!r}: {exc}") from exc
+            raise link_lost(self.url, f"cannot resolve {self._host!r}", exc) from exc
         family, _, _, _, sockaddr = infos[0]
         remote = (str(sockaddr[0]), int(sockaddr[1]))
         wildcard = "::" if family == socket.AF_INET6 else "0.0.0.0"
@@ -344,7 +345,7 @@ class UdpTransport(Transport):
         except OSError as exc:
             sock.close()
             where = format_hostport(local_host, self._local_port)
-            raise LinkLost(f"{self.url}: cannot bind {where}: {exc}") from exc
+            raise link_lost(self.url, f"cannot bind {where}", exc) from exc
         except BaseException:
             sock.close()
             raise

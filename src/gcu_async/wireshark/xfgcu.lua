@@ -17,9 +17,12 @@
 -- at each position a header with a length in [72, 256] whose bytes are all there and whose
 -- CRC-16/XMODEM (sent high byte first) matches is a packet; otherwise one byte is junk. Spans
 -- that fail the CRC are shown as packets with a CRC error (expert info) when no valid packet
--- starts inside them; a valid packet whose content breaks the protocol (version, parameter
--- length or range, status length) is flagged malformed. Every value is shown in engineering
--- units with the same digits as `gcu-async decode` prints, and raw.
+-- starts inside them. Receive is liberal, as in gcu_async: a CRC-valid packet always
+-- dissects; each value V2.0.6 does not expect (a version other than 1 or 2, a parameter out
+-- of range or of the wrong length, a status a command never answers, extra status bytes)
+-- is an "anomaly" field with expert info, worded exactly as `gcu-async decode` words it.
+-- Every value is shown in engineering units with the same digits as `gcu-async decode`
+-- prints, and raw.
 --
 -- This file is an independent second decoder: offsets, scales, signs and checks are written
 -- here by hand. Only the name tables between the GENERATED markers come from the Python
@@ -384,7 +387,7 @@ def("uint16", "crc.computed", "Computed CRC", base.HEX)
 def("string", "crc.status", "CRC status")
 def("bytes", "reserved", "Reserved")
 def("bytes", "junk", "Junk")
-def("string", "malformed", "Malformed")
+def("string", "anomaly", "Anomaly")
 def("bytes", "sub.data", "Sub frame data")
 
 -- host main frame
@@ -494,6 +497,7 @@ def("int8", "gcu.sub.time_zone", "Time zone (h)")
 def("uint8", "gcu.feedback.opcode", "Feedback to", base.HEX)
 def("string", "gcu.feedback.command", "Command name")
 def("uint8", "gcu.feedback.status_raw", "Execution status", base.HEX)
+def("bytes", "gcu.feedback.extra_status", "Extra status bytes")
 def("string", "gcu.feedback.status", "Result")
 def("uint8", "gcu.feedback.failed_cameras", "Failed cameras", base.HEX)
 
@@ -529,8 +533,8 @@ end
 local E = {
   crc = ProtoExpert.new("xfgcu.crc.bad", "CRC mismatch", expert.group.CHECKSUM,
     expert.severity.ERROR),
-  malformed = ProtoExpert.new("xfgcu.malformed.expert", "Malformed packet",
-    expert.group.MALFORMED, expert.severity.ERROR),
+  anomaly = ProtoExpert.new("xfgcu.anomaly.expert", "A value V2.0.6 does not expect",
+    expert.group.PROTOCOL, expert.severity.WARN),
   junk = ProtoExpert.new("xfgcu.junk.expert", "Bytes that are not part of any packet",
     expert.group.PROTOCOL, expert.severity.WARN),
   truncated = ProtoExpert.new("xfgcu.truncated", "Truncated packet", expert.group.MALFORMED,
@@ -540,7 +544,7 @@ local E = {
   bug = ProtoExpert.new("xfgcu.internal", "Dissector error (please report)",
     expert.group.MALFORMED, expert.severity.ERROR),
 }
-xfgcu.experts = {E.crc, E.malformed, E.junk, E.truncated, E.reserved, E.bug}
+xfgcu.experts = {E.crc, E.anomaly, E.junk, E.truncated, E.reserved, E.bug}
 
 ---------------------------------------------------------------------------------------------
 -- the reference parse
@@ -685,15 +689,26 @@ end
 ---------------------------------------------------------------------------------------------
 local P = "host.command.params."
 
+-- an anomaly, worded as gcu_async words it (FieldRangeError: field, value, range, unit, detail)
+local function anomaly(ctx, field, value, low, high, unit, detail)
+  local msg = string.format("%s: %d is outside the allowed range [%d, %d]", field, value, low, high)
+  if unit and unit ~= "" then msg = msg .. " " .. unit end
+  if detail and detail ~= "" then msg = msg .. " (" .. detail .. ")" end
+  ctx.err(msg)
+end
+
+local IMAGE_UNIT = "1/10000 of the image"
+
 local function p_mask(ctx, off)
   local v = ctx.r(off, 1):uint()
   add_cameras(ctx.tree, P .. "cameras", ctx.r(off, 1), v, "Cameras", true)
     :add(F["host.command.params_raw"], ctx.r(off, 1), v, "Raw: " .. int_text(v))
-  if v == 0 then ctx.err("cameras: 0 is outside [1, 255] (camera mask)") end
+  if v == 0 then anomaly(ctx, "cameras", v, 1, 255, "camera mask", "0x00 selects no camera") end
 end
 
--- a switch byte: off = 0x00, on = `on`; `invert`: the byte says "off" (image auto-flip)
-local function p_switch(name, label, on, invert)
+-- a switch byte: off = 0x00, on = `on`; `invert`: the byte says "off" (image auto-flip);
+-- `meaning`: what the two bytes mean, for the anomaly
+local function p_switch(name, label, on, invert, meaning)
   return function(ctx, off)
     local v = ctx.r(off, 1):uint()
     local state = (v == on)
@@ -702,7 +717,8 @@ local function p_switch(name, label, on, invert)
       label .. ": " .. (state and "True" or "False"))
     item:add(F["host.command.params_raw"], ctx.r(off, 1), v, "Raw: " .. int_text(v))
     if v ~= 0 and v ~= on then
-      ctx.err(string.format("%s: parameter byte 0x%02X is neither 0x00 nor 0x%02X", name, v, on))
+      anomaly(ctx, name, v, 0, on, "", "only " .. (meaning or
+        string.format("0x00 = off, 0x%02X = on", on)))
     end
   end
 end
@@ -712,27 +728,32 @@ local function p_image(name, label)
     local raw = le_uint(ctx.r(off, 2))
     add_scaled(ctx.tree, P .. name, "host.command.params_raw", ctx.r(off, 2), raw, 10000, label)
     ctx.values[name] = raw
-    if raw > 10000 then ctx.err(name .. ": " .. raw .. " is outside [0, 10000] (image fraction)") end
+    if raw > 10000 then anomaly(ctx, name, raw, 0, 10000, IMAGE_UNIT) end
   end
 end
 
 local function p_box_order(ctx)
   local v = ctx.values
-  if v["box.right"] < v["box.left"] then ctx.err("box.right: right edge left of the left edge") end
-  if v["box.bottom"] < v["box.top"] then ctx.err("box.bottom: bottom edge above the top edge") end
+  if v["box.right"] < v["box.left"] then
+    anomaly(ctx, "box.right", v["box.right"], v["box.left"], 10000, IMAGE_UNIT,
+      "right edge must not be left of the left edge")
+  end
+  if v["box.bottom"] < v["box.top"] then
+    anomaly(ctx, "box.bottom", v["box.bottom"], v["box.top"], 10000, IMAGE_UNIT,
+      "bottom edge must not be above the top edge")
+  end
 end
 
 local function p_geo(name, label, scale, limit, unit)
   return function(ctx, off)
     local raw = le_int(ctx.r(off, 4))
     add_scaled(ctx.tree, P .. name, "host.command.params_raw", ctx.r(off, 4), raw, scale, label, unit)
-    if limit and (raw < -limit or raw > limit) then
-      ctx.err(string.format("%s: %d is outside [%d, %d]", name, raw, -limit, limit))
-    end
+    if limit and (raw < -limit or raw > limit) then anomaly(ctx, name, raw, -limit, limit, "1e-7 deg") end
   end
 end
 
-local function p_uint8(name, label, low, high, names)
+-- `field`, `detail`: the anomaly's field name (default `name`) and what the values mean
+local function p_uint8(name, label, low, high, names, field, detail)
   return function(ctx, off)
     local v = ctx.r(off, 1):uint()
     local text = label .. ": " .. int_text(v)
@@ -744,9 +765,7 @@ local function p_uint8(name, label, low, high, names)
       item = ctx.tree:add(F[P .. name], ctx.r(off, 1), v, text)
     end
     item:add(F["host.command.params_raw"], ctx.r(off, 1), v, "Raw: " .. int_text(v))
-    if v < low or v > high then
-      ctx.err(string.format("%s: %d is outside [%d, %d]", name, v, low, high))
-    end
+    if v < low or v > high then anomaly(ctx, field or name, v, low, high, "", detail) end
   end
 end
 
@@ -754,7 +773,7 @@ local function p_time_zone(ctx, off)
   local v = ctx.r(off, 1):int()
   local item = add_int(ctx.tree, P .. "offset_hours", ctx.r(off, 1), v, "UTC offset", " h")
   item:add(F["host.command.params_raw"], ctx.r(off, 1), v, "Raw: " .. int_text(v))
-  if v < -12 or v > 14 then ctx.err("offset_hours: " .. v .. " is outside [-12, 14] h") end
+  if v < -12 or v > 14 then anomaly(ctx, "offset_hours", v, -12, 14, "h") end
 end
 
 local function p_temperature(name, label)
@@ -766,7 +785,10 @@ local function p_temperature(name, label)
 end
 
 local function p_temperature_order(ctx)
-  if ctx.values.low > ctx.values.high then ctx.err("low: must not exceed high") end
+  local v = ctx.values
+  if v.low > v.high then
+    anomaly(ctx, "low", v.low, -32768, v.high, "0.1 degC", "low must not exceed high")
+  end
 end
 
 local function p_zoom_to(ctx, off)
@@ -780,7 +802,8 @@ local function p_zoom_to(ctx, off)
       "Fraction of the zoom range: " .. pyfloat(raw / 10000))
   else
     item = ctx.tree:add(ctx.r(off, 2), "Zoom value: neither a ratio nor a fraction")
-    ctx.err("ZOOM_TO: value " .. raw .. " is in neither [-32768, -10] nor [1, 10000]")
+    anomaly(ctx, "raw_value", raw, -32768, 10000, "",
+      "a ratio -32768 to -10 (-0.1x) or a fraction 1 to 10000")
   end
   item:add(F["host.command.params_raw"], ctx.r(off, 2), raw, "Raw: " .. int_text(raw))
 end
@@ -795,26 +818,28 @@ local function layout(size, ...)
 end
 local ENABLED = p_switch("enabled", "Enabled", 1)
 local COMMANDS = {
-  [0x06] = layout(1, {p_uint8("coordinates", "OSD coordinates", 0, 1, OSD_COORDINATE_NAMES), 0}),
-  [0x07] = layout(1, {p_switch("enabled", "Auto-flip enabled", 1, true), 0}),
+  [0x06] = layout(1, {p_uint8("coordinates", "OSD coordinates", 0, 1, OSD_COORDINATE_NAMES, nil,
+    "0 = aircraft, 1 = target"), 0}),
+  [0x07] = layout(1, {p_switch("enabled", "Auto-flip enabled", 1, true, "0x00 = on, 0x01 = off"), 0}),
   [0x08] = layout(1, {p_time_zone, 0}),
   [0x15] = layout(12, {p_geo("longitude", "Longitude", 1e7, 1800000000, " deg"), 0},
     {p_geo("latitude", "Latitude", 1e7, 900000000, " deg"), 4},
     {p_geo("altitude", "Altitude", 1000, nil, " m"), 8}),
-  [0x17] = layout(10, {p_mask, 0}, {p_switch("enter", "Enter tracking", 1), 1},
+  [0x17] = layout(10, {p_mask, 0},
+    {p_switch("enter", "Enter tracking", 1, false, "0x00 = exit, 0x01 = enter"), 1},
     {BOX[1], 2}, {BOX[2], 4}, {BOX[3], 6}, {BOX[4], 8}, {p_box_order}),
   [0x1A] = layout(5, {p_mask, 0}, {POINT[1], 1}, {POINT[2], 3}),
   [0x25] = layout(3, {p_mask, 0}, {p_zoom_to, 1}),
-  [0x2A] = layout(2, {p_mask, 0}, {p_uint8("palette", "Palette", 0, 10), 1}),
-  [0x2B] = layout(2, {p_mask, 0},
-    {p_uint8("night_vision_mode", "Night vision", 0, 2, NIGHT_VISION_NAMES), 1}),
+  [0x2A] = layout(2, {p_mask, 0}, {p_uint8("palette", "Palette", 0, 10, nil, nil, "0 cycles"), 1}),
+  [0x2B] = layout(2, {p_mask, 0}, {p_uint8("night_vision_mode", "Night vision", 0, 2,
+    NIGHT_VISION_NAMES, "mode", "0 off, 1 on, 2 auto"), 1}),
   [0x30] = layout(10, {p_mask, 0}, {ENABLED, 1}, {BOX[1], 2}, {BOX[2], 4}, {BOX[3], 6},
     {BOX[4], 8}, {p_box_order}),
   [0x31] = layout(6, {p_mask, 0}, {ENABLED, 1}, {p_temperature("high", "High"), 2},
     {p_temperature("low", "Low"), 4}, {p_temperature_order}),
   [0x33] = layout(6, {p_mask, 0}, {ENABLED, 1}, {POINT[1], 2}, {POINT[2], 4}),
   [0x73] = layout(1, {ENABLED, 0}),
-  [0x74] = layout(1, {p_uint8("mode", "Picture-in-picture mode", 0, 4), 0}),
+  [0x74] = layout(1, {p_uint8("mode", "Picture-in-picture mode", 0, 4, nil, nil, "0 cycles"), 0}),
   [0x80] = layout(1, {p_uint8("brightness", "Brightness", 0, 255), 0}),
   [0x81] = layout(1, {p_switch("enabled", "Ranging enabled", 2), 0}),
 }
@@ -924,7 +949,8 @@ local function host_command(ctx, tree, len)
   local spec = COMMANDS[op]
   if not spec then return end -- an opcode V2.0.6 does not define: parameters kept as bytes
   if nparams ~= spec.size then
-    ctx.err(string.format("%s: expected %d parameter bytes, got %d", name, spec.size, nparams))
+    anomaly(ctx, "params", nparams, spec.size, spec.size, "bytes",
+      string.format("%s has %d parameter bytes", name, spec.size))
     return
   end
   ctx.tree = t
@@ -1029,8 +1055,29 @@ local function gcu_feedback(ctx, tree, len)
     status = r(70, 1):uint()
     t:add(F["gcu.feedback.status_raw"], r(70, 1))
   end
+  -- a status this command never answers (docs/protocol-notes.md §2 "Execution status per
+  -- command"); zoom answers any camera mask; opcodes V2.0.6 does not define are not checked
+  if status and status ~= 0 and OPCODE_NAMES[op] and not ZOOM_OPCODES[op] then
+    if THERMAL_OPCODES[op] then
+      if status ~= 0x02 then
+        anomaly(ctx, "status", status, 0, 2, "", "0x00 = success, 0x02 = failure")
+      end
+    elseif op == 0x01 then
+      if status > CALIBRATION_IN_PROGRESS then
+        anomaly(ctx, "status", status, 0, 2, "",
+          "0x00 = success, 0x01 = failure, 0x02 = in progress")
+      end
+    elseif status ~= 0x01 then
+      anomaly(ctx, "status", status, 0, 1, "", "0x00 = success, 0x01 = failure")
+    end
+  end
   if len > MIN_LEN + 1 then
-    ctx.err(string.format("execution status of %d bytes; V2.0.6 defines one", len - MIN_LEN))
+    local extra = r(71, len - MIN_LEN - 1)
+    t:add(F["gcu.feedback.extra_status"], extra)
+    local bytes = {}
+    for i = 0, extra:len() - 1 do bytes[#bytes + 1] = string.format("%02x", extra(i, 1):uint()) end
+    anomaly(ctx, "status length", len - MIN_LEN, 1, 1, "bytes",
+      "V2.0.6 defines one status byte; extra " .. table.concat(bytes, " "))
   end
   local result
   if status == nil then
@@ -1066,7 +1113,8 @@ local function dissect_packet(tvb, s, start, len, root, good, infos)
   local version = s:byte(start + 5)
   tree:add(F["version"], ctx.r(4, 1))
   if version ~= 1 and version ~= 2 then
-    ctx.err(string.format("protocol version %d is not supported (1 or 2)", version))
+    anomaly(ctx, "version", version, 1, 2, "",
+      "V2.0.6 defines versions 1 and 2; decoded with its layout")
   end
   local ok, failure = pcall(function()
     if host then
@@ -1090,10 +1138,10 @@ local function dissect_packet(tvb, s, start, len, root, good, infos)
   citem:add(F["crc.status"], ctx.r(len - 2, 2), good and "Good" or "Bad"):set_generated()
   if not good then citem:add_proto_expert_info(E.crc) end
   for _, msg in ipairs(problems) do
-    tree:add(F["malformed"], tvb(start, len), msg):add_proto_expert_info(E.malformed, msg)
+    tree:add(F["anomaly"], tvb(start, len), msg):add_proto_expert_info(E.anomaly, msg)
   end
   local what = (host and "Host->GCU " or "GCU->Host ") .. (ctx.summary or "?")
-  if not good then what = what .. " [CRC MISMATCH]" elseif #problems > 0 then what = what .. " [MALFORMED]" end
+  if not good then what = what .. " [CRC MISMATCH]" elseif #problems > 0 then what = what .. " [ANOMALY]" end
   tree:append_text(string.format(", %s, %d bytes: %s", host and "host -> GCU" or "GCU -> host", len,
     (ctx.summary or "?")))
   infos[#infos + 1] = what
