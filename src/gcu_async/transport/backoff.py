@@ -1,4 +1,4 @@
-"""Reconnect schedules shared by the TCP and serial transports and the client's start-up:
+"""Reconnect schedules shared by the TCP, serial and UDP transports and the client's start-up:
 exponential backoff with full jitter, bounded (docs/transports.md, "Reconnection")."""
 
 from __future__ import annotations

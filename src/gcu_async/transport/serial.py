@@ -35,11 +35,11 @@ from urllib.parse import quote
 
 import serial_asyncio  # type: ignore[import-untyped]
 
-from gcu_async._checks import check_bool, type_error
 from gcu_async.errors import LinkLost
 from gcu_async.protocol.links import BAUDRATES, DEFAULT_BAUDRATE
 from gcu_async.transport._common import call_guarded, check_reason, link_lost
-from gcu_async.transport.backoff import Backoff, cancel_and_wait, giving_up, retry
+from gcu_async.transport._reopen import Reopener, Reopening
+from gcu_async.transport.backoff import Backoff
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 try:
@@ -95,7 +95,7 @@ class _SerialProtocol(asyncio.Protocol):
         self._owner._lost(self, exc)
 
 
-class SerialTransport(Transport):
+class SerialTransport(Reopening, Transport):
     """Serial link on ``device`` (e.g. ``/dev/ttyUSB0``) at ``baudrate``, 8N1."""
 
     def __init__(
@@ -112,20 +112,7 @@ class SerialTransport(Transport):
             raise ValueError(f"device: {device!r} is not a device path")
         self._device = device
         self._baudrate = check_baudrate(baudrate)
-        self._reconnect = check_bool("reconnect", reconnect)
-        if backoff is not None and not isinstance(backoff, Backoff):
-            raise type_error("backoff", "a Backoff or None", backoff)
-        self.backoff = backoff if backoff is not None else Backoff(max_attempts=None,
-                                                                   max_total=60.0)  # fmt: skip
-        """Reopening schedule after the device is lost (unplugged): by default every
-        0–2 s for up to a minute."""
-        self._rng = rng if rng is not None else random.Random()
-        self._task: asyncio.Task[None] | None = None
-        self._closing = False
-        self.reconnect_attempts = 0
-        """Attempts to reopen the device during the current (or last) outage."""
-        self.reconnects = 0
-        """Outages ended by reopening the device."""
+        self._reopen = Reopener(reconnect, backoff, rng)
         self._proto: _SerialProtocol | None = None
         self._stransport: asyncio.Transport | None = None
         self._fd = -1
@@ -151,18 +138,13 @@ class SerialTransport(Transport):
     def connected(self) -> bool:
         return self._stransport is not None and not self._stransport.is_closing()
 
-    @property
-    def reconnecting(self) -> bool:
-        """True while the port is lost and the background task tries to reopen it."""
-        return self._task is not None and not self._task.done() and not self.connected
-
     async def open(self) -> None:
         """Open the device (8N1). Raises :class:`LinkLost`, naming the device, if it is
         missing or cannot be opened. Stops a running reopen task first."""
         if self.connected:
             return
-        self._closing = False
-        await self._stop_task()
+        self._reopen.closing = False
+        await self._reopen.stop()
         await self._open_port()
 
     async def _open_port(self, timeout: float | None = None) -> None:
@@ -229,8 +211,8 @@ class SerialTransport(Transport):
     async def close(self) -> None:
         """Stop reopening, close the port and release its fd; returns once released.
         Idempotent."""
-        self._closing = True
-        await self._stop_task()
+        self._reopen.closing = True
+        await self._reopen.stop()
         stransport, proto = self._stransport, self._proto
         self._stransport = None
         if stransport is None or proto is None:
@@ -274,35 +256,6 @@ class SerialTransport(Transport):
         reason = f": {exc}" if exc is not None else ""
         event = LinkEvent(LinkEventKind.LOST, f"serial {self._device}: port lost{reason}")
         call_guarded(self._on_event, event, "event")
-        if self._reconnect and not self._closing:
-            self._task = asyncio.get_running_loop().create_task(
-                self._reopen_loop(), name=f"gcu_async reopen {self.url}")  # fmt: skip
-
-    # -- reopening after a loss (an unplugged adapter coming back) --------------------------
-
-    async def _reopen_loop(self) -> None:
-        self.reconnect_attempts = 0
-
-        def counted(n: int) -> None:
-            self.reconnect_attempts = n
-
-        try:
-            # opening a device node takes no time worth bounding: the timeout is unused
-            last = await retry(self._open_port, self.backoff, self._rng, 1.0, counted)
-            if self._closing:
-                return
-            if last is None:
-                self.reconnects += 1
-                detail = (f"serial {self._device}: reopened after {self.reconnect_attempts} "
-                          "attempt(s)")  # fmt: skip
-                call_guarded(self._on_event, LinkEvent(LinkEventKind.RESTORED, detail), "event")
-            else:
-                call_guarded(self._on_event, giving_up(self.url, self.reconnect_attempts, last),
-                             "event")  # fmt: skip
-        finally:
-            if self._task is asyncio.current_task():
-                self._task = None
-
-    async def _stop_task(self) -> None:
-        task, self._task = self._task, None
-        await cancel_and_wait(task)
+        # opening a device node takes no time worth bounding: the timeout is unused
+        self._reopen.start(self.url, self._open_port, 1.0, f"serial {self._device}: reopened",
+                           self._on_event)  # fmt: skip

@@ -69,7 +69,6 @@ import random
 import socket
 from typing import Any
 
-from gcu_async._checks import check_bool, type_error
 from gcu_async.errors import LinkLost
 from gcu_async.protocol.links import GCU_UDP_PORT, HOST_UDP_PORT
 from gcu_async.transport._common import (
@@ -80,7 +79,8 @@ from gcu_async.transport._common import (
     same_address,
 )
 from gcu_async.transport._datagram import DrainingDatagramTransport
-from gcu_async.transport.backoff import Backoff, cancel_and_wait, giving_up, retry
+from gcu_async.transport._reopen import Reopener, Reopening
+from gcu_async.transport.backoff import Backoff
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 MAX_DATAGRAM = 65536
@@ -156,7 +156,7 @@ class _UdpProtocol(asyncio.DatagramProtocol):
         self._owner._lost(self, exc)
 
 
-class UdpTransport(Transport):
+class UdpTransport(Reopening, Transport):
     """Datagram link to a GCU at ``host:port``.
 
     ``local_host`` defaults to the wildcard address of the remote's address family;
@@ -193,20 +193,8 @@ class UdpTransport(Transport):
         self._discovery = bool(discovery)
         self._follow_peer = bool(follow_peer)
         self._reuse_port = _reuse_port(reuse_port, self._local_port)
-        self._reconnect = check_bool("reconnect", reconnect)
-        if backoff is not None and not isinstance(backoff, Backoff):
-            raise type_error("backoff", "a Backoff or None", backoff)
-        self.backoff = backoff if backoff is not None else Backoff(max_attempts=None,
-                                                                   max_total=60.0)  # fmt: skip
-        """Schedule for binding a new socket after the socket was closed under us."""
-        self._rng = rng if rng is not None else random.Random()
-        self._task: asyncio.Task[None] | None = None
-        self._closing = False
+        self._reopen = Reopener(reconnect, backoff, rng)
         self._erring = False  # an ERROR event was emitted and no datagram has arrived since
-        self.reconnect_attempts = 0
-        """Attempts to bind a new socket during the current (or last) loss."""
-        self.reconnects = 0
-        """Losses ended by binding a new socket."""
         self._proto: _UdpProtocol | None = None
         self._dtransport: asyncio.DatagramTransport | None = None
         self._remote: tuple[str, int] | None = None
@@ -302,11 +290,6 @@ class UdpTransport(Transport):
         """The bound (host, port) once open; useful with ``local_port=0``."""
         return self._local
 
-    @property
-    def reconnecting(self) -> bool:
-        """True while the socket is lost and the background task tries to bind a new one."""
-        return self._task is not None and not self._task.done() and not self.connected
-
     async def open(self) -> None:
         """Resolve the GCU address, bind the local socket and start receiving.
 
@@ -314,8 +297,8 @@ class UdpTransport(Transport):
         running reopen task first."""
         if self.connected:
             return
-        self._closing = False
-        await self._stop_task()
+        self._reopen.closing = False
+        await self._reopen.stop()
         await self._bind()
 
     async def _bind(self, timeout: float | None = None) -> None:
@@ -389,8 +372,8 @@ class UdpTransport(Transport):
 
     async def close(self) -> None:
         """Stop reopening, close the socket; returns once it is released. Idempotent."""
-        self._closing = True
-        await self._stop_task()
+        self._reopen.closing = True
+        await self._reopen.stop()
         dtransport, proto = self._dtransport, self._proto
         self._dtransport = None
         if dtransport is None or proto is None:
@@ -438,34 +421,5 @@ class UdpTransport(Transport):
         self._dtransport = None
         detail = f"{self.url}: socket closed" + (f": {exc}" if exc else "")
         call_guarded(self._on_event, LinkEvent(LinkEventKind.LOST, detail), "event")
-        if self._reconnect and not self._closing:
-            self._task = asyncio.get_running_loop().create_task(
-                self._reopen_loop(), name=f"gcu_async reopen {self.url}")  # fmt: skip
-
-    # -- binding a new socket after a loss --------------------------------------------------
-
-    async def _reopen_loop(self) -> None:
-        self.reconnect_attempts = 0
-
-        def counted(n: int) -> None:
-            self.reconnect_attempts = n
-
-        try:
-            # binding takes no time worth bounding (resolving might: getaddrinfo of a name)
-            last = await retry(self._bind, self.backoff, self._rng, 5.0, counted)
-            if self._closing:
-                return
-            if last is None:
-                self.reconnects += 1
-                detail = f"{self.url}: new socket after {self.reconnect_attempts} attempt(s)"
-                call_guarded(self._on_event, LinkEvent(LinkEventKind.RESTORED, detail), "event")
-            else:
-                call_guarded(self._on_event, giving_up(self.url, self.reconnect_attempts, last),
-                             "event")  # fmt: skip
-        finally:
-            if self._task is asyncio.current_task():
-                self._task = None
-
-    async def _stop_task(self) -> None:
-        task, self._task = self._task, None
-        await cancel_and_wait(task)
+        # binding takes no time worth bounding (resolving might: getaddrinfo of a name)
+        self._reopen.start(self.url, self._bind, 5.0, f"{self.url}: new socket", self._on_event)
