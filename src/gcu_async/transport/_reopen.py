@@ -1,7 +1,7 @@
 """Reopening a lost link on a :class:`~gcu_async.transport.backoff.Backoff` schedule: the part
 the serial transport (an unplugged adapter) and the UDP transport (a socket closed under it)
-share (docs/transports.md, "Reconnection"; TCP reconnects in its own way, since a connection
-can come up while an attempt is timing out)."""
+share (docs/transports.md, "Serial" and "UDP errors and reopening"; TCP reconnects in its own
+way, since a connection can come up while an attempt is timing out)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """Reconnect schedules shared by the TCP, serial and UDP transports and the client's start-up:
-exponential backoff with full jitter, bounded (docs/transports.md, "Reconnection")."""
+exponential backoff with full jitter, bounded (docs/transports.md, "TCP")."""
 
 from __future__ import annotations
 
