@@ -55,6 +55,8 @@ VERBS = frozenset({
     "track", "click", "gaze",
 })  # fmt: skip
 """The verbs a command method may start with: a new method with a noun name fails."""
+LEADING_ONLY = frozenset({"enter", "set", "start", "stop", "toggle"})
+"""Verbs that lead: ``zoom_stop`` is a noun phrase (the verb is ``stop``, so ``stop_zoom``)."""
 
 SAMPLES: dict[str, Any] = {
     "latitude": 47.39, "longitude": 8.54, "altitude": 420.0, "box": (0.4, 0.4, 0.6, 0.6),
@@ -140,12 +142,22 @@ def test_catalogue_is_unique_and_immutable() -> None:
         BY_METHOD["x"] = entry  # type: ignore[index]
 
 
+def rule_breaks(method: str, command: type[Command]) -> list[str]:
+    """How a method name and its command class break the naming rule."""
+    out = []
+    words = method.split("_")
+    if (not re.fullmatch(r"[a-z]+(_[a-z]+)*", method) or words[0] not in VERBS
+            or LEADING_ONLY.intersection(words[1:])):  # fmt: skip
+        out.append(f"{method}: not a verb phrase")
+    if command.__name__ != camel(command.OPCODE.name):
+        out.append(f"{command.__name__}: not {camel(command.OPCODE.name)}")
+    return out
+
+
 @pytest.mark.parametrize("entry", CATALOGUE, ids=IDS)
 def test_names_follow_the_rule(entry: CatalogueEntry) -> None:
-    assert re.fullmatch(r"[a-z]+(_[a-z]+)*", entry.method), entry.method
-    assert entry.method.split("_")[0] in VERBS, f"{entry.method}: not a verb phrase"
+    assert rule_breaks(entry.method, entry.command) == []
     assert entry.cli_name == entry.method.replace("_", "-")
-    assert entry.command.__name__ == camel(entry.opcode.name), entry.command.__name__
     assert entry.opcode == entry.command.OPCODE
     assert entry.doc and "\n" not in entry.doc and entry.doc.endswith(".")
     assert len({p.name for p in entry.parameters}) == len(entry.parameters)
@@ -163,11 +175,19 @@ def test_every_opcode_but_null_has_an_entry() -> None:
     assert {e.command for e in CATALOGUE} | {NullCommand} == set(COMMAND_TYPES.values())
 
 
-def test_the_rule_check_can_fail() -> None:
-    """The checks above would catch the old names."""
-    assert ["area"][0] not in VERBS and camel("ZOOM_STOP").lower() != "zoom_stop"
-    assert camel(Opcode.OSD_COORDINATES.name) != "OsdCoordinatesCommand"
-    assert "euler" not in VERBS and "pointing" not in VERBS and "isotherm" not in VERBS
+@pytest.mark.parametrize("method", ["euler_control", "fpv", "pointing_lock", "zoom_stop",
+                                    "area_temperature", "isotherm", "Set_osd"])  # fmt: skip
+def test_the_rule_check_catches_the_old_names(method: str) -> None:
+    assert rule_breaks(method, BY_METHOD["set_osd"].command) == [f"{method}: not a verb phrase"]
+
+
+def test_the_rule_check_catches_a_command_suffix() -> None:
+    class OsdCoordinatesCommand(BY_METHOD["set_osd_coordinates"].command):  # type: ignore[misc]
+        pass
+
+    assert rule_breaks("set_osd_coordinates", OsdCoordinatesCommand) == [
+        "OsdCoordinatesCommand: not OsdCoordinates"
+    ]
 
 
 # -- the client against the catalogue ------------------------------------------------------

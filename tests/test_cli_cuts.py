@@ -42,9 +42,10 @@ def test_send_help_lists_every_command_with_its_arguments_and_method() -> None:
     done = cli("send", "--help")
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
+    width = max(map(len, COMMANDS))  # the names in one column
     for name, spec in COMMANDS.items():
         args = " ".join(f"[{p.name}]" if p.optional else p.name for p in spec.params)
-        line = f"  {name:<18} {args + ' ' if args else ''}-> {spec.method}()"
+        line = f"  {name:<{width}} {args + ' ' if args else ''}-> {spec.method}()"
         assert line in lines, line
 
 

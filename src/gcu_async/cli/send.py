@@ -71,10 +71,11 @@ def _shared_options(parser: argparse.ArgumentParser, *, cameras: bool = True) ->
 def _command_list() -> str:
     """The commands for ``gcu-async send --help``."""
     lines = ["commands (gcu-async send URL COMMAND --help: its arguments, units, ranges):"]
+    width = max(map(len, COMMANDS))
     for name, spec in COMMANDS.items():
         args = [f"[{p.name}]" if p.optional else p.name for p in spec.params]
-        lines.append(f"  {name:<18} {' '.join([*args, f'-> {spec.method}()'])}")
-        lines.append(f"  {'':<18} {spec.summary}")
+        lines.append(f"  {name:<{width}} {' '.join([*args, f'-> {spec.method}()'])}")
+        lines.append(f"  {'':<{width}} {spec.summary}")
     return "\n".join(lines)
 
 

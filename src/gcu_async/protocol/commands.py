@@ -555,7 +555,7 @@ class TemperatureAlarm(_Thresholds):
 
 @dataclass(frozen=True, slots=True)
 class Isotherm(_Thresholds):
-    """0x32: set_isotherm off, or on in "inside the interval" mode with high/low thresholds (°C)."""
+    """0x32: isotherm off, or on in "inside the interval" mode with high/low thresholds (°C)."""
 
     OPCODE = Opcode.ISOTHERM
 
