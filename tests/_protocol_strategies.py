@@ -44,7 +44,7 @@ from gcu_async.protocol import (
     NullCommand,
     Osd,
     OsdCoordinates,
-    OsdCoordinatesCommand,
+    OsdCoordinateSource,
     Palette,
     PictureInPicture,
     PointingFollow,
@@ -262,8 +262,8 @@ COMMAND_STRATEGIES: dict[type[Command], st.SearchStrategy[Command]] = {
     ),
     Track: st.builds(Track, enter=st.booleans(), box=boxes(), cameras=masks),
     ClickToPan: st.builds(ClickToPan, point=points, cameras=masks),
-    OsdCoordinatesCommand: st.builds(
-        OsdCoordinatesCommand, coordinates=st.sampled_from(OsdCoordinates)
+    OsdCoordinates: st.builds(
+        OsdCoordinates, coordinates=st.sampled_from(OsdCoordinateSource)
     ),
     ImageAutoFlip: _switch(ImageAutoFlip),
     TimeZone: st.builds(TimeZone, offset_hours=st.integers(-12, 14)),

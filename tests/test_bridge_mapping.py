@@ -170,7 +170,7 @@ def test_plan_needs_exactly_one_of_result_and_call() -> None:
 def test_attitude_requests_choose_the_mode_and_then_only_values() -> None:
     v = view(Mode.POINTING_FOLLOW)
     call = gimbal.attitude_call(v, pitch=-30.0, yaw=200.0, yaw_lock=True)
-    assert call == GcuCall("euler_control", {"roll": 0.0, "pitch": -30.0, "yaw": -160.0},
+    assert call == GcuCall("enter_euler_control", {"roll": 0.0, "pitch": -30.0, "yaw": -160.0},
                            mode=Mode.EULER_CONTROL)  # fmt: skip
     confirmed = view(Mode.EULER_CONTROL, bridge_mode=Mode.EULER_CONTROL)
     assert gimbal.attitude_call(confirmed, pitch=-30.0, yaw=20.0, yaw_lock=True).method == (
@@ -179,15 +179,15 @@ def test_attitude_requests_choose_the_mode_and_then_only_values() -> None:
     assert gimbal.attitude_call(pending, pitch=-30.0, yaw_lock=True).method == "set_angles"
     # the pod changed mode by itself: a mode command again
     drifted = view(Mode.TRACK, bridge_mode=Mode.EULER_CONTROL)
-    assert gimbal.attitude_call(drifted, pitch=-30.0, yaw_lock=True).method == "euler_control"
+    assert gimbal.attitude_call(drifted, pitch=-30.0, yaw_lock=True).method == "enter_euler_control"
     # a missing angle keeps the current one (absolute for yaw lock, relative otherwise)
     assert gimbal.attitude_call(v, pitch=-5.0, yaw_lock=True).kwargs["yaw"] == 90.0
     assert gimbal.attitude_call(v, pitch=-5.0, yaw_lock=False).kwargs["yaw"] == 45.0
     assert gimbal.attitude_call(v, yaw=5.0, yaw_lock=False).kwargs["pitch"] == -10.0
     rates = gimbal.attitude_call(v, pitch_rate=NAN, yaw_rate=12.0, yaw_lock=False)
-    assert rates == GcuCall("pointing_follow", {"pitch_rate": 0.0, "yaw_rate": 12.0},
+    assert rates == GcuCall("enter_pointing_follow", {"pitch_rate": 0.0, "yaw_rate": 12.0},
                             mode=Mode.POINTING_FOLLOW)  # fmt: skip
-    assert gimbal.attitude_call(v, yaw_rate=1.0, yaw_lock=True).method == "pointing_lock"
+    assert gimbal.attitude_call(v, yaw_rate=1.0, yaw_lock=True).method == "enter_pointing_lock"
     assert gimbal.attitude_call(v, yaw_lock=True) == GcuCall("release_control")
 
 
@@ -265,7 +265,7 @@ def test_zoom_plans() -> None:
     zoom = mavlink.MAV_CMD_SET_CAMERA_ZOOM
     assert camera.zoom_plan(c(zoom, 1, 1), v, CONFIG).call == GcuCall("zoom_in")
     assert camera.zoom_plan(c(zoom, 1, -1), v, CONFIG).call == GcuCall("zoom_out")
-    assert camera.zoom_plan(c(zoom, 1, 0), v, CONFIG).call == GcuCall("zoom_stop")
+    assert camera.zoom_plan(c(zoom, 1, 0), v, CONFIG).call == GcuCall("stop_zoom")
     assert camera.zoom_plan(c(zoom, 1, 0.5), v, CONFIG).result == DENIED
     assert camera.zoom_plan(c(zoom, 2, 50), v, CONFIG).call == GcuCall(
         "zoom_to_fraction", {"fraction": 0.5})

@@ -166,7 +166,7 @@ def test_cli_capture_options(tmp_path: Path) -> None:
     sim = SimProcess("--listen", "udp://127.0.0.1:0", "--capture", str(tmp_path / "sim.pcapng"))
     try:
         url = sim.url + "?local_port=0"
-        sent = run_cli("send", url, "photo", "--capture", str(tmp_path / "send.pcapng"))
+        sent = run_cli("send", url, "take-photo", "--capture", str(tmp_path / "send.pcapng"))
         assert sent.returncode == 0, sent.stderr
         watched = run_cli("monitor", url, "--count", "2", "--interval", "0.1",
                           "--capture", str(tmp_path / "monitor.pcapng"))  # fmt: skip
@@ -199,7 +199,7 @@ def test_capture_without_the_extra_names_it(
 
 def test_cli_capture_errors(tmp_path: Path) -> None:
     missing = tmp_path / "no" / "such" / "dir" / "x.pcapng"
-    done = run_cli("send", "udp://127.0.0.1:9?local_port=0", "photo", "--timeout", "1",
+    done = run_cli("send", "udp://127.0.0.1:9?local_port=0", "take-photo", "--timeout", "1",
                    "--capture", str(missing))  # fmt: skip
     assert done.returncode == 1 and "No such file" in done.stdout
     bad = run_cli("sim", "--listen", "udp://127.0.0.1:0", "--capture", str(tmp_path))

@@ -42,24 +42,25 @@ def test_send_help_lists_every_command_with_its_arguments_and_method() -> None:
     done = cli("send", "--help")
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
+    width = max(map(len, COMMANDS))  # the names in one column
     for name, spec in COMMANDS.items():
         args = " ".join(f"[{p.name}]" if p.optional else p.name for p in spec.params)
-        line = f"  {name:<18} {args + ' ' if args else ''}-> {spec.method}()"
+        line = f"  {name:<{width}} {args + ' ' if args else ''}-> {spec.method}()"
         assert line in lines, line
 
 
 def test_a_command_help_shows_its_arguments_units_ranges_and_method() -> None:
-    done = cli("send", DEAD, "euler", "--help")
+    done = cli("send", DEAD, "enter-euler-control", "--help")
     assert done.returncode == 0, done.stderr
     out = done.stdout
-    assert out.startswith("usage: gcu-async send URL euler ")
-    assert "GcuClient.euler_control(roll, pitch, yaw)" in out
-    for line in ("roll               degrees, -180 to 180",
-                 "pitch              degrees, -180 to 180",
-                 "yaw                degrees, -180 to 360 (north = 0)"):  # fmt: skip
+    assert out.startswith("usage: gcu-async send URL enter-euler-control ")
+    assert "GcuClient.enter_euler_control(roll, pitch, yaw)" in out
+    for line in ("roll               -180 to 180 deg: Euler roll (default: the current one)",
+                 "pitch              -180 to 180 deg: Euler pitch (default: the current one)",
+                 "yaw                -180 to 360 (excluded) deg: Euler yaw"):  # fmt: skip
         assert line in out, out
     assert "--cameras" not in out  # euler addresses no camera
-    assert "zoom_to" not in out and "area-temperature" not in out  # not the generic list
+    assert "zoom_to" not in out and "set-area-temperature" not in out  # not the generic list
 
 
 @pytest.mark.parametrize("name", COMMANDS)
@@ -121,11 +122,11 @@ def test_parse_cameras() -> None:
 
 
 @pytest.mark.parametrize(("args", "executed"), [
-    (["palette", "3"], ("PALETTE", "02 03")),  # the method's default: camera 2
-    (["palette", "3", "--cameras", "1,2"], ("PALETTE", "03 03")),
-    (["--cameras", "thermal", "photo"], ("TAKE_PHOTO", "02")),  # before the command's name
+    (["set-palette", "3"], ("PALETTE", "02 03")),  # the method's default: camera 2
+    (["set-palette", "3", "--cameras", "1,2"], ("PALETTE", "03 03")),
+    (["--cameras", "thermal", "take-photo"], ("TAKE_PHOTO", "02")),  # before the command's name
     (["zoom-to", "4", "--cameras", "1,2"], ("ZOOM_TO", "03 d8 ff")),
-    (["record", "--cameras", "visible,thermal"], ("RECORD", "03")),
+    (["toggle-recording", "--cameras", "visible,thermal"], ("RECORD", "03")),
 ])  # fmt: skip
 def test_cameras_reach_the_wire(sim: SimProcess, args: list[str],
                                 executed: tuple[str, str]) -> None:  # fmt: skip
@@ -149,16 +150,16 @@ SAMPLE = {"on": "on", "mode": "1", "coordinates": "aircraft", "hours": "1"}
 
 
 def test_cameras_refused_through_the_entry_point(sim: SimProcess) -> None:
-    done = cli("send", f"{sim.url}?local_port=0", "time-zone", "3", "--cameras", "1")
+    done = cli("send", f"{sim.url}?local_port=0", "set-time-zone", "3", "--cameras", "1")
     assert done.returncode == 2
-    assert done.stderr.strip() == ("gcu-async send: --cameras: time-zone addresses no camera "
+    assert done.stderr.strip() == ("gcu-async send: --cameras: set-time-zone addresses no camera "
                                    "(set_time_zone() has no cameras parameter)")  # fmt: skip
     assert done.stdout == ""
     assert not sim.executions()  # nothing was sent
 
 
 def test_bad_cameras_is_a_usage_error() -> None:
-    done = cli("send", DEAD, "photo", "--cameras", "9")
+    done = cli("send", DEAD, "take-photo", "--cameras", "9")
     assert done.returncode == 2
     assert "camera numbers 1-8 or names" in done.stderr
     assert len(done.stderr.strip().splitlines()) == 1
@@ -200,7 +201,7 @@ async def test_demo_pan_rate_follows_the_zoom() -> None:
         await demo.step_pan()
         assert gcu.info is not None and gcu.info.camera1_zoom == pytest.approx(10.0)
     text = out.getvalue()
-    assert "pointing_lock(yaw_rate=13.5): ok" in text, text  # 0.9 * 150 / 10
+    assert "enter_pointing_lock(yaw_rate=13.5): ok" in text, text  # 0.9 * 150 / 10
     assert "seen a 30 deg pan" in text, text
 
 
@@ -227,9 +228,11 @@ def test_monitor_json_shows_the_vendors_pod_name() -> None:
 # -- a value out of range is a usage error before anything is opened -------------------------
 @pytest.mark.parametrize(("args", "message"), [
     (["zoom-to", "0.5"], "ratio: 0.5 is outside the allowed range [1, 3276.8] x"),
-    (["time-zone", "20"], "offset_hours: 20 is outside the allowed range [-12, 14] h"),
-    (["euler", "0", "-30", "400"], "yaw: 400.0 is outside the allowed range [-180, 360) deg"),
-    (["pointing-lock", "0", "200"], "yaw_rate: 200.0 is outside the allowed range [-150, 150]"),
+    (["set-time-zone", "20"], "offset_hours: 20 is outside the allowed range [-12, 14] h"),
+    (["enter-euler-control", "0", "-30", "400"],
+     "yaw: 400.0 is outside the allowed range [-180, 360) deg"),
+    (["enter-pointing-lock", "0", "200"],
+     "yaw_rate: 200.0 is outside the allowed range [-150, 150]"),
 ])  # fmt: skip
 def test_out_of_range_values_fail_before_connecting(args: list[str], message: str) -> None:
     # nothing answers at DEAD: had the client been opened, this would be a timeout (1)

@@ -235,8 +235,9 @@ def test_default_run_over_udp_reports_every_step_and_a_consistent_summary(
     # every command the client saw succeed was executed exactly once by the simulator
     executions = numbers(s["sim executions"].split(" ", 1)[0])[0]
     assert executions == numbers(s["commands"])[0]
-    for call in ("pointing_follow()", "euler_control(pitch=-45)", "pointing_lock(yaw_rate=",
-                 "top_down()", "zoom_to(10)", "zoom_to(1)", "take_photo()",
+    for call in ("enter_pointing_follow()", "enter_euler_control(pitch=-45)",
+                 "enter_pointing_lock(yaw_rate=",
+                 "enter_top_down()", "zoom_to(10)", "zoom_to(1)", "take_photo()",
                  "start_recording()", "stop_recording()", "set_ranging(True)", "track(",
                  "stop_tracking()"):  # fmt: skip
         assert re.search(rf"^\s+{re.escape(call)}.*: ok in ", out, re.M), call
@@ -312,7 +313,7 @@ def test_pod_without_zoom_to_tracking_and_ranging(runs: dict[str, Run]) -> None:
     # no zoom-to on this pod: continuous zoom in/out, then stop
     assert "zoom_in() (this pod has no zoom-to): ok" in out
     assert "zoom_out() (this pod has no zoom-to): ok" in out
-    assert len(re.findall(r"zoom_stop\(\): ok", out)) == 2
+    assert len(re.findall(r"stop_zoom\(\): ok", out)) == 2
     assert "seen zoom 10x: 10.0x" in out and "seen zoom 1x: 1.0x" in out
 
 

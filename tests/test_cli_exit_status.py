@@ -18,7 +18,7 @@ DEAD = "udp://127.0.0.1:9?local_port=0"  # discard port: nothing answers
 @pytest.mark.parametrize(("args", "status"), [
     (["decode", "zz"], 2),
     (["decode", "00 11"], 1),
-    (["send", DEAD, "photo", "--timeout", "0.3"], 1),
+    (["send", DEAD, "take-photo", "--timeout", "0.3"], 1),
     (["send", DEAD, "no-such-command"], 2),
     (["monitor", DEAD, "--timeout", "0.3"], 1),
     (["monitor", DEAD, "--interval", "0"], 2),
@@ -37,8 +37,8 @@ def test_send_interrupted_closes_cleanly_with_130(sig: signal.Signals) -> None:
     sim = SimProcess("--listen", "udp://127.0.0.1:0")
     try:
         # a rate mode holds its rates for --hold seconds (no target to stop early at)
-        proc = subprocess.Popen([*CLI, "send", f"{sim.url}?local_port=0", "pointing-lock", "0",
-                                 "5", "--hold", "60"], stdout=subprocess.PIPE,
+        proc = subprocess.Popen([*CLI, "send", f"{sim.url}?local_port=0", "enter-pointing-lock",
+                                 "0", "5", "--hold", "60"], stdout=subprocess.PIPE,
                                 stderr=subprocess.PIPE, text=True)  # fmt: skip
         try:
             time.sleep(1.5)  # connected, command sent, holding

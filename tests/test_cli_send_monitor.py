@@ -53,15 +53,15 @@ def sim_url() -> Iterator[str]:
 @pytest.mark.parametrize(
     ("command", "opcode"),
     [
-        (["photo"], 0x20),
+        (["take-photo"], 0x20),
         (["zoom-to", "12.5"], 0x25),
-        (["euler", "0", "-30", "45"], 0x14),
-        (["pointing-lock"], 0x11),
-        (["pointing-lock", "1.5", "-2"], 0x11),
+        (["enter-euler-control", "0", "-30", "45"], 0x14),
+        (["enter-pointing-lock"], 0x11),
+        (["enter-pointing-lock", "1.5", "-2"], 0x11),
         (["track", "0.4", "0.4", "0.6", "0.6"], 0x17),
-        (["night-vision", "auto"], 0x2B),
-        (["ranging", "on"], 0x81),
-        (["area-temperature", "on", "0.1", "0.1", "0.9", "0.9"], 0x30),
+        (["set-night-vision", "auto"], 0x2B),
+        (["set-ranging", "on"], 0x81),
+        (["set-area-temperature", "on", "0.1", "0.1", "0.9", "0.9"], 0x30),
     ],
 )
 def test_send_prints_feedback_json(sim_url: str, command: list[str], opcode: int) -> None:
@@ -75,7 +75,8 @@ def test_send_prints_feedback_json(sim_url: str, command: list[str], opcode: int
 
 
 def test_send_euler_holds_the_control_values_until_the_camera_arrives(sim_url: str) -> None:
-    result = run("send", f"{sim_url}?local_port=0", "euler", "0", "-40", "30", "--hold", "3")
+    result = run("send", f"{sim_url}?local_port=0", "enter-euler-control", "0", "-40", "30",
+                 "--hold", "3")
     assert result.returncode == 0, result.stderr
     out = json.loads(result.stdout)
     assert out["opcode"] == 0x14
@@ -84,7 +85,7 @@ def test_send_euler_holds_the_control_values_until_the_camera_arrives(sim_url: s
 
 
 def test_send_failure_exits_1_with_status(sim_url: str) -> None:
-    result = run("send", f"{sim_url}?local_port=0", "fill-light", "100")  # not on this pod
+    result = run("send", f"{sim_url}?local_port=0", "set-fill-light", "100")  # not on this pod
     assert result.returncode == 1
     out = json.loads(result.stdout)
     assert out["ok"] is False
@@ -94,7 +95,7 @@ def test_send_failure_exits_1_with_status(sim_url: str) -> None:
 
 def test_send_timeout_exits_1() -> None:
     # nothing listens on this port: no reply, so the connect wait times out
-    result = run("send", "udp://127.0.0.1:9?local_port=0", "photo", "--timeout", "0.3")
+    result = run("send", "udp://127.0.0.1:9?local_port=0", "take-photo", "--timeout", "0.3")
     assert result.returncode == 1
     assert json.loads(result.stdout)["ok"] is False
 
@@ -107,11 +108,11 @@ def test_send_timeout_exits_1() -> None:
                                                "ratio"),
         (["udp://127.0.0.1:2337", "zoom-to", "fast"], "argument ratio: invalid float value"),
         (["udp://127.0.0.1:2337", "zoom-to", "2", "3"], "unrecognized arguments: 3"),
-        (["udp://127.0.0.1:2337", "area-temperature", "on", "0.1"], "give all of left top "
+        (["udp://127.0.0.1:2337", "set-area-temperature", "on", "0.1"], "give all of left top "
                                                                     "right bottom, or none"),
-        (["udp://127.0.0.1:2337", "ranging", "maybe"], "expected on/off"),
-        (["ftp://127.0.0.1", "photo"], "scheme"),
-        (["udp://127.0.0.1:99999", "photo"], "port"),
+        (["udp://127.0.0.1:2337", "set-ranging", "maybe"], "expected on/off"),
+        (["ftp://127.0.0.1", "take-photo"], "scheme"),
+        (["udp://127.0.0.1:99999", "take-photo"], "port"),
     ],
 )
 def test_send_usage_errors_exit_2_with_one_line(args: list[str], message: str) -> None:

@@ -48,13 +48,13 @@ Call = Callable[[GcuClient], Awaitable[Any]]
 # (call, opcode) for every command the default pod (D-90Pro(TA)) supports
 ROUND_TRIPS: list[tuple[str, Call, Opcode]] = [
     ("centre", lambda g: g.centre(), Opcode.CENTRE),
-    ("euler", lambda g: g.euler_control(pitch=-10.0, yaw=20.0), Opcode.EULER_CONTROL),
-    ("angle", lambda g: g.angle_control(pitch=-5.0, yaw=5.0), Opcode.ANGLE_CONTROL),
-    ("fpv", lambda g: g.fpv(pitch=-5.0), Opcode.FPV),
-    ("lock", lambda g: g.pointing_lock(yaw_rate=2.0), Opcode.POINTING_LOCK),
-    ("follow", lambda g: g.pointing_follow(), Opcode.POINTING_FOLLOW),
-    ("top-down", lambda g: g.top_down(), Opcode.TOP_DOWN),
-    ("gaze-lock", lambda g: g.gaze_lock(), Opcode.GAZE_LOCK),
+    ("euler", lambda g: g.enter_euler_control(pitch=-10.0, yaw=20.0), Opcode.EULER_CONTROL),
+    ("angle", lambda g: g.enter_angle_control(pitch=-5.0, yaw=5.0), Opcode.ANGLE_CONTROL),
+    ("fpv", lambda g: g.enter_fpv(pitch=-5.0), Opcode.FPV),
+    ("lock", lambda g: g.enter_pointing_lock(yaw_rate=2.0), Opcode.POINTING_LOCK),
+    ("follow", lambda g: g.enter_pointing_follow(), Opcode.POINTING_FOLLOW),
+    ("top-down", lambda g: g.enter_top_down(), Opcode.TOP_DOWN),
+    ("gaze-lock", lambda g: g.enter_gaze_lock(), Opcode.GAZE_LOCK),
     ("gaze-at", lambda g: g.gaze_at(47.39, 8.54, 420.0), Opcode.GAZE_AT_COORDINATES),
     ("track", lambda g: g.track((0.4, 0.4, 0.6, 0.6)), Opcode.TRACK),
     ("stop-track", lambda g: g.stop_tracking(), Opcode.TRACK),
@@ -62,17 +62,19 @@ ROUND_TRIPS: list[tuple[str, Call, Opcode]] = [
     ("photo", lambda g: g.take_photo(), Opcode.TAKE_PHOTO),
     ("record", lambda g: g.toggle_recording(), Opcode.RECORD),
     ("zoom-in", lambda g: g.zoom_in(), Opcode.ZOOM_IN),
-    ("zoom-stop", lambda g: g.zoom_stop(), Opcode.ZOOM_STOP),
+    ("zoom-stop", lambda g: g.stop_zoom(), Opcode.ZOOM_STOP),
     ("zoom-out", lambda g: g.zoom_out(), Opcode.ZOOM_OUT),
     ("zoom-to", lambda g: g.zoom_to(4.0), Opcode.ZOOM_TO),
     ("zoom-fraction", lambda g: g.zoom_to_fraction(0.5), Opcode.ZOOM_TO),
     ("focus", lambda g: g.focus(), Opcode.FOCUS),
     ("palette", lambda g: g.set_palette(3), Opcode.PALETTE),
     ("night", lambda g: g.set_night_vision(NightVisionMode.AUTO), Opcode.NIGHT_VISION),
-    ("area-t", lambda g: g.area_temperature(True, (0.1, 0.1, 0.5, 0.5)), Opcode.AREA_TEMPERATURE),
-    ("alarm", lambda g: g.temperature_alarm(True, high=80.0, low=-10.0), Opcode.TEMPERATURE_ALARM),
-    ("isotherm", lambda g: g.isotherm(True, high=60.0, low=20.0), Opcode.ISOTHERM),
-    ("spot-t", lambda g: g.spot_temperature(True, 0.5, 0.5), Opcode.SPOT_TEMPERATURE),
+    ("area-t", lambda g: g.set_area_temperature(True, (0.1, 0.1, 0.5, 0.5)),
+     Opcode.AREA_TEMPERATURE),
+    ("alarm", lambda g: g.set_temperature_alarm(True, high=80.0, low=-10.0),
+     Opcode.TEMPERATURE_ALARM),
+    ("isotherm", lambda g: g.set_isotherm(True, high=60.0, low=20.0), Opcode.ISOTHERM),
+    ("spot-t", lambda g: g.set_spot_temperature(True, 0.5, 0.5), Opcode.SPOT_TEMPERATURE),
     ("osd", lambda g: g.set_osd(True), Opcode.OSD),
     ("osd-coords", lambda g: g.set_osd_coordinates(1), Opcode.OSD_COORDINATES),
     ("auto-flip", lambda g: g.set_image_auto_flip(False), Opcode.IMAGE_AUTO_FLIP),
@@ -119,7 +121,7 @@ async def test_telemetry_follows_the_gimbal(gcu_sim: SimHandle, gcu_client: GcuC
     g = gcu_client
     g.update_aircraft(attitude=(0.0, 0.0, 90.0), acceleration=(0.0, 0.0, 0.0),
                       velocity=(0.0, 0.0, 0.0))  # the simulator keeps the last valid one
-    await g.euler_control(pitch=-30.0, yaw=120.0)
+    await g.enter_euler_control(pitch=-30.0, yaw=120.0)
     await wait_for(lambda: g.status.mode is Mode.EULER_CONTROL, what="euler mode")
     await wait_for(
         lambda: abs(g.status.attitude.pitch + 30) < 0.5 and abs(g.status.attitude.yaw - 120) < 0.5,
@@ -136,7 +138,7 @@ async def test_telemetry_follows_the_gimbal(gcu_sim: SimHandle, gcu_client: GcuC
     await wait_for(lambda: not g.info.recording, what="recording stopped")
     await g.set_ranging(True)
     await wait_for(lambda: PodStatus.RANGING_ON in g.status.pod_status, what="ranging flag")
-    await g.area_temperature(True)
+    await g.set_area_temperature(True)
     await wait_for(
         lambda: ThermalFlags.AREA_TEMPERATURE_ON in g.info.thermal_flags, what="thermal flag"
     )

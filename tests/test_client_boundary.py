@@ -66,7 +66,7 @@ from gcu_async.protocol import (
     NorthEastUp,
     NullCommand,
     Opcode,
-    OsdCoordinates,
+    OsdCoordinateSource,
     TakePhoto,
     ZoomTo,
 )
@@ -217,11 +217,11 @@ def sent_control(kind: str, index: int) -> Callable[[Rig, Any], Awaitable[Any]]:
 
 
 async def euler_mode(rig: Rig) -> None:
-    await asyncio.wait_for(rig.gcu.euler_control(), WAIT)
+    await asyncio.wait_for(rig.gcu.enter_euler_control(), WAIT)
 
 
 async def rate_mode(rig: Rig) -> None:
-    await asyncio.wait_for(rig.gcu.pointing_lock(), WAIT)
+    await asyncio.wait_for(rig.gcu.enter_pointing_lock(), WAIT)
 
 
 async def ins_valid(rig: Rig) -> None:
@@ -267,22 +267,22 @@ def with_element(base: tuple[float, ...], fields: tuple[str, ...], element: str,
 
 
 # -- command methods: modes and control values
-for _name in ("euler_control", "angle_control", "fpv"):
+for _name in ("enter_euler_control", "enter_angle_control", "enter_fpv"):
     for _i, _axis in enumerate(("roll", "pitch", "yaw")):
-        _euler_yaw = _name == "euler_control" and _axis == "yaw"
+        _euler_yaw = _name == "enter_euler_control" and _axis == "yaw"
         method(_name, _axis, "real", low=-180.0, high=360.0 if _euler_yaw else 180.0,
-               high_open=_euler_yaw, optional=_name == "euler_control",  # None: keep current
+               high_open=_euler_yaw, optional=_name == "enter_euler_control",  # None: keep current
                valid=(-180.0, 359.99, 180.0, 0.01) if _euler_yaw else (-180.0, 180.0, 0.01),
                read=sent_control("angles", _i),
                expected=(lambda v: round(v - 360.0 if v >= 180.0 else v, 2)) if _euler_yaw
                else None)  # fmt: skip
-for _name, _params in (("pointing_lock", ("pitch_rate", "yaw_rate")),
-                       ("pointing_follow", ("pitch_rate", "yaw_rate")),
-                       ("top_down", ("yaw_rate",)),
-                       ("gaze_lock", ("pitch_rate", "yaw_rate"))):  # fmt: skip
+for _name, _params in (("enter_pointing_lock", ("pitch_rate", "yaw_rate")),
+                       ("enter_pointing_follow", ("pitch_rate", "yaw_rate")),
+                       ("enter_top_down", ("yaw_rate",)),
+                       ("enter_gaze_lock", ("pitch_rate", "yaw_rate"))):  # fmt: skip
     for _param in _params:
         method(_name, _param, "real", low=-150.0, high=150.0, valid=(-150.0, 150.0, 0.1),
-               setup=ins_valid if _name == "gaze_lock" else None,
+               setup=ins_valid if _name == "enter_gaze_lock" else None,
                read=sent_control("rates", 1 if _param == "pitch_rate" else 2))  # fmt: skip
 _GAZE = {"latitude": 22.5, "longitude": 113.9, "altitude": 50.0}
 _GAZE_RANGES = {"latitude": (-90.0, 90.0), "longitude": (-180.0, 180.0),
@@ -300,13 +300,13 @@ method("calibrate", "timeout", "real", low=0.0, low_open=True, valid=(1.0, 1e300
 
 # -- command methods: image geometry, cameras and the rest
 _CAMERA_METHODS = ("take_photo", "toggle_recording", "start_recording", "stop_recording",
-                   "zoom_in", "zoom_out", "zoom_stop", "focus", "stop_tracking")  # fmt: skip
+                   "zoom_in", "zoom_out", "stop_zoom", "focus", "stop_tracking")  # fmt: skip
 for _name in _CAMERA_METHODS:
     method(_name, "cameras", "int", low=1, high=255, valid=MASKS, read=cmd("cameras"),
            setup=recording if _name == "stop_recording" else None)  # fmt: skip
 _BOX = (0.0, 0.0, 1.0, 1.0)
 _BOX_BAD = ((0.6, 0.4, 0.5, 0.6), (0.1, 0.7, 0.5, 0.6))  # right < left, bottom < top
-for _name, _base in (("track", {}), ("area_temperature", {"enabled": True})):
+for _name, _base in (("track", {}), ("set_area_temperature", {"enabled": True})):
     method(_name, "box", "tuple", base=_base, valid=(_BOX, ImageBox(0.25, 0.5, 0.25, 0.75)),
            wrong=tuple_wrong(_BOX, Quad(0, 0, 1, 1)), bad=_BOX_BAD, read=cmd("box"))  # fmt: skip
     for _e in ImageBox._fields:
@@ -318,7 +318,7 @@ for _name, _base in (("track", {}), ("area_temperature", {"enabled": True})):
     method(_name, "cameras", "int", base={**_base, "box": _BOX}, low=1, high=255, valid=MASKS,
            read=cmd("cameras"))  # fmt: skip
 for _name, _base in (("click_to_pan", {"x": 0.5, "y": 0.5}),
-                     ("spot_temperature", {"enabled": True})):  # fmt: skip
+                     ("set_spot_temperature", {"enabled": True})):  # fmt: skip
     for _e in ("x", "y"):
         method(_name, _e, "real", base=_base, low=0.0, high=1.0, valid=(0.0, 1.0),
                read=from_log(lambda rig, r, e=_e: getattr(rig.last_command.point, e)))
@@ -337,11 +337,12 @@ method("set_palette", "cameras", "int", low=1, high=255, valid=MASKS, read=cmd("
 method("set_night_vision", "mode", "enum", low=0, high=2, read=cmd("mode"),
        valid=(*NightVisionMode, 0, 2), wrong=("ON", "1"))  # fmt: skip
 method("set_night_vision", "cameras", "int", low=1, high=255, valid=MASKS, read=cmd("cameras"))
-for _name in ("area_temperature", "temperature_alarm", "isotherm", "spot_temperature",
+for _name in ("set_area_temperature", "set_temperature_alarm", "set_isotherm",
+              "set_spot_temperature",
               "set_osd", "set_image_auto_flip", "set_target_detection", "set_digital_zoom",
               "set_ranging"):  # fmt: skip
     method(_name, "enabled", "bool", valid=(True, False), read=cmd("enabled"))
-for _name in ("temperature_alarm", "isotherm"):
+for _name in ("set_temperature_alarm", "set_isotherm"):
     # high with low at its minimum, low with high at its maximum: only one bound moves
     method(_name, "high", "real", base={"low": -3276.8}, low=-3276.8, high=3276.7, step=0.1,
            valid=(-3276.8, 3276.7), read=cmd("high"))  # fmt: skip
@@ -352,7 +353,7 @@ for _name in ("temperature_alarm", "isotherm"):
           bad=(20.0, 10.1, 3276.7)))  # fmt: skip
     method(_name, "cameras", "int", low=1, high=255, valid=MASKS, read=cmd("cameras"))
 method("set_osd_coordinates", "coordinates", "enum", low=0, high=1, read=cmd("coordinates"),
-       valid=(*OsdCoordinates, 0, 1), wrong=("TARGET",))  # fmt: skip
+       valid=(*OsdCoordinateSource, 0, 1), wrong=("TARGET",))  # fmt: skip
 method("set_time_zone", "offset_hours", "int", low=-12, high=14, valid=(-12, 0, 14),
        read=cmd("offset_hours"))  # fmt: skip
 method("set_picture_in_picture", "mode", "int", low=0, high=4, valid=(0, 4), read=cmd("mode"))
@@ -936,7 +937,8 @@ async def _keeps_running(rig: Rig, seconds: float = 0.5) -> None:
 REGRESSIONS: list[tuple[str, Callable[[GcuClient], Any], type[Exception], str]] = [
     ('set_osd("false")', lambda g: g.set_osd("false"), TypeError, "enabled: "),
     ("take_photo(cameras=1.5)", lambda g: g.take_photo(cameras=1.5), TypeError, "cameras: "),
-    ("euler_control(yaw=1e30)", lambda g: g.euler_control(yaw=1e30), FieldRangeError, "yaw: "),
+    ("enter_euler_control(yaw=1e30)", lambda g: g.enter_euler_control(yaw=1e30),
+     FieldRangeError, "yaw: "),
     ("set_control(ControlValues(99999, 0, 0))",
      lambda g: g.set_control(ControlValues(99999, 0, 0)), FieldRangeError, "control.roll_raw: "),
     ("set_aircraft(None)", lambda g: g.set_aircraft(None), TypeError, "state: "),
@@ -1002,7 +1004,7 @@ def _values(p: P) -> st.SearchStrategy[Any]:
         st.binary(max_size=2), st.decimals(allow_nan=True), st.fractions(),
         st.complex_numbers(max_magnitude=10), st.just(object()),
         st.lists(st.integers(), max_size=2),
-        st.sampled_from([*CameraMask, *NightVisionMode, *OsdCoordinates]),
+        st.sampled_from([*CameraMask, *NightVisionMode, *OsdCoordinateSource]),
     )  # fmt: skip
     return st.one_of(*near, anything).filter(lambda v: not (p.optional and v is None))
 
@@ -1150,7 +1152,7 @@ def test_catalogue_covers_the_constructor_and_connect() -> None:
 
 @pytest.mark.parametrize(("owner", "param", "value"), [
     ("set_osd", "enabled", "false"), ("take_photo", "cameras", 1.5),
-    ("euler_control", "yaw", 1e30), ("set_control", "control", ControlValues(99999, 0, 0)),
+    ("enter_euler_control", "yaw", 1e30), ("set_control", "control", ControlValues(99999, 0, 0)),
     ("set_aircraft", "state", None), ("connect", "version", True),
 ])  # fmt: skip
 def test_catalogue_holds_the_issue_cases(owner: str, param: str, value: Any) -> None:

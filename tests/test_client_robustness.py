@@ -22,7 +22,7 @@ Step = tuple[Opcode, Callable[[GcuClient], Awaitable[Any]]]
 STEPS: list[Step] = [
     (Opcode.TAKE_PHOTO, lambda g: g.take_photo()),
     (Opcode.FOCUS, lambda g: g.focus()),
-    (Opcode.ZOOM_STOP, lambda g: g.zoom_stop()),
+    (Opcode.ZOOM_STOP, lambda g: g.stop_zoom()),
     (Opcode.OSD, lambda g: g.set_osd(True)),
     (Opcode.TAKE_PHOTO, lambda g: g.take_photo()),  # same opcode twice in a row
     (Opcode.DIGITAL_ZOOM, lambda g: g.set_digital_zoom(True)),

@@ -100,7 +100,7 @@ async def test_control_values_valid_bit_and_invalid_during_centre(fake: FakeGcu)
 
     fake.answer = answer
     async with GcuClient(fake.client_end) as gcu:
-        await gcu.pointing_lock(pitch_rate=-2.0)
+        await gcu.enter_pointing_lock(pitch_rate=-2.0)
         gcu.set_rates(pitch=-4.0, yaw=1.0)
         n = len(fake.packets)
         await until(lambda: len(fake.packets) > n + 1)
@@ -122,8 +122,8 @@ async def test_control_values_valid_bit_and_invalid_during_centre(fake: FakeGcu)
 
 async def test_mode_helper_sends_control_invalid_until_mode_confirmed(fake: FakeGcu) -> None:
     async with GcuClient(fake.client_end) as gcu:
-        await gcu.pointing_lock(yaw_rate=5.0)
-        await gcu.euler_control(pitch=-45.0, yaw=270.0)
+        await gcu.enter_pointing_lock(yaw_rate=5.0)
+        await gcu.enter_euler_control(pitch=-45.0, yaw=270.0)
         euler = [p for p in fake.packets if command_code(p.command) == Opcode.EULER_CONTROL]
         assert euler
         assert all(not p.main.control_valid for p in euler)  # rates never read as angles
@@ -196,7 +196,7 @@ async def test_concurrent_callers_complete_in_fifo_order(fake: FakeGcu) -> None:
     async with GcuClient(fake.client_end) as gcu:
         order: list[int] = []
 
-        calls = (gcu.take_photo, gcu.focus, gcu.zoom_stop)
+        calls = (gcu.take_photo, gcu.focus, gcu.stop_zoom)
 
         async def call(i: int) -> None:
             await calls[i % 3]()
@@ -289,7 +289,7 @@ def test_built_frames_hold_plain_integers() -> None:
 
 async def test_click_to_pan_and_track_release_the_control_values(fake: FakeGcu) -> None:
     async with GcuClient(fake.client_end) as gcu:
-        await gcu.euler_control(pitch=-30.0)
+        await gcu.enter_euler_control(pitch=-30.0)
         await gcu.click_to_pan(0.8, 0.2)
         assert gcu.control is None  # pointing-lock would read angle targets as rates
         n = len(fake.packets)
@@ -297,7 +297,7 @@ async def test_click_to_pan_and_track_release_the_control_values(fake: FakeGcu) 
         assert not last(fake).main.control_valid
         with pytest.raises(ValueError, match="no mode is confirmed"):
             gcu.set_angles(pitch=-30.0)
-        await gcu.euler_control(pitch=-30.0)
+        await gcu.enter_euler_control(pitch=-30.0)
         await gcu.track((0.4, 0.4, 0.6, 0.6))
         assert gcu.control is None
         with pytest.raises(ValueError, match="TRACK takes no control values"):

@@ -33,7 +33,7 @@ async def test_reach_attitude_returns_there_and_omitted_angles_keep_the_current_
     assert abs(sample.status.attitude.pitch + 20.0) <= 0.5
     assert angle_error(sample.status.attitude.yaw, 40.0) <= 0.5
     # only the pitch given: the yaw stays at 40 (it used to swing to north, 0)
-    await gcu_client.euler_control(pitch=-45.0)
+    await gcu_client.enter_euler_control(pitch=-45.0)
     there = await gcu_client.wait_attitude(pitch=-45.0, yaw=40.0, timeout=15.0)
     assert angle_error(there.status.attitude.yaw, 40.0) <= 0.5
     await asyncio.sleep(0.5)  # and it stays there
@@ -173,7 +173,7 @@ async def test_wait_link_times_out(gcu_client: GcuClient) -> None:
         (lambda g: g.reach_attitude(pitch=-100.0), ValueError, "pitch"),
         (lambda g: g.reach_attitude(pitch=-10.0, timeout=0.0), ValueError, "timeout"),
         (lambda g: g.reach_zoom(2.0, tolerance=0), ValueError, "tolerance"),
-        (lambda g: g.euler_control(yaw=1e30), ValueError, "yaw"),
+        (lambda g: g.enter_euler_control(yaw=1e30), ValueError, "yaw"),
     ],
 )
 async def test_wait_arguments_are_checked_before_anything_is_sent(

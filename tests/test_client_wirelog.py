@@ -106,11 +106,11 @@ def test_the_client_module_logs_under_the_package_logger() -> None:
 
 @pytest.mark.parametrize("verbose", [(), ("-v",), ("-vv",)])
 def test_the_cli_verbose_flag_shows_the_lifecycle_and_the_wire(verbose: tuple[str, ...]) -> None:
-    """The real entry point: ``gcu-async send URL photo`` against ``gcu-async sim``."""
+    """The real entry point: ``gcu-async send URL take-photo`` against ``gcu-async sim``."""
     sim = SimProcess("--listen", "udp://127.0.0.1:0")
     try:
-        done = subprocess.run([*CLI, "send", *verbose, sim.url, "photo"], capture_output=True,
-                              text=True, timeout=30, check=False)  # fmt: skip
+        done = subprocess.run([*CLI, "send", *verbose, sim.url, "take-photo"],
+                              capture_output=True, text=True, timeout=30, check=False)  # fmt: skip
     finally:
         sim.stop()
     assert done.returncode == 0, done.stderr

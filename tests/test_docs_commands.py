@@ -1,16 +1,21 @@
-"""The README's command table must match the client: names, parameters and opcodes.
+"""The docs' command tables are the command catalogue's, and match the client.
 
-The table (between the ``commands`` snippet markers of README.md, also included in the docs
-site) is parsed, and every row is checked against ``GcuClient``: the method exists and is
-awaitable, the backticked lower-case names of the parameters column are exactly the
-method's parameters, and calling the method sends the command with the opcode of the row.
-Every command method of the client must have a row, so the table cannot silently drift.
+The command table of docs/client.md and the ``send`` table of docs/cli.md are generated from
+the catalogue (:mod:`gcu_async.protocol.catalogue`): each must equal what :func:`client_table`
+/ :func:`cli_table` render (``python tests/test_docs_commands.py --write`` rewrites them; the
+README's copy, if it has one, must equal the docs' too). The client table is also parsed and
+every row checked against ``GcuClient``: the method exists and is awaitable, the backticked
+lower-case names of the parameters column are exactly the method's parameters, and calling
+the method sends the command with the opcode of the row. Every command method of the client
+must have a row, so the table cannot silently drift.
 """
 
 from __future__ import annotations
 
+import enum
 import inspect
 import re
+import sys
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -19,9 +24,12 @@ import pytest
 from gcu_async import GcuClient, GcuSubFrame
 from gcu_async.client.api import CommandMethods
 from gcu_async.protocol import Attitude, CameraFlags, Command, ControlValues, Feedback, command_code
+from gcu_async.protocol.catalogue import CATALOGUE, REQUIRED, CatalogueEntry, Kind, Parameter
 from gcu_async.session import ControlKind
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+CLIENT_DOC = ROOT / "docs" / "client.md"
 START = "<!-- --8<-- [start:commands] -->"
 END = "<!-- --8<-- [end:commands] -->"
 PARAM_NAME = re.compile(r"`([a-z_][a-z0-9_]*)`")
@@ -52,7 +60,7 @@ def table_rows(text: str) -> list[Row]:
     return rows
 
 
-ROWS = table_rows(README.read_text(encoding="utf-8"))
+ROWS = table_rows(CLIENT_DOC.read_text(encoding="utf-8"))
 
 
 class Recorder(CommandMethods):
@@ -104,8 +112,8 @@ def test_table_was_found() -> None:
 
 def test_every_command_method_has_a_row() -> None:
     listed = {r.method for r in ROWS}
-    assert command_methods() - listed == set(), "command methods missing from the README table"
-    assert listed - command_methods() == set(), "README rows without a command method"
+    assert command_methods() - listed == set(), "command methods missing from the table"
+    assert listed - command_methods() == set(), "table rows without a command method"
 
 
 @pytest.mark.parametrize("row", ROWS, ids=lambda r: r.method)
@@ -144,7 +152,7 @@ def test_parser_rejects_a_drifted_table() -> None:
 
 
 # -- the `gcu-async send` table of docs/cli.md ------------------------------------------
-CLI_DOC = Path(__file__).resolve().parents[1] / "docs" / "cli.md"
+CLI_DOC = ROOT / "docs" / "cli.md"
 CLI_START = "<!-- --8<-- [start:send-commands] -->"
 CLI_END = "<!-- --8<-- [end:send-commands] -->"
 
@@ -192,3 +200,92 @@ def test_cli_send_table_matches_the_cli() -> None:
         spec.call(spy, [0.5] * len(spec.params))
         assert spy.called == [row.method] == [spec.method], row.command
         assert hasattr(GcuClient, row.method)
+
+
+# -- the tables, generated from the catalogue ---------------------------------------------
+def _value(value: object) -> str:
+    if isinstance(value, enum.Enum):
+        return value.name
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def _param_cell(p: Parameter) -> str:
+    """``name``: range unit (default), the doc."""
+    text = f"`{p.name}`"
+    bounds = " ".join(part for part in (p.range_text(), p.unit) if part)
+    if p.choices is not None:
+        bounds = f"`{p.choices.__name__}` {p.range_text()}"
+    detail = "; ".join(part for part in (bounds, p.doc) if part)
+    if p.default is None:
+        detail += " (default: the current one)"
+    elif p.default is not REQUIRED:
+        detail += f" (default {_value(p.default)})"
+    return f"{text}: {detail}" if p.kind is not Kind.CAMERAS else f"{text} ({_value(p.default)})"
+
+
+def _notes(entry: CatalogueEntry) -> str:
+    rule = entry.status.value
+    return f"{entry.doc} Status: {rule}." if entry.status.name != "STANDARD" else entry.doc
+
+
+def client_table() -> str:
+    """The command table of docs/client.md, from the catalogue."""
+    lines = [START, "| Method | Opcode | Parameters: range unit; what (default) | Notes |",
+             "|---|---|---|---|"]  # fmt: skip
+    for e in CATALOGUE:
+        params = "<br>".join(_param_cell(p) for p in e.parameters) or "—"
+        lines.append(f"| `{e.method}` | 0x{e.opcode:02X} | {params} | {_notes(e)} |")
+    return "\n".join([*lines, END])
+
+
+def cli_table() -> str:
+    """The ``send`` table of docs/cli.md, from the commands (made from the catalogue)."""
+    from gcu_async.cli.send_commands import COMMANDS
+
+    lines = [CLI_START, "| Command | Arguments | Client method |", "|---|---|---|"]
+    for name, spec in COMMANDS.items():
+        args = " ".join(f"[`{p.name}`]" if p.optional else f"`{p.name}`" for p in spec.params)
+        lines.append(f"| `{name}` | {args or '—'} | `{spec.method}` |")
+    return "\n".join([*lines, CLI_END])
+
+
+def _section(text: str, start: str, end: str) -> str:
+    return text[text.index(start) : text.index(end) + len(end)]
+
+
+def test_client_table_is_the_catalogue() -> None:
+    text = CLIENT_DOC.read_text(encoding="utf-8")
+    assert _section(text, START, END) == client_table(), "run tests/test_docs_commands.py --write"
+
+
+def test_cli_table_is_the_catalogue() -> None:
+    text = CLI_DOC.read_text(encoding="utf-8")
+    assert _section(text, CLI_START, CLI_END) == cli_table(), "run with --write"
+
+
+def test_readme_table_if_any_is_the_docs_one() -> None:
+    text = README.read_text(encoding="utf-8")
+    if START in text:
+        assert _section(text, START, END) == client_table(), "README's command table is stale"
+
+
+def test_generated_table_parses_back() -> None:
+    """The parser above reads the generated table: one row per entry, its parameters."""
+    rows = table_rows(client_table())
+    assert [(r.method, r.opcode) for r in rows] == [(e.method, e.opcode) for e in CATALOGUE]
+    for row, entry in zip(rows, CATALOGUE, strict=True):
+        assert row.params == {p.name for p in entry.parameters}, entry.method
+
+
+def _write() -> None:
+    for path, start, end, table in ((CLIENT_DOC, START, END, client_table()),
+                                    (CLI_DOC, CLI_START, CLI_END, cli_table())):  # fmt: skip
+        text = path.read_text(encoding="utf-8")
+        path.write_text(text.replace(_section(text, start, end), table), encoding="utf-8")
+
+
+if __name__ == "__main__":
+    if sys.argv[1:] == ["--write"]:
+        _write()
+    else:
+        print(client_table())

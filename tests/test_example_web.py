@@ -94,7 +94,8 @@ async def test_status_reports_the_simulated_gimbal(web: Web) -> None:
     assert status["raw"]["main"]["mode_raw"] == status["mode_raw"]
     assert status["raw"]["sub"]["camera1_zoom_raw"] == round(status["zoom"]["camera1"] * 10)
 
-    assert (await web.command("euler_control", {"pitch": -30.0, "yaw": 120.0})).status_code == 200
+    response = await web.command("enter_euler_control", {"pitch": -30.0, "yaw": 120.0})
+    assert response.status_code == 200
 
     async def pointed() -> bool:
         s = await web.status()
@@ -116,7 +117,7 @@ async def test_page_and_assets_are_served_locally(web: Web) -> None:
     assert page.status_code == 200
     assert page.headers["content-type"].startswith("text/html")
     html = page.text
-    for element in ('id="zoom"', 'id="horizon"', 'id="compass"', 'data-command="photo"'):
+    for element in ('id="zoom"', 'id="horizon"', 'id="compass"', 'data-command="take_photo"'):
         assert element in html
     for forbidden in ('src="http', "src='http", 'href="http', "href='http", "//cdn"):
         assert forbidden not in html  # everything comes from this server
@@ -138,7 +139,7 @@ async def test_command_listing_matches_the_client(web: Web) -> None:
     listed = {c["name"]: c for c in response.json()["commands"]}
     assert set(listed) == set(COMMANDS)
     assert listed["zoom_to"]["params"]["ratio"] == {"type": "float", "required": True}
-    assert listed["photo"]["params"]["cameras"] == {"type": "int", "default": 1}
+    assert listed["take_photo"]["params"]["cameras"] == {"type": "int", "default": 1}
     for spec in COMMANDS.values():
         assert callable(getattr(GcuClient, spec.method)), spec.method
 
@@ -146,47 +147,69 @@ async def test_command_listing_matches_the_client(web: Web) -> None:
 # -- commands -----------------------------------------------------------------------------
 # name -> (parameters, opcode the simulator must execute)
 EVERY_COMMAND: dict[str, tuple[dict[str, Any], Opcode]] = {
-    "photo": ({}, Opcode.TAKE_PHOTO),
-    "record_start": ({}, Opcode.RECORD),
-    "record_stop": ({}, Opcode.RECORD),
-    "record": ({}, Opcode.RECORD),
+    "take_photo": ({}, Opcode.TAKE_PHOTO),
+    "start_recording": ({}, Opcode.RECORD),
+    "stop_recording": ({}, Opcode.RECORD),
+    "toggle_recording": ({}, Opcode.RECORD),
     "zoom_in": ({}, Opcode.ZOOM_IN),
-    "zoom_stop": ({}, Opcode.ZOOM_STOP),
+    "stop_zoom": ({}, Opcode.ZOOM_STOP),
     "zoom_out": ({"cameras": 1}, Opcode.ZOOM_OUT),
     "zoom_to": ({"ratio": 4.0}, Opcode.ZOOM_TO),
     "zoom_to_fraction": ({"fraction": 0.5}, Opcode.ZOOM_TO),
     "focus": ({}, Opcode.FOCUS),
-    "euler_control": ({"pitch": -10.0, "yaw": 350.0}, Opcode.EULER_CONTROL),
-    "angle_control": ({"pitch": -5.0, "yaw": 5.0}, Opcode.ANGLE_CONTROL),
-    "fpv": ({"pitch": -5.0}, Opcode.FPV),
-    "pointing_lock": ({"pitch_rate": 0.0, "yaw_rate": 2.0}, Opcode.POINTING_LOCK),
-    "pointing_follow": ({}, Opcode.POINTING_FOLLOW),
-    "top_down": ({"yaw_rate": 1.0}, Opcode.TOP_DOWN),
+    "enter_euler_control": ({"pitch": -10.0, "yaw": 350.0}, Opcode.EULER_CONTROL),
+    "enter_angle_control": ({"pitch": -5.0, "yaw": 5.0}, Opcode.ANGLE_CONTROL),
+    "enter_fpv": ({"pitch": -5.0}, Opcode.FPV),
+    "enter_pointing_lock": ({"pitch_rate": 0.0, "yaw_rate": 2.0}, Opcode.POINTING_LOCK),
+    "enter_pointing_follow": ({}, Opcode.POINTING_FOLLOW),
+    "enter_top_down": ({"yaw_rate": 1.0}, Opcode.TOP_DOWN),
     "centre": ({}, Opcode.CENTRE),
     "calibrate": ({"timeout": 5.0}, Opcode.CALIBRATION),
     "track": ({"box": [0.45, 0.45, 0.55, 0.55]}, Opcode.TRACK),
     "stop_tracking": ({}, Opcode.TRACK),
     "click_to_pan": ({"x": 0.7, "y": 0.3}, Opcode.CLICK_TO_PAN),
-    "palette": ({"palette": 3}, Opcode.PALETTE),
-    "night_vision": ({"mode": 2}, Opcode.NIGHT_VISION),
-    "ranging": ({"enabled": True}, Opcode.RANGING),
-    "osd": ({"enabled": True}, Opcode.OSD),
-    "digital_zoom": ({}, Opcode.DIGITAL_ZOOM),
-    "target_detection": ({"enabled": True}, Opcode.TARGET_DETECTION),
-    "picture_in_picture": ({"mode": 2}, Opcode.PICTURE_IN_PICTURE),
+    "set_palette": ({"palette": 3}, Opcode.PALETTE),
+    "set_night_vision": ({"mode": 2}, Opcode.NIGHT_VISION),
+    "set_ranging": ({"enabled": True}, Opcode.RANGING),
+    "set_osd": ({"enabled": True}, Opcode.OSD),
+    "set_digital_zoom": ({}, Opcode.DIGITAL_ZOOM),
+    "set_target_detection": ({"enabled": True}, Opcode.TARGET_DETECTION),
+    "set_picture_in_picture": ({"mode": 2}, Opcode.PICTURE_IN_PICTURE),
+    "set_area_temperature": ({"box": [0.1, 0.1, 0.5, 0.5]}, Opcode.AREA_TEMPERATURE),
+    "set_temperature_alarm": ({"high": 80.0, "low": -10.0}, Opcode.TEMPERATURE_ALARM),
+    "set_isotherm": ({"enabled": False}, Opcode.ISOTHERM),
+    "set_spot_temperature": ({"x": 0.25, "y": 0.75}, Opcode.SPOT_TEMPERATURE),
+    "set_osd_coordinates": ({"coordinates": 1}, Opcode.OSD_COORDINATES),
+    "set_image_auto_flip": ({"enabled": False}, Opcode.IMAGE_AUTO_FLIP),
+    "set_time_zone": ({"offset_hours": 2}, Opcode.TIME_ZONE),
 }
-FAILS_ON_D90PRO_TA = {"fill_light": ({"brightness": 100}, Opcode.FILL_LIGHT)}
+FAILS_ON_D90PRO_TA = {"set_fill_light": ({"brightness": 100}, Opcode.FILL_LIGHT)}
+FAIL_WITHOUT_INS: dict[str, tuple[dict[str, Any], Opcode]] = {
+    "enter_gaze_lock": ({}, Opcode.GAZE_LOCK),
+    "gaze_at": ({"latitude": 47.39, "longitude": 8.54, "altitude": 420.0},
+                Opcode.GAZE_AT_COORDINATES),
+}  # fmt: skip
+"""The web app sends no aircraft INS data: the simulated GCU refuses the gaze commands."""
 
 
 def test_every_exposed_command_is_covered() -> None:
-    assert set(EVERY_COMMAND) | set(FAILS_ON_D90PRO_TA) == set(COMMANDS)
+    covered = set(EVERY_COMMAND) | set(FAILS_ON_D90PRO_TA) | set(FAIL_WITHOUT_INS)
+    assert covered == set(COMMANDS)
+
+
+async def test_gaze_commands_reach_the_gcu_and_fail_without_ins(web: Web) -> None:
+    for name, (params, opcode) in FAIL_WITHOUT_INS.items():
+        response = await web.command(name, params)
+        assert response.status_code == 409, (name, response.text)
+        assert response.json()["opcode"] == opcode
+        assert web.sim.simulator.model.executions[opcode] == 1
 
 
 async def test_every_command_runs_on_the_simulator(web: Web) -> None:
     model = web.sim.simulator.model
     expected: dict[int, int] = {}
     for name, (params, opcode) in EVERY_COMMAND.items():
-        if name == "record_stop":  # the client decides from the flags it has seen
+        if name == "stop_recording":  # the client decides from the flags it has seen
             await eventually(lambda: _recording(web, True), what="recording flag")
         response = await web.command(name, params)
         assert response.status_code == 200, (name, response.text)
@@ -211,11 +234,11 @@ async def _recording(web: Web, value: bool) -> bool:
 
 async def test_record_start_when_recording_sends_nothing(web: Web) -> None:
     executions = web.sim.simulator.model.executions
-    assert (await web.command("record_start")).status_code == 200
+    assert (await web.command("start_recording")).status_code == 200
     await eventually(lambda: _recording(web, True), what="recording flag")
-    response = await web.command("record_start")
+    response = await web.command("start_recording")
     assert response.status_code == 200
-    assert response.json() == {"command": "record_start", "feedback": None}
+    assert response.json() == {"command": "start_recording", "feedback": None}
     assert executions[Opcode.RECORD] == 1
 
 
@@ -234,7 +257,7 @@ async def test_ahead_points_ahead_of_the_aircraft(web: Web) -> None:
     yaw relative to the aircraft), not north, and keeps it there when the aircraft turns."""
     html = (await web.http.get("/")).text
     ahead, east, down = (page_button(html, label) for label in ("Ahead", "East", "Down 45°"))
-    assert ahead == ("angle_control", {"pitch": 0, "yaw": 0})
+    assert ahead == ("enter_angle_control", {"pitch": 0, "yaw": 0})
     model = web.sim.simulator.model
 
     async def pointing(mode: str, pitch: float, yaw: float) -> bool:
@@ -273,18 +296,18 @@ BAD_PARAMETERS: list[tuple[str, Any, str]] = [
     ("zoom_to", {"ratio": "ten"}, "ratio: expected a number, got string 'ten'"),
     ("zoom_to", {"ratio": True}, "ratio: expected a number"),
     ("zoom_to_fraction", {"fraction": 1.5}, "fraction"),
-    ("photo", {"camera": 1}, "unknown parameter(s) camera (allowed: cameras)"),
-    ("photo", {"cameras": 1.5}, "cameras: expected an integer"),
-    ("photo", [1, 2], "the body must be a JSON object, got array"),
-    ("euler_control", {"pitch": -200.0}, "pitch"),
-    ("pointing_lock", {"yaw_rate": math.inf}, "yaw_rate: inf is not a finite number"),
+    ("take_photo", {"camera": 1}, "unknown parameter(s) camera (allowed: cameras)"),
+    ("take_photo", {"cameras": 1.5}, "cameras: expected an integer"),
+    ("take_photo", [1, 2], "the body must be a JSON object, got array"),
+    ("enter_euler_control", {"pitch": -200.0}, "pitch"),
+    ("enter_pointing_lock", {"yaw_rate": math.inf}, "yaw_rate: inf is not a finite number"),
     ("track", {"box": [0.1, 0.2, 0.3]}, "box: expected [left, top, right, bottom]"),
     ("track", {"box": [0.6, 0.6, 0.4, 0.4]}, "box"),
     ("click_to_pan", {"x": 0.5}, "y: required parameter"),
-    ("night_vision", {"mode": 7}, "7"),
-    ("palette", {"palette": 11}, "palette"),
-    ("ranging", {"enabled": 1}, "enabled: expected true or false"),
-    ("fill_light", {"brightness": 256}, "brightness"),
+    ("set_night_vision", {"mode": 7}, "7"),
+    ("set_palette", {"palette": 11}, "palette"),
+    ("set_ranging", {"enabled": 1}, "enabled: expected true or false"),
+    ("set_fill_light", {"brightness": 256}, "brightness"),
     ("calibrate", {"timeout": -1.0}, "timeout"),
     ("centre", {"now": True}, "unknown parameter(s) now (allowed: none)"),
 ]
@@ -309,21 +332,22 @@ async def test_unknown_command_malformed_body_and_wrong_method(web: Web) -> None
     response = await web.command("self_destruct")
     assert response.status_code == 404
     assert "self_destruct" in response.json()["error"]
-    assert "photo" in response.json()["commands"]
+    assert "take_photo" in response.json()["commands"]
     response = await web.http.post(
-        "/api/commands/photo", content=b"{not json", headers={"content-type": "application/json"}
+        "/api/commands/take_photo", content=b"{not json",
+        headers={"content-type": "application/json"},
     )
     assert response.status_code == 400
     assert "not valid JSON" in response.json()["error"]
-    assert (await web.http.get("/api/commands/photo")).status_code == 405
+    assert (await web.http.get("/api/commands/take_photo")).status_code == 405
     # an empty body means "all defaults"
-    response = await web.http.post("/api/commands/photo", content=b"")
+    response = await web.http.post("/api/commands/take_photo", content=b"")
     assert response.status_code == 200
     assert web.sim.simulator.model.state.camera.photos == {1: 1}
 
 
 async def test_gcu_failure_is_409_with_opcode_and_status(web: Web) -> None:
-    response = await web.command("fill_light", {"brightness": 100})
+    response = await web.command("set_fill_light", {"brightness": 100})
     assert response.status_code == 409
     body = response.json()
     assert body["kind"] == "CommandFailed"
@@ -339,7 +363,7 @@ async def test_commands_a_z6a_lacks_are_409(web: Web) -> None:
     assert response.status_code == 409
     body = response.json()
     assert (body["opcode"], body["status"], body["failed_cameras"]) == (0x25, 0x01, 0x01)
-    response = await web.command("palette", {"palette": 2})
+    response = await web.command("set_palette", {"palette": 2})
     assert response.status_code == 409
     assert (response.json()["opcode"], response.json()["status"]) == (0x2A, 0x02)
     # what the Z-6A does support still works
@@ -377,7 +401,7 @@ async def test_link_lost_is_503_and_reported_live(web: Web) -> None:
             return (await web.status())["link"]["up"] is False
 
         await eventually(link_down, what="link down in /api/status")
-        response = await web.command("photo")
+        response = await web.command("take_photo")
         assert response.status_code == 503
         assert response.json()["kind"] == "CommandLinkLost"
         assert response.json()["outcome"] == "not sent"
@@ -395,7 +419,7 @@ async def test_link_lost_is_503_and_reported_live(web: Web) -> None:
             return (await web.status())["link"]["up"] is True
 
         await eventually(link_up, what="link restored")
-        assert (await web.command("photo")).status_code == 200
+        assert (await web.command("take_photo")).status_code == 200
         message = await next_message(ws)
         assert message["type"] == "telemetry"
         assert message["link"]["restored_count"] >= 1
@@ -409,7 +433,7 @@ async def test_telemetry_follows_a_command(web: Web) -> None:
         assert first["mode"] == "POINTING_FOLLOW"
         assert first["pod"]["model"] == "D-90Pro(TA)"
         assert first["link"]["up"] is True
-        response = await web.command("euler_control", {"pitch": -30.0, "yaw": 90.0})
+        response = await web.command("enter_euler_control", {"pitch": -30.0, "yaw": 90.0})
         assert response.status_code == 200
         yaws: list[float] = []
         seqs: list[int] = [first["seq"]]
@@ -485,7 +509,7 @@ async def test_app_starts_before_the_gcu_and_connects_when_it_answers(gcu_sim: S
         assert "no reply from the GCU within 0.3 s" in body["connection"]["last_error"]
         assert f"waiting for the GCU at {gcu_sim.url}" in body["error"]
         # commands are refused without sending; parameters are still checked first
-        response = await web.command("photo")
+        response = await web.command("take_photo")
         assert response.status_code == 503
         assert (response.json()["kind"], response.json()["outcome"]) == ("NotConnected", "not sent")
         assert (await web.command("zoom_to", {"ratio": "ten"})).status_code == 422
@@ -506,7 +530,7 @@ async def test_app_starts_before_the_gcu_and_connects_when_it_answers(gcu_sim: S
         status = await web.status()
         assert status["connection"]["state"] == "connected"
         assert status["connection"]["last_error"] is None
-        assert (await web.command("photo")).status_code == 200
+        assert (await web.command("take_photo")).status_code == 200
         assert gcu_sim.simulator.model.executions[Opcode.TAKE_PHOTO] == 1
 
 
@@ -529,7 +553,7 @@ async def test_app_waits_for_a_gcu_powered_later() -> None:
             status = await web.status()
             assert status["pod"]["model"] == "D-90Pro(TA)"
             assert status["link"]["up"] is True
-            assert (await web.command("photo")).status_code == 200
+            assert (await web.command("take_photo")).status_code == 200
             assert sim.model.executions[Opcode.TAKE_PHOTO] == 1
 
 
@@ -548,7 +572,7 @@ async def test_client_is_reopened_when_its_transport_gives_up(gcu_sim: SimHandle
         await eventually(reopened, timeout=5.0, what="the client reopened")
         assert connection.connects == 2
         assert web.gcu.transport.connected
-        assert (await web.command("photo")).status_code == 200
+        assert (await web.command("take_photo")).status_code == 200
         assert gcu_sim.simulator.model.executions[Opcode.TAKE_PHOTO] == 1
 
 

@@ -159,7 +159,7 @@ async def test_page_drives_the_gimbal(web: Web, browser: Any, tmp_path: Path) ->
     assert transform.startswith("rotate(-9")  # the compass card turned to east
     assert page.errors == []  # no script errors, no failed loads (e.g. a favicon)
     # an error shows up on the page too (fill light: the pod lacks it)
-    await page.value("send('fill_light', {brightness: 10})")
+    await page.value("send('set_fill_light', {brightness: 10})")
     await page.until("document.getElementById('result').textContent.includes('HTTP 409')")
     assert page.unexpected_errors() == []
 
@@ -241,7 +241,8 @@ async def test_layout_fits_the_screen(
     page = await open_page(browser, web, viewport)
     await page.until(f"{LIVE} && document.getElementById('pod').textContent.includes('D-90')")
     # wide numbers in every row (pitch −89.00, yaw 181.00, relative Z −179.00)
-    assert (await web.command("euler_control", {"pitch": -89.0, "yaw": 181.0})).status_code == 200
+    response = await web.command("enter_euler_control", {"pitch": -89.0, "yaw": 181.0})
+    assert response.status_code == 200
     await page.until(yaw_near(181, 1.0))
     layout = await page.value(LAYOUT)
     await page.shot(tmp_path / f"layout-{name}-{viewport['width']}.png")
@@ -275,7 +276,7 @@ async def test_outage_marks_values_stale_and_disables_commands(
     assert await page.value(dimmed) < 1
     assert await page.page.get_by_role("button", name="Photo").is_disabled()
     # a command that was on its way when the link went down ends in the error banner
-    await page.value("send('photo', {})")
+    await page.value("send('take_photo', {})")
     await page.until("document.getElementById('result').textContent.includes('HTTP 503')")
     assert await page.value("document.getElementById('result').className") == "error"
     await page.shot(tmp_path / "outage-390.png")

@@ -22,7 +22,8 @@ def lan() -> Iterator[Lan]:
 def test_commands_and_telemetry_over_tcp_across_hosts(lan: Lan) -> None:
     sim, line = lan.sim("--listen", f"tcp://{GCU_ADDRESS}:2332")
     assert f"listening on tcp://{GCU_ADDRESS}:2332" in line
-    done = lan.cli(lan.host, "send", GCU_URL, "euler", "0", "-45", "-60", "--timeout", "5")
+    done = lan.cli(lan.host, "send", GCU_URL, "enter-euler-control", "0", "-45", "-60",
+                   "--timeout", "5")
     assert done.returncode == 0, (done.stdout, done.stderr)
     result = json.loads(done.stdout)
     assert result["ok"] and result["command"] == "EULER_CONTROL", result
@@ -43,6 +44,6 @@ def test_commands_and_telemetry_over_tcp_across_hosts(lan: Lan) -> None:
 def test_no_tcp_server_on_host_b(lan: Lan) -> None:
     """Control: the same command to host B's own address is refused (exit 1)."""
     lan.sim("--listen", f"tcp://{GCU_ADDRESS}:2332")
-    done = lan.cli(lan.host, "send", f"tcp://{HOST_ADDRESS}", "photo", "--timeout", "1")
+    done = lan.cli(lan.host, "send", f"tcp://{HOST_ADDRESS}", "take-photo", "--timeout", "1")
     assert done.returncode == 1, (done.stdout, done.stderr)
     assert json.loads(done.stdout)["ok"] is False

@@ -47,7 +47,7 @@ def _real_gcu(lan: Lan) -> Any:
 def test_replies_leave_port_2337_for_the_subnet_broadcast_address_port_2338(lan: Lan) -> None:
     sim = _real_gcu(lan)
     listener = lan.sniffer(2338)  # a third party on host B: it never sends anything
-    done = lan.cli(lan.host, "send", GCU_URL, "photo", "--timeout", "5")
+    done = lan.cli(lan.host, "send", GCU_URL, "take-photo", "--timeout", "5")
     assert done.returncode == 0, done.stderr
     result = json.loads(done.stdout)
     assert result["ok"] and result["command"] == "TAKE_PHOTO", result
@@ -71,7 +71,8 @@ def test_app_and_monitor_on_port_2338_at_once(lan: Lan) -> None:
     monitor = lan.start(lan.host, *CLI, "monitor", GCU_URL, "--json", "--interval", "0.25")
     lines = [json.loads(line(monitor, 10.0, "monitor"))]
     assert lines[0]["link"]["up"] and lines[0]["status"] is not None
-    done = lan.cli(lan.host, "send", GCU_URL, "euler", "0", "-30", "20", "--timeout", "5")
+    done = lan.cli(lan.host, "send", GCU_URL, "enter-euler-control", "0", "-30", "20",
+                   "--timeout", "5")
     assert done.returncode == 0, (done.stdout, done.stderr)
     result = json.loads(done.stdout)
     assert result["ok"] and result["command"] == "EULER_CONTROL", result
@@ -103,7 +104,7 @@ def test_an_exclusive_client_cannot_share_the_port(lan: Lan) -> None:
     beside another listener — the sharing above is the transport's doing."""
     _real_gcu(lan)
     listener = lan.sniffer(2338)
-    done = lan.cli(lan.host, "send", f"{GCU_URL}?reuse_port=0", "photo", "--timeout", "2")
+    done = lan.cli(lan.host, "send", f"{GCU_URL}?reuse_port=0", "take-photo", "--timeout", "2")
     assert done.returncode == 1, (done.stdout, done.stderr)
     assert "cannot bind 0.0.0.0:2338" in done.stdout, done.stdout
     assert datagrams(stop(listener)[0]) == []  # nothing was sent, nothing answered
@@ -147,7 +148,7 @@ def test_a_gcu_host_with_nothing_on_2337_is_reported_by_its_icmp_error(lan: Lan)
     of only timing out (docs/transports.md, "UDP errors and reopening")."""
     if not sys.platform.startswith("linux"):
         pytest.skip("ICMP errors on an unconnected socket are read on Linux only")
-    done = lan.cli(lan.host, "send", GCU_URL, "photo", "--timeout", "1")
+    done = lan.cli(lan.host, "send", GCU_URL, "take-photo", "--timeout", "1")
     assert done.returncode == 1, (done.stdout, done.stderr)
     assert json.loads(done.stdout)["ok"] is False
     expected = f"ICMP port unreachable from {GCU_ADDRESS} for a datagram to {GCU_ADDRESS}:2337"

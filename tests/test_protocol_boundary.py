@@ -60,7 +60,7 @@ from gcu_async.protocol import (
     Opcode,
     Osd,
     OsdCoordinates,
-    OsdCoordinatesCommand,
+    OsdCoordinateSource,
     PodModel,
     SpotTemperature,
     TakePhoto,
@@ -221,8 +221,8 @@ add_command(GazeAtCoordinates, "longitude", "real", low=-180.0, high=180.0, step
             valid=(-180.0, 180.0))  # fmt: skip
 add_command(GazeAtCoordinates, "altitude", "real", low=-2147483.648, high=2147483.647,
             step=1e-3, valid=(-2147483.648, 2147483.647))  # fmt: skip
-add_command(OsdCoordinatesCommand, "coordinates", "enum", low=0, high=1,
-            valid=(*OsdCoordinates, 0, 1))  # fmt: skip
+add_command(OsdCoordinates, "coordinates", "enum", low=0, high=1,
+            valid=(*OsdCoordinateSource, 0, 1))  # fmt: skip
 add_command(NightVision, "mode", "enum", low=0, high=2, valid=(*NightVisionMode, 0, 2))
 add_command(COMMAND_TYPES[Opcode.TIME_ZONE], "offset_hours", "int", low=-12, high=14,
             valid=(-12, 0, 14))  # fmt: skip
@@ -809,7 +809,7 @@ def _values(p: P) -> st.SearchStrategy[Any]:
         st.binary(max_size=2), st.decimals(allow_nan=True), st.fractions(),
         st.complex_numbers(max_magnitude=10), st.just(object()),
         st.lists(st.integers(), max_size=2),
-        st.sampled_from([*CameraMask, *NightVisionMode, *OsdCoordinates]),
+        st.sampled_from([*CameraMask, *NightVisionMode, *OsdCoordinateSource]),
     )  # fmt: skip
     values = st.one_of(*near, anything)
     return values.filter(lambda v: not (p.optional and v is None))
@@ -874,7 +874,7 @@ def test_arbitrary_values_accepted_iff_valid(data: st.DataObject) -> None:
         (lambda: Osd("false"), TypeError, "enabled"),  # type: ignore[arg-type]
         (lambda: Osd(None), TypeError, "enabled"),  # type: ignore[arg-type]
         (lambda: NightVision(mode=1.0), TypeError, "mode"),  # type: ignore[arg-type]
-        (lambda: OsdCoordinatesCommand(True), TypeError, "coordinates"),  # type: ignore[arg-type]
+        (lambda: OsdCoordinates(True), TypeError, "coordinates"),  # type: ignore[arg-type]
         (lambda: ControlValues.check(ControlValues(99999, 0, 0)), FieldRangeError,
          "control.roll_raw"),
         (lambda: HostMainFrame.build(control=ControlValues(99999, 0, 0)), FieldRangeError,
@@ -917,7 +917,7 @@ def test_checked_values_are_stored_as_their_types() -> None:
     assert type(SpotTemperature(point=(0.5, 0.5)).point) is ImagePoint
     night = NightVision(1)  # type: ignore[arg-type]
     assert night.mode is NightVisionMode.ON and night.as_dict()["params"]["mode"] == "ON"
-    assert OsdCoordinatesCommand(1).coordinates is OsdCoordinates.TARGET  # type: ignore[arg-type]
+    assert OsdCoordinates(1).coordinates is OsdCoordinateSource.TARGET  # type: ignore[arg-type]
     state = AircraftState(attitude=(1.0, 2.0, 3.0), position=(1.0, 2.0, 3.0))
     assert type(state.attitude) is Attitude and type(state.position) is GeoPosition
     command = UnknownCommand(0x42, bytearray(b"\x01"))

@@ -38,6 +38,7 @@ from gcu_async.protocol import (
     HostMainFrame,
     HostPacket,
     HostSubFrame,
+    NullCommand,
     Opcode,
     UnknownCommand,
     UnknownSubFrame,
@@ -47,8 +48,11 @@ from gcu_async.protocol import (
     decode_host_packet,
     decode_packet,
 )
+from gcu_async.protocol.catalogue import CATALOGUE
 
-ALL_COMMAND_CLASSES = [*COMMAND_TYPES.values(), UnknownCommand]
+ALL_COMMAND_CLASSES = [*dict.fromkeys(e.command for e in CATALOGUE), NullCommand, UnknownCommand]
+"""The command classes of the catalogue (a command a method sends: a new catalogue entry
+without a strategy fails below), the null command (sent by the session) and unknown ones."""
 
 
 def _subclasses(cls: type) -> set[type]:
@@ -67,6 +71,7 @@ def test_every_command_class_has_a_strategy() -> None:
 
 def test_command_types_cover_every_opcode_and_every_public_command_class() -> None:
     assert set(COMMAND_TYPES) == {int(op) for op in Opcode}
+    assert set(COMMAND_TYPES.values()) | {UnknownCommand} == set(ALL_COMMAND_CLASSES)
     for code, cls in COMMAND_TYPES.items():
         assert int(cls.OPCODE) == code
     # dataclass(slots=True) leaves the pre-slots class behind: keep the module-level ones

@@ -139,8 +139,8 @@ def test_queue_timeout_is_never_sent_and_wire_timeout_is_unknown() -> None:
 
 
 def test_concurrent_mode_commands_never_send_one_modes_values_in_another() -> None:
-    """gather(euler_control(...), pointing_lock(...)) sent Euler angles marked valid inside
-    pointing-lock packets (read as rates)."""
+    """gather(enter_euler_control(...), enter_pointing_lock(...)) sent Euler angles marked
+    valid inside pointing-lock packets (read as rates)."""
     rig = Rig(udp_session(), bound=0.010, requests=Direction(extreme=0.3, seed=3),
               replies=Direction(extreme=0.3, seed=4))  # fmt: skip
     rig.open()

@@ -166,7 +166,7 @@ async def test_tcp_peer_that_stalls_cannot_run_stale_control_packets_later() -> 
             gcu.transport.send = tap_send  # type: ignore[method-assign]
             gcu.session.receive = tap_receive  # type: ignore[method-assign]
             gcu.on_link_change(lambda e: lost.set() if e.kind.value == "lost" else None)
-            await gcu.pointing_lock(yaw_rate=5.0)
+            await gcu.enter_pointing_lock(yaw_rate=5.0)
             await asyncio.sleep(0.2)
             assert gcu.control_valid
             sim.stall(3.0)
@@ -237,11 +237,13 @@ async def test_concurrent_mode_commands_never_cross_their_control_values() -> No
     recorder = Recorder(sim)
     async with sim.serve_udp("127.0.0.1", 0) as server, connect(server.url, local_port=0) as gcu:
         for _ in range(10):
-            await asyncio.gather(gcu.euler_control(pitch=-45.0, yaw=30.0),
-                                 gcu.pointing_lock(pitch_rate=5.0, yaw_rate=-5.0))  # fmt: skip
+            await asyncio.gather(
+                gcu.enter_euler_control(pitch=-45.0, yaw=30.0),
+                gcu.enter_pointing_lock(pitch_rate=5.0, yaw_rate=-5.0),
+            )
             await asyncio.sleep(0.05)
-            await asyncio.gather(gcu.pointing_lock(pitch_rate=5.0, yaw_rate=-5.0),
-                                 gcu.euler_control(pitch=-45.0, yaw=30.0))  # fmt: skip
+            await asyncio.gather(gcu.enter_pointing_lock(pitch_rate=5.0, yaw_rate=-5.0),
+                                 gcu.enter_euler_control(pitch=-45.0, yaw=30.0))  # fmt: skip
             await asyncio.sleep(0.05)
     angles = (0, -4500, 3000)
     valid = [(p.main.control, mode) for _, p, mode in recorder.packets if p.main.control_valid]

@@ -20,7 +20,7 @@ from gcu_async.protocol import (
     NightVisionMode,
     Osd,
     OsdCoordinates,
-    OsdCoordinatesCommand,
+    OsdCoordinateSource,
     Palette,
     PictureInPicture,
     PodStatus,
@@ -245,7 +245,7 @@ def test_display_settings_show_in_the_camera_flags() -> None:
     assert sub.auto_flip
     assert sub.pip_mode == 0
     rig.command(Osd(True))
-    rig.command(OsdCoordinatesCommand(OsdCoordinates.TARGET))
+    rig.command(OsdCoordinates(OsdCoordinateSource.TARGET))
     rig.command(ImageAutoFlip(False))
     rig.command(TargetDetection(True))
     rig.command(TimeZone(-5))

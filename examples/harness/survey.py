@@ -85,7 +85,7 @@ async def run_survey(
     report = SurveyReport(photos_requested=photos)
     step = _Steps(gcu, report, attempts, reconnect_timeout)
     try:
-        await step.run("top-down", gcu.top_down)
+        await step.run("top-down", gcu.enter_top_down)
         if not await _settle(gcu, lambda: _looking_down(gcu), settle_timeout):
             report.notes.append("camera did not reach -90° pitch in time")
         try:

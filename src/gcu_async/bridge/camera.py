@@ -321,7 +321,7 @@ def zoom_plan(cmd: CommandIn, view: GcuView, config: CameraConfig) -> Plan:
     if kind == mavlink.ZOOM_TYPE_CONTINUOUS:
         if value not in (-1.0, 0.0, 1.0):
             return refuse(DENIED, f"continuous zoom {value:g}: expected -1, 0 or 1")
-        method = {-1.0: "zoom_out", 0.0: "zoom_stop", 1.0: "zoom_in"}[value]
+        method = {-1.0: "zoom_out", 0.0: "stop_zoom", 1.0: "zoom_in"}[value]
         return run(GcuCall(method))
     if kind == mavlink.ZOOM_TYPE_RANGE:
         if not 0.0 <= value <= 100.0:

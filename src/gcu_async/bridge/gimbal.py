@@ -13,10 +13,10 @@ Control requests map onto the GCU's modes:
 =====================================  ===============================================
 request                                client call (mode)
 =====================================  ===============================================
-angles, yaw lock (earth frame)         ``euler_control`` (Euler control, 0x14)
-angles, yaw follow (vehicle frame)     ``angle_control`` (angle control, 0x10)
-rates only, yaw lock                   ``pointing_lock`` (pointing lock, 0x11)
-rates only, yaw follow                 ``pointing_follow`` (pointing follow, 0x12)
+angles, yaw lock (earth frame)         ``enter_euler_control`` (Euler control, 0x14)
+angles, yaw follow (vehicle frame)     ``enter_angle_control`` (angle control, 0x10)
+rates only, yaw lock                   ``enter_pointing_lock`` (pointing lock, 0x11)
+rates only, yaw follow                 ``enter_pointing_follow`` (pointing follow, 0x12)
 neither (all NaN)                      ``release_control`` (values invalid: hold)
 NEUTRAL flag                           ``centre``
 =====================================  ===============================================
@@ -223,7 +223,7 @@ def attitude_call(
         mode = Mode.EULER_CONTROL if yaw_lock else Mode.ANGLE_CONTROL
         if view.in_mode(mode):
             return GcuCall("set_angles", angles)
-        method = "euler_control" if yaw_lock else "angle_control"
+        method = "enter_euler_control" if yaw_lock else "enter_angle_control"
         return GcuCall(method, angles, mode=mode)
     if math.isfinite(pitch_rate) or math.isfinite(yaw_rate):
         rates = (pitch_rate if math.isfinite(pitch_rate) else 0.0,
@@ -231,7 +231,7 @@ def attitude_call(
         mode = Mode.POINTING_LOCK if yaw_lock else Mode.POINTING_FOLLOW
         if view.in_mode(mode):
             return GcuCall("set_rates", {"pitch": rates[0], "yaw": rates[1]})
-        method = "pointing_lock" if yaw_lock else "pointing_follow"
+        method = "enter_pointing_lock" if yaw_lock else "enter_pointing_follow"
         return GcuCall(method, {"pitch_rate": rates[0], "yaw_rate": rates[1]}, mode=mode)
     return GcuCall("release_control")
 
@@ -359,12 +359,12 @@ def roi_location_plan(cmd: CommandIn, view: GcuView) -> Plan:
 
 def roi_none_plan(cmd: CommandIn, view: GcuView) -> Plan:
     """MAV_CMD_DO_SET_ROI_NONE: stop gazing; the camera follows the aircraft again
-    (``pointing_follow`` with zero rates)."""
+    (``enter_pointing_follow`` with zero rates)."""
     if not view.control.allows(cmd.source):
         return refuse(DENIED, "another component controls the gimbal")
     if not _device_ok(cmd.param(1)):
         return refuse(DENIED, f"gimbal device {cmd.param(1):g} is not this gimbal")
-    return run(GcuCall("pointing_follow", {"pitch_rate": 0.0, "yaw_rate": 0.0},
+    return run(GcuCall("enter_pointing_follow", {"pitch_rate": 0.0, "yaw_rate": 0.0},
                        mode=Mode.POINTING_FOLLOW))  # fmt: skip
 
 

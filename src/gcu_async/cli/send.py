@@ -54,7 +54,8 @@ def _shared_options(parser: argparse.ArgumentParser, *, cameras: bool = True) ->
     parser.add_argument(
         "--hold", type=float, default=None, metavar="SECONDS",
         help="after a mode command, keep sending its control values this long (default 3 s "
-        "for euler/angle-control/fpv, stopping early once the camera is there; 0 otherwise)",
+        "for enter-euler-control/enter-angle-control/enter-fpv, stopping early once the camera "
+        "is there; 0 otherwise)",
     )
     parser.add_argument(
         "--cameras", type=parse_cameras, default=None, metavar="LIST",
@@ -70,10 +71,11 @@ def _shared_options(parser: argparse.ArgumentParser, *, cameras: bool = True) ->
 def _command_list() -> str:
     """The commands for ``gcu-async send --help``."""
     lines = ["commands (gcu-async send URL COMMAND --help: its arguments, units, ranges):"]
+    width = max(map(len, COMMANDS))
     for name, spec in COMMANDS.items():
         args = [f"[{p.name}]" if p.optional else p.name for p in spec.params]
-        lines.append(f"  {name:<18} {' '.join([*args, f'-> {spec.method}()'])}")
-        lines.append(f"  {'':<18} {spec.summary}")
+        lines.append(f"  {name:<{width}} {' '.join([*args, f'-> {spec.method}()'])}")
+        lines.append(f"  {'':<{width}} {spec.summary}")
     return "\n".join(lines)
 
 
@@ -156,9 +158,9 @@ def resolve(args: argparse.Namespace) -> Invocation:
     command_parser(args.name).parse_args(args.args, namespace=args)
     given = [getattr(args, f"arg_{p.name}") for p in spec.params]
     values = [v for v in given if v is not None]
-    optional = [p.name for p in spec.params if p.optional]
-    if spec.together and len(spec.params) > len(values) > len(spec.params) - len(optional):
-        raise ValueError(f"{args.name}: give all of {' '.join(optional)}, or none")
+    group = [name for name in spec.together if getattr(args, f"arg_{name}") is not None]
+    if group and len(group) != len(spec.together):
+        raise ValueError(f"{args.name}: give all of {' '.join(spec.together)}, or none")
     if args.timeout is not None and not 0 < args.timeout < float("inf"):
         raise ValueError(f"--timeout: {args.timeout!r} must be a number of seconds > 0")
     extra: dict[str, Any] = {}
@@ -191,17 +193,19 @@ async def _send(inv: Invocation) -> tuple[Any, dict[str, Any]]:
         # modes stop early once the camera's attitude matches the target).
         deadline = time.monotonic() + inv.hold
         while time.monotonic() < deadline:
-            if inv.spec.angle_target and _arrived(gcu, inv.values):
+            if inv.spec.angle_target and _arrived(gcu, inv.spec.build(inv.values)[1]):
                 break
             await asyncio.sleep(0.05)
         return feedback, {"attitude_deg": gcu.status.attitude._asdict(),
                           "mode": gcu.status.mode.name}  # fmt: skip
 
 
-def _arrived(gcu: GcuClient, values: list[Any]) -> bool:
-    pitch, yaw = float(values[1]), float(values[2])
+def _arrived(gcu: GcuClient, targets: dict[str, Any]) -> bool:
+    """The camera is within 0.5° of the pitch and yaw given (those left out: any)."""
     att = gcu.status.attitude
-    return abs(att.pitch - pitch) < 0.5 and abs((att.yaw - yaw + 180) % 360 - 180) < 0.5
+    pitch, yaw = targets.get("pitch"), targets.get("yaw")
+    return (pitch is None or abs(att.pitch - float(pitch)) < 0.5) and (
+        yaw is None or abs((att.yaw - float(yaw) + 180) % 360 - 180) < 0.5)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -1,22 +1,26 @@
-"""The commands of ``gcu-async send``: one per client command method, with the arguments
-each takes on the command line (units and ranges for its ``--help``) and how they map onto
-the method's parameters (docs/cli.md, "gcu-async send")."""
+"""The commands of ``gcu-async send``: one per entry of the command catalogue
+(:mod:`gcu_async.protocol.catalogue`), named as its method with dashes, with the arguments
+each takes on the command line (units and ranges for its ``--help``, from the catalogue) and
+how they map onto the method's parameters (docs/cli.md, "gcu-async send")."""
 
 from __future__ import annotations
 
 import argparse
 import asyncio
 import inspect
+import itertools
 import re
 import textwrap
 from collections.abc import Callable
 from dataclasses import dataclass
+from enum import IntEnum
 from typing import Any, NamedTuple
 
-from gcu_async.client.api import ALTITUDE_RANGE, RATE_LIMIT, CommandMethods
+from gcu_async.client.api import CommandMethods
 from gcu_async.client.client import GcuClient
-from gcu_async.protocol.commands import ZOOM_RATIO_MAX, Command, command_code
-from gcu_async.protocol.enums import CameraMask, NightVisionMode, OsdCoordinates
+from gcu_async.protocol.catalogue import CATALOGUE, CatalogueEntry, Kind, Parameter
+from gcu_async.protocol.commands import IMAGE_SCALE, Command, ImageBox, command_code
+from gcu_async.protocol.enums import CameraMask
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuSubFrame
 from gcu_async.protocol.host_frames import ControlValues
@@ -33,18 +37,17 @@ def _switch(text: str) -> bool:
     raise argparse.ArgumentTypeError(f"expected on/off, got {text!r}")
 
 
-def _night(text: str) -> NightVisionMode:
-    try:
-        return NightVisionMode[text.strip().upper()]
-    except KeyError:
-        raise argparse.ArgumentTypeError(f"expected off/on/auto, got {text!r}") from None
+def _choice(choices: type[IntEnum]) -> Callable[[str], IntEnum]:
+    """A converter of a member name (any case) of ``choices``."""
+    names = "/".join(m.name.lower() for m in choices)
 
+    def convert(text: str) -> IntEnum:
+        try:
+            return choices[text.strip().upper()]
+        except KeyError:
+            raise argparse.ArgumentTypeError(f"expected {names}, got {text!r}") from None
 
-def _osd_coords(text: str) -> OsdCoordinates:
-    try:
-        return OsdCoordinates[text.strip().upper()]
-    except KeyError:
-        raise argparse.ArgumentTypeError(f"expected aircraft/target, got {text!r}") from None
+    return convert
 
 
 CAMERA_NAMES: dict[str, CameraMask] = {
@@ -88,24 +91,6 @@ class Param(NamedTuple):
 Build = Callable[[list[Any]], tuple[tuple[Any, ...], dict[str, Any]]]
 
 
-def _positional(values: list[Any]) -> tuple[tuple[Any, ...], dict[str, Any]]:
-    return tuple(values), {}
-
-
-def _keywords(*names: str) -> Build:
-    """The values given (maybe fewer than ``names``) as keyword arguments."""
-    return lambda values: ((), dict(zip(names, values, strict=False)))
-
-
-def _switch_box(values: list[Any]) -> tuple[tuple[Any, ...], dict[str, Any]]:
-    """``on`` and, if given, the box (left, top, right, bottom) as one tuple."""
-    return ((values[0], tuple(values[1:])) if len(values) > 1 else (values[0],)), {}
-
-
-def _switch_thresholds(values: list[Any]) -> tuple[tuple[Any, ...], dict[str, Any]]:
-    return (values[0],), {"high": values[1], "low": values[2]}
-
-
 @dataclass(frozen=True)
 class CliCommand:
     """A ``send`` command: which client method it calls, with which arguments."""
@@ -114,11 +99,11 @@ class CliCommand:
     """The :class:`GcuClient` method it calls."""
     summary: str
     """One line for ``gcu-async send --help``."""
-    params: tuple[Param, ...] = ()
-    build: Build = _positional
+    params: tuple[Param, ...]
+    build: Build
     """The method's positional and keyword arguments from the values given."""
-    together: bool = False
-    """The optional parameters are given all together or not at all."""
+    together: tuple[str, ...] = ()
+    """Optional arguments given all together or not at all (a box's four edges)."""
     angle_target: bool = False
     """The parameters are roll/pitch/yaw targets of an angle mode."""
     holds: bool = False
@@ -194,91 +179,83 @@ def _plain(doc: str) -> str:
     return " ".join(_ROLE.sub(r"\1", doc).replace("``", "").split())
 
 
-F, N = float, int
-DEG = "degrees, -180 to 180"
-RATE = f"deg/s, at most {RATE_LIMIT:g}/zoom either way (default 0)"
-FRACTION = "image fraction, 0 (left/top) to 1"
-CELSIUS = "degrees C, -3276.8 to 3276.7"
+OPTIONS = frozenset({"cameras", "timeout"})
+"""Method parameters given as options (``--cameras``, ``--timeout``), not as arguments."""
+BOX_EDGES = ImageBox._fields
+HOLDS = frozenset({"enter_euler_control", "enter_angle_control", "enter_fpv"})
+"""Angle modes: their control values need packets to act (default ``--hold`` 3 s)."""
+ANGLE_TARGET = frozenset({"enter_euler_control"})
+"""Commands whose roll/pitch/yaw are absolute targets ``send`` may wait for."""
 ON = "on or off (also 1/0, true/false, yes/no)"
-_ALT = f"metres above mean sea level, {ALTITUDE_RANGE[0]:g} to {ALTITUDE_RANGE[1]:g}"
-_BOX = tuple(Param(edge, F, FRACTION) for edge in ("left", "top", "right", "bottom"))
-_BOX_OPTIONAL = tuple(p._replace(optional=True, help=f"{p.help} (all four or none: the whole "
-                                 "image)") for p in _BOX)  # fmt: skip
-_ANGLES = (Param("roll", F, DEG), Param("pitch", F, DEG), Param("yaw", F, DEG))
+CONVERTERS: dict[Kind, Callable[[str], Any]] = {Kind.REAL: float, Kind.INTEGER: int,
+                                                Kind.SWITCH: _switch}  # fmt: skip
+"""The converter of a command-line argument by its catalogue kind (choices: by name)."""
 
-COMMANDS: dict[str, CliCommand] = {
-    "calibrate": CliCommand("calibrate", "calibrate the gimbal (0x01)"),
-    "centre": CliCommand("centre", "centre pitch and heading (0x03)"),
-    "euler": CliCommand("euler_control", "Euler-angle control mode, hold angles (0x14)",
-                        (*_ANGLES[:2], Param("yaw", F, "degrees, -180 to 360 (north = 0)")),
-                        _keywords("roll", "pitch", "yaw"), angle_target=True, holds=True),
-    "angle-control": CliCommand("angle_control", "angle-control mode, yaw relative to the "
-                                "aircraft (0x10)", _ANGLES, _keywords("roll", "pitch", "yaw"),
-                                holds=True),
-    "fpv": CliCommand("fpv", "FPV mode, angles relative to the aircraft (0x1C)", _ANGLES,
-                      _keywords("roll", "pitch", "yaw"), holds=True),
-    "pointing-lock": CliCommand("pointing_lock", "pointing-lock mode with rates (0x11)",
-                                (Param("pitch_rate", F, RATE, True),
-                                 Param("yaw_rate", F, RATE, True)),
-                                _keywords("pitch_rate", "yaw_rate")),
-    "pointing-follow": CliCommand("pointing_follow", "pointing-follow mode with rates (0x12)",
-                                  (Param("pitch_rate", F, RATE, True),
-                                   Param("yaw_rate", F, RATE, True)),
-                                  _keywords("pitch_rate", "yaw_rate")),
-    "top-down": CliCommand("top_down", "top-down mode, pitch -90 (0x13)",
-                           (Param("yaw_rate", F, RATE, True),), _keywords("yaw_rate")),
-    "gaze-at": CliCommand("gaze_at", "gaze at a coordinate (0x15; needs INS data)",
-                          (Param("latitude", F, "degrees, -90 to 90"),
-                           Param("longitude", F, "degrees, -180 to 180"),
-                           Param("altitude", F, _ALT))),
-    "gaze-lock": CliCommand("gaze_lock", "gaze at the image centre (0x16; needs INS data)"),
-    "track": CliCommand("track", "track the target in a box (0x17)", _BOX,
-                        lambda v: ((tuple(v),), {})),
-    "stop-tracking": CliCommand("stop_tracking", "exit tracking (0x17)"),
-    "click-to-pan": CliCommand("click_to_pan", "bring an image point to the centre (0x1A)",
-                               (Param("x", F, FRACTION), Param("y", F, FRACTION))),
-    "photo": CliCommand("take_photo", "take a photo (0x20)"),
-    "record": CliCommand("toggle_recording", "start or stop recording, a toggle (0x21)"),
-    "zoom-in": CliCommand("zoom_in", "start zooming in (0x22)"),
-    "zoom-out": CliCommand("zoom_out", "start zooming out (0x23)"),
-    "zoom-stop": CliCommand("zoom_stop", "stop zooming (0x24)"),
-    "zoom-to": CliCommand("zoom_to", "zoom to a ratio (0x25)",
-                          (Param("ratio", F, f"x, 1 to {ZOOM_RATIO_MAX:g}, 0.1 steps"),)),
-    "zoom-fraction": CliCommand("zoom_to_fraction", "zoom to a fraction of the maximum (0x25)",
-                                (Param("fraction", F, "of the maximum ratio, 0.0001 to 1"),)),
-    "focus": CliCommand("focus", "trigger focus (0x26)"),
-    "palette": CliCommand("set_palette", "thermal palette (0x2A)",
-                          (Param("palette", N, "1 to 10, or 0 to cycle"),)),
-    "night-vision": CliCommand("set_night_vision", "night vision (0x2B)",
-                               (Param("mode", _night, "off, on or auto"),)),
-    "area-temperature": CliCommand("area_temperature", "area temperature measurement (0x30)",
-                                   (Param("on", _switch, ON), *_BOX_OPTIONAL), _switch_box,
-                                   together=True),
-    "temperature-alarm": CliCommand("temperature_alarm", "temperature alarm (0x31)",
-                                    (Param("on", _switch, ON), Param("high", F, CELSIUS),
-                                     Param("low", F, CELSIUS)), _switch_thresholds),
-    "isotherm": CliCommand("isotherm", "isotherm between two temperatures (0x32)",
-                           (Param("on", _switch, ON), Param("high", F, CELSIUS),
-                            Param("low", F, CELSIUS)), _switch_thresholds),
-    "spot-temperature": CliCommand("spot_temperature", "spot temperature at a point (0x33)",
-                                   (Param("on", _switch, ON), Param("x", F, FRACTION),
-                                    Param("y", F, FRACTION))),
-    "osd": CliCommand("set_osd", "on-screen display (0x73)", (Param("on", _switch, ON),)),
-    "osd-coordinates": CliCommand("set_osd_coordinates", "OSD coordinates shown (0x06)",
-                                  (Param("coordinates", _osd_coords, "aircraft or target"),)),
-    "auto-flip": CliCommand("set_image_auto_flip", "image auto-flip (0x07)",
-                            (Param("on", _switch, ON),)),
-    "time-zone": CliCommand("set_time_zone", "the pod's UTC offset (0x08)",
-                            (Param("hours", N, "whole hours, -12 to 14"),)),
-    "pip": CliCommand("set_picture_in_picture", "picture-in-picture mode (0x74)",
-                      (Param("mode", N, "1 to 4, or 0 to cycle"),)),
-    "target-detection": CliCommand("set_target_detection", "AI target detection (0x75)",
-                                   (Param("on", _switch, ON),)),
-    "digital-zoom": CliCommand("set_digital_zoom", "digital zoom (0x76)",
-                               (Param("on", _switch, ON),)),
-    "fill-light": CliCommand("set_fill_light", "fill light brightness (0x80)",
-                             (Param("brightness", N, "0 (off) to 255"),)),
-    "ranging": CliCommand("set_ranging", "continuous laser ranging (0x81)",
-                          (Param("on", _switch, ON),)),
-}  # fmt: skip
-"""Every ``send`` command by name, in the order of docs/cli.md's table."""
+
+def _help(param: Parameter) -> str:
+    """The ``--help`` line of a catalogue parameter: what, unit, range, default."""
+    if param.kind is Kind.SWITCH:
+        what = f"{ON}: {param.doc}"
+    elif param.kind is Kind.CHOICE:
+        what = f"{param.range_text().lower().replace(',', '')}: {param.doc}"
+    else:
+        bounds = " ".join(part for part in (param.range_text(), param.unit) if part)
+        what = f"{bounds}: {param.doc}" if bounds else param.doc
+    if param.required:
+        return what
+    if param.default is None:
+        return f"{what} (default: the current one)"
+    default = param.default
+    if isinstance(default, IntEnum):
+        return f"{what} (default {default.name.lower()})"
+    if isinstance(default, bool):
+        return f"{what} (default {'on' if default else 'off'})"
+    return f"{what} (default {default})"
+
+
+def _arguments(entry: CatalogueEntry) -> tuple[tuple[Param, ...], tuple[str, ...]]:
+    """The command-line arguments of ``entry`` (a box as its four edges) and those given all
+    together or not at all (an optional box: all four edges or none)."""
+    out: list[Param] = []
+    together: tuple[str, ...] = ()
+    for p in entry.parameters:
+        if p.name in OPTIONS:
+            continue
+        optional = not p.required
+        if p.kind is Kind.BOX:
+            together = BOX_EDGES if optional else ()
+            edge = f"image fraction, 0 to 1 (step {1 / IMAGE_SCALE:g})"
+            if optional:
+                edge += f"; all four or none: {p.default}"
+            out.extend(Param(e, float, edge, optional) for e in BOX_EDGES)
+            continue
+        convert = CONVERTERS[p.kind] if p.choices is None else _choice(p.choices)
+        out.append(Param(p.name, convert, _help(p), optional))
+    if any(a.optional and not b.optional for a, b in itertools.pairwise(out)):
+        raise AssertionError(f"{entry.method}: a required argument follows an optional one")
+    return tuple(out), together
+
+
+def _builder(params: tuple[Param, ...]) -> Build:
+    """The method's keyword arguments from the values given (a prefix of ``params``: the
+    optional arguments come last); the four edges become one ``box``."""
+    names = [p.name for p in params]
+
+    def build(values: list[Any]) -> tuple[tuple[Any, ...], dict[str, Any]]:
+        kwargs = dict(zip(names, values, strict=False))
+        if all(edge in kwargs for edge in BOX_EDGES):
+            kwargs["box"] = tuple(kwargs.pop(edge) for edge in BOX_EDGES)
+        return (), kwargs
+
+    return build
+
+
+def _command(entry: CatalogueEntry) -> CliCommand:
+    params, together = _arguments(entry)
+    return CliCommand(entry.method, f"0x{entry.opcode:02X}: {entry.doc}", params,
+                      _builder(params), together, angle_target=entry.method in ANGLE_TARGET,
+                      holds=entry.method in HOLDS)  # fmt: skip
+
+
+COMMANDS: dict[str, CliCommand] = {entry.cli_name: _command(entry) for entry in CATALOGUE}
+"""Every ``send`` command by name (the catalogue's order, that of docs/cli.md's table)."""

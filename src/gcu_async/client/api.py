@@ -9,6 +9,10 @@ coerced, clipped or wrapped. A bad argument raises ``TypeError`` or
 :class:`~gcu_async.errors.FieldRangeError` whose message starts with the parameter name as
 the caller wrote it (``pitch_rate``, ``box.right``) and gives the allowed range and the
 value; then nothing is sent and no state changes (tests/test_client_boundary.py).
+
+The methods' names, parameters, defaults and ranges are those of the command catalogue
+(:mod:`gcu_async.protocol.catalogue`, docs/architecture.md "One command catalogue");
+tests/test_catalogue.py checks every method against its entry.
 """
 
 from __future__ import annotations
@@ -17,19 +21,16 @@ import abc
 
 from gcu_async._checks import check_bool, check_int, check_positive, check_real
 from gcu_async.protocol import commands as c
-from gcu_async.protocol.enums import CameraMask, NightVisionMode, OsdCoordinates
+from gcu_async.protocol.catalogue import ALTITUDE_RANGE, RATE_LIMIT, TEMPERATURE_RANGE
+from gcu_async.protocol.enums import CameraMask, NightVisionMode, OsdCoordinateSource
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuSubFrame
-from gcu_async.protocol.host_frames import CONTROL_RATE_RAW, ControlValues
+from gcu_async.protocol.host_frames import ControlValues
 from gcu_async.protocol.units import Attitude, check_member, check_tuple
 from gcu_async.session import ControlKind
 
 CAM1 = CameraMask.CAMERA_1
 CAM2 = CameraMask.CAMERA_2
-RATE_LIMIT = CONTROL_RATE_RAW / 10
-"""°/s at zoom 1×: the largest rate the control field carries (it shrinks with zoom)."""
-ALTITUDE_RANGE = (-(2**31) / 1000, (2**31 - 1) / 1000)
-"""Metres: what gaze_at's altitude field (S32, 1 mm) carries."""
 
 
 def _angle(name: str, value: object, low: float = -180.0, high: float = 180.0) -> float:
@@ -102,13 +103,13 @@ class CommandMethods(abc.ABC):
         return ControlValues.rates(r, p, y, zoom=zoom)
 
     # -- pod: modes ------------------------------------------------------------------------
-    async def euler_control(
+    async def enter_euler_control(
         self, *, roll: float | None = None, pitch: float | None = None,
         yaw: float | None = None,
     ) -> Feedback:  # fmt: skip
         """Euler-angle control mode (0x14) holding roll/pitch/yaw Euler angles in degrees;
         an angle left out keeps the camera's current one (``status.attitude``), so
-        ``euler_control(pitch=-45)`` does not swing the yaw. ``yaw`` may be given in
+        ``enter_euler_control(pitch=-45)`` does not swing the yaw. ``yaw`` may be given in
         [-180, 360): [180, 360) is sent as its −180…0 equivalent. The angles go out valid
         once the GCU confirmed the mode; :meth:`reach_attitude` also waits until the camera
         is there."""
@@ -121,7 +122,7 @@ class CommandMethods(abc.ABC):
                                       y - 360.0 if y >= 180.0 else y)  # fmt: skip
         return await self._run(c.EulerControl(), control=values)
 
-    async def angle_control(
+    async def enter_angle_control(
         self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0
     ) -> Feedback:
         """Angle-control mode (0x10): roll/pitch Euler angles, yaw relative to the aircraft
@@ -130,31 +131,35 @@ class CommandMethods(abc.ABC):
                                       _angle("yaw", yaw))  # fmt: skip
         return await self._run(c.AngleControl(), control=values)
 
-    async def fpv(self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0) -> Feedback:
+    async def enter_fpv(
+        self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0
+    ) -> Feedback:
         """FPV mode (0x1C): roll/pitch/yaw angles relative to the aircraft, degrees (±180)."""
         values = ControlValues.angles(_angle("roll", roll), _angle("pitch", pitch),
                                       _angle("yaw", yaw))  # fmt: skip
         return await self._run(c.Fpv(), control=values)
 
-    async def pointing_lock(self, *, pitch_rate: float = 0.0, yaw_rate: float = 0.0) -> Feedback:
+    async def enter_pointing_lock(
+        self, *, pitch_rate: float = 0.0, yaw_rate: float = 0.0
+    ) -> Feedback:
         """Pointing-lock mode (0x11) with pitch/yaw rates in °/s at the current zoom
         (at most 150 / zoom °/s)."""
         values = self._rates(roll_rate=0.0, pitch_rate=pitch_rate, yaw_rate=yaw_rate)
         return await self._run(c.PointingLock(), control=values)
 
-    async def pointing_follow(
+    async def enter_pointing_follow(
         self, *, pitch_rate: float = 0.0, yaw_rate: float = 0.0
     ) -> Feedback:
         """Pointing-follow mode (0x12); yaw rate 0 follows the aircraft's heading."""
         values = self._rates(roll_rate=0.0, pitch_rate=pitch_rate, yaw_rate=yaw_rate)
         return await self._run(c.PointingFollow(), control=values)
 
-    async def top_down(self, *, yaw_rate: float = 0.0) -> Feedback:
+    async def enter_top_down(self, *, yaw_rate: float = 0.0) -> Feedback:
         """Top-down mode (0x13): pitch −90°, yaw rate in °/s."""
         values = self._rates(roll_rate=0.0, pitch_rate=0.0, yaw_rate=yaw_rate)
         return await self._run(c.TopDown(), control=values)
 
-    async def gaze_lock(self, *, pitch_rate: float = 0.0, yaw_rate: float = 0.0) -> Feedback:
+    async def enter_gaze_lock(self, *, pitch_rate: float = 0.0, yaw_rate: float = 0.0) -> Feedback:
         """Gaze (geographic target lock) at the image centre (0x16); needs valid INS data."""
         values = self._rates(roll_rate=0.0, pitch_rate=pitch_rate, yaw_rate=yaw_rate)
         return await self._run(c.GazeLock(), control=values)
@@ -234,14 +239,14 @@ class CommandMethods(abc.ABC):
         return await self._submit(c.Record(_cameras(cameras)), recording_target=False)
 
     async def zoom_in(self, *, cameras: int = CAM1) -> Feedback:
-        """Start zooming in (0x22) until :meth:`zoom_stop`."""
+        """Start zooming in (0x22) until :meth:`stop_zoom`."""
         return await self._run(c.ZoomIn(_cameras(cameras)))
 
     async def zoom_out(self, *, cameras: int = CAM1) -> Feedback:
-        """Start zooming out (0x23) until :meth:`zoom_stop`."""
+        """Start zooming out (0x23) until :meth:`stop_zoom`."""
         return await self._run(c.ZoomOut(_cameras(cameras)))
 
-    async def zoom_stop(self, *, cameras: int = CAM1) -> Feedback:
+    async def stop_zoom(self, *, cameras: int = CAM1) -> Feedback:
         """Stop a continuous zoom (0x24)."""
         return await self._run(c.ZoomStop(_cameras(cameras)))
 
@@ -271,7 +276,7 @@ class CommandMethods(abc.ABC):
         command = c.NightVision(check_member("mode", mode, NightVisionMode), _cameras(cameras))
         return await self._run(command)
 
-    async def area_temperature(
+    async def set_area_temperature(
         self,
         enabled: bool = True,
         box: c.ImageBox | tuple[float, float, float, float] = (0.0, 0.0, 1.0, 1.0),
@@ -282,7 +287,7 @@ class CommandMethods(abc.ABC):
         command = c.AreaTemperature(check_bool("enabled", enabled), _box(box), _cameras(cameras))
         return await self._run(command)
 
-    async def temperature_alarm(
+    async def set_temperature_alarm(
         self, enabled: bool = True, *, high: float = 0.0, low: float = 0.0, cameras: int = CAM2
     ) -> Feedback:
         """Temperature alarm with high/low thresholds in °C (0x31)."""
@@ -290,7 +295,7 @@ class CommandMethods(abc.ABC):
                                      _temp("low", low), _cameras(cameras))  # fmt: skip
         return await self._run(command)
 
-    async def isotherm(
+    async def set_isotherm(
         self, enabled: bool = True, *, high: float = 0.0, low: float = 0.0, cameras: int = CAM2
     ) -> Feedback:
         """Isotherm between ``low`` and ``high`` °C (0x32)."""
@@ -298,7 +303,7 @@ class CommandMethods(abc.ABC):
                              _temp("low", low), _cameras(cameras))  # fmt: skip
         return await self._run(command)
 
-    async def spot_temperature(
+    async def set_spot_temperature(
         self, enabled: bool = True, x: float = 0.5, y: float = 0.5, *, cameras: int = CAM2
     ) -> Feedback:
         """Spot temperature at image point (x, y) (0x33)."""
@@ -311,11 +316,11 @@ class CommandMethods(abc.ABC):
         return await self._run(c.Osd(check_bool("enabled", enabled)))
 
     async def set_osd_coordinates(
-        self, coordinates: OsdCoordinates | int = OsdCoordinates.AIRCRAFT
+        self, coordinates: OsdCoordinateSource | int = OsdCoordinateSource.AIRCRAFT
     ) -> Feedback:
         """OSD shows aircraft or target coordinates (0x06)."""
-        value = check_member("coordinates", coordinates, OsdCoordinates)
-        return await self._run(c.OsdCoordinatesCommand(value))
+        value = check_member("coordinates", coordinates, OsdCoordinateSource)
+        return await self._run(c.OsdCoordinates(value))
 
     async def set_image_auto_flip(self, enabled: bool = True) -> Feedback:
         """Image auto-flip on/off (0x07)."""
@@ -347,4 +352,4 @@ class CommandMethods(abc.ABC):
 
 
 def _temp(name: str, value: object) -> float:
-    return check_real(name, value, -3276.8, 3276.7, "degC")
+    return check_real(name, value, *TEMPERATURE_RANGE, "degC")

@@ -83,7 +83,7 @@ class WaitingMethods(abc.ABC):
         """Set once the client closes; None while it is not open."""
 
     @abc.abstractmethod
-    async def euler_control(self, *, roll: float | None = None, pitch: float | None = None,
+    async def enter_euler_control(self, *, roll: float | None = None, pitch: float | None = None,
                             yaw: float | None = None) -> Feedback: ...  # fmt: skip
 
     @abc.abstractmethod
@@ -160,7 +160,7 @@ class WaitingMethods(abc.ABC):
     async def reach_attitude(self, *, roll: float | None = None, pitch: float | None = None,
                              yaw: float | None = None, tolerance: float = ANGLE_TOLERANCE,
                              timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
-        """Euler-angle control (:meth:`euler_control`) to the angles given — omitted ones
+        """Euler-angle control (:meth:`enter_euler_control`) to the angles given — omitted ones
         keep the current attitude — then wait until the camera is within ``tolerance``
         degrees of all three. ``timeout`` bounds the wait after the GCU confirmed the mode
         (the command itself has its own ``command_timeout``)."""
@@ -171,7 +171,7 @@ class WaitingMethods(abc.ABC):
         r = current.roll if roll is None else roll
         p = current.pitch if pitch is None else pitch
         y = current.yaw if yaw is None else yaw
-        await self.euler_control(roll=r, pitch=p, yaw=y)
+        await self.enter_euler_control(roll=r, pitch=p, yaw=y)
         return await self.wait_attitude(roll=r, pitch=p, yaw=y, tolerance=tolerance,
                                         timeout=timeout)  # fmt: skip
 

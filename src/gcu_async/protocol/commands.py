@@ -28,7 +28,7 @@ from gcu_async.protocol.enums import (
     CameraMask,
     NightVisionMode,
     Opcode,
-    OsdCoordinates,
+    OsdCoordinateSource,
     opcode_name,
 )
 from gcu_async.protocol.layout import S16, S32
@@ -192,7 +192,7 @@ class Command:
                 v = v._asdict()
             elif isinstance(v, CameraMask):
                 v = int(v)
-            elif isinstance(v, (NightVisionMode, OsdCoordinates)):
+            elif isinstance(v, (NightVisionMode, OsdCoordinateSource)):
                 v = v.name
             params[f.name] = v
         return {
@@ -370,22 +370,23 @@ class ClickToPan(Command):
 
 # --- camera commands ------------------------------------------------------------------
 @dataclass(frozen=True, slots=True)
-class OsdCoordinatesCommand(Command):
+class OsdCoordinates(Command):
     """0x06: which coordinates the OSD shows (aircraft or target)."""
 
     OPCODE = Opcode.OSD_COORDINATES
     LAYOUT = struct.Struct("<B")
-    coordinates: OsdCoordinates = OsdCoordinates.AIRCRAFT
+    coordinates: OsdCoordinateSource = OsdCoordinateSource.AIRCRAFT
 
     def _normalize(self) -> None:
-        _store(self, "coordinates", check_member("coordinates", self.coordinates, OsdCoordinates))
+        value = check_member("coordinates", self.coordinates, OsdCoordinateSource)
+        _store(self, "coordinates", value)
 
     def raw_params(self) -> tuple[int, ...]:
         return (int(self.coordinates),)
 
     @classmethod
-    def from_raw_params(cls, raw: tuple[int, ...]) -> OsdCoordinatesCommand:
-        return cls(OsdCoordinates(check_int("coordinates", raw[0], 0, 1)))
+    def from_raw_params(cls, raw: tuple[int, ...]) -> OsdCoordinates:
+        return cls(OsdCoordinateSource(check_int("coordinates", raw[0], 0, 1)))
 
     @classmethod
     def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
@@ -897,7 +898,7 @@ COMMAND_TYPES: dict[int, type[Command]] = {
     int(cls.OPCODE): cls
     for cls in (
         NullCommand, Calibration, Centre, AngleControl, PointingLock, PointingFollow, TopDown,
-        EulerControl, GazeAtCoordinates, GazeLock, Track, ClickToPan, Fpv, OsdCoordinatesCommand,
+        EulerControl, GazeAtCoordinates, GazeLock, Track, ClickToPan, Fpv, OsdCoordinates,
         ImageAutoFlip, TimeZone, TakePhoto, Record, ZoomIn, ZoomOut, ZoomStop, ZoomTo, Focus,
         Palette, NightVision, AreaTemperature, TemperatureAlarm, Isotherm, SpotTemperature, Osd,
         PictureInPicture, TargetDetection, DigitalZoom, FillLight, Ranging,

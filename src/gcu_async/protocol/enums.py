@@ -205,7 +205,7 @@ class NightVisionMode(IntEnum):
     AUTO = 2
 
 
-class OsdCoordinates(IntEnum):
+class OsdCoordinateSource(IntEnum):
     """OSD coordinate command (0x06) parameter TT."""
 
     AIRCRAFT = 0

@@ -135,8 +135,8 @@ class ControlState:
         if opcode is None:
             raise ValueError(
                 "control values: no mode is confirmed or pending; call a mode command first "
-                "(euler_control, angle_control, fpv, pointing_lock, pointing_follow, top_down, "
-                "gaze_lock)"
+                "(enter_euler_control, enter_angle_control, enter_fpv, enter_pointing_lock, "
+                "enter_pointing_follow, enter_top_down, enter_gaze_lock)"
             )
         mode_kind = KIND.get(opcode, ControlKind.NONE)
         if values is not None and mode_kind is ControlKind.NONE:

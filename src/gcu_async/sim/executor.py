@@ -33,7 +33,7 @@ from gcu_async.protocol.commands import (
     Isotherm,
     NightVision,
     Osd,
-    OsdCoordinatesCommand,
+    OsdCoordinates,
     Palette,
     PictureInPicture,
     Ranging,
@@ -46,7 +46,7 @@ from gcu_async.protocol.commands import (
     ZoomTo,
     command_code,
 )
-from gcu_async.protocol.enums import Mode, Opcode, OsdCoordinates
+from gcu_async.protocol.enums import Mode, Opcode, OsdCoordinateSource
 from gcu_async.protocol.feedback import CALIBRATION_IN_PROGRESS, failure_status
 from gcu_async.protocol.host_frames import HostMainFrame
 from gcu_async.protocol.pods import supports
@@ -179,9 +179,9 @@ class Executor:
         """Every camera in ``mask`` exists on this pod."""
         return mask != 0 and not mask & ~self.state.camera.mask
 
-    def _osd_coordinates(self, command: OsdCoordinatesCommand, main: HostMainFrame,
+    def _osd_coordinates(self, command: OsdCoordinates, main: HostMainFrame,
                          now: float) -> int:  # fmt: skip
-        self.state.camera.osd_target_coordinates = command.coordinates == OsdCoordinates.TARGET
+        self.state.camera.osd_target_coordinates = command.coordinates == OsdCoordinateSource.TARGET
         return SUCCESS
 
     def _auto_flip(self, command: ImageAutoFlip, main: HostMainFrame, now: float) -> int:

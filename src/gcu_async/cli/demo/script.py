@@ -6,8 +6,8 @@ from __future__ import annotations
 import time
 
 from gcu_async.cli.demo.engine import Step, StepEngine, StepFailed, angle_between, zoom_of
-from gcu_async.client.api import RATE_LIMIT
 from gcu_async.client.telemetry import TelemetrySample
+from gcu_async.protocol.catalogue import RATE_LIMIT
 from gcu_async.protocol.enums import Mode, Opcode
 from gcu_async.protocol.units import wrap_degrees_180, wrap_degrees_360
 
@@ -20,7 +20,7 @@ class Demo(StepEngine):
 
     async def step_follow(self) -> None:
         gcu = self.gcu
-        await self.cmd("pointing_follow()", gcu.pointing_follow)
+        await self.cmd("enter_pointing_follow()", gcu.enter_pointing_follow)
         await self.cmd("centre()", gcu.centre)
 
         def following(s: TelemetrySample) -> bool:
@@ -41,7 +41,7 @@ class Demo(StepEngine):
     async def step_euler(self) -> None:
         yaw = wrap_degrees_360(self.heading() + 40.0)
         self.say(f"target: pitch -45, yaw {yaw:.1f} (aircraft heading + 40)")
-        await self.cmd("euler_control(pitch=-45)", lambda: self.gcu.euler_control(
+        await self.cmd("enter_euler_control(pitch=-45)", lambda: self.gcu.enter_euler_control(
             pitch=-45.0, yaw=yaw))  # fmt: skip
         await self.expect_pose(Mode.EULER_CONTROL, pitch=-45.0, yaw=yaw)
         z0, h0 = self.gcu.status.relative_angles.z, self.heading()
@@ -57,8 +57,8 @@ class Demo(StepEngine):
         info = self.gcu.info
         zoom = max(info.camera1_zoom, 1.0) if info is not None else 1.0
         rate = round(min(15.0 * self.speed, 90.0, 0.9 * RATE_LIMIT / zoom), 1)
-        await self.cmd(f"pointing_lock(yaw_rate={rate:g})",
-                       lambda: self.gcu.pointing_lock(yaw_rate=rate))  # fmt: skip
+        await self.cmd(f"enter_pointing_lock(yaw_rate={rate:g})",
+                       lambda: self.gcu.enter_pointing_lock(yaw_rate=rate))  # fmt: skip
         yaw0 = self.gcu.status.attitude.yaw
         await self.expect(
             "a 30 deg pan",
@@ -78,7 +78,7 @@ class Demo(StepEngine):
         await self.hold(1.0)
 
     async def step_top_down(self) -> None:
-        await self.cmd("top_down()", self.gcu.top_down)
+        await self.cmd("enter_top_down()", self.gcu.enter_top_down)
         await self.expect_pose(Mode.TOP_DOWN, pitch=-90.0, tolerance=0.5,
                                what="camera looking down")  # fmt: skip
         await self.hold(1.5, "looking straight down")
@@ -105,7 +105,7 @@ class Demo(StepEngine):
         await self.expect(f"zoom {ratio:g}x", settled, lambda s: f"{zoom_of(s):.1f}x",
                           trace=lambda s: f"{zoom_of(s):.1f}x")  # fmt: skip
         if continuous:
-            await self.cmd("zoom_stop()", gcu.zoom_stop)
+            await self.cmd("stop_zoom()", gcu.stop_zoom)
 
     async def step_zoom(self) -> None:
         await self._zoom_to(10.0)
@@ -139,8 +139,8 @@ class Demo(StepEngine):
     async def step_track(self) -> None:
         gcu = self.gcu
         yaw = self.heading()
-        await self.cmd("euler_control(pitch=-30)", lambda: gcu.euler_control(pitch=-30.0,
-                                                                              yaw=yaw))  # fmt: skip
+        await self.cmd("enter_euler_control(pitch=-30)",
+                       lambda: gcu.enter_euler_control(pitch=-30.0, yaw=yaw))  # fmt: skip
         await self.expect_pose(Mode.EULER_CONTROL, pitch=-30.0, yaw=yaw)
         await self.cmd(f"track({', '.join(f'{v:g}' for v in TRACK_BOX)})",
                        lambda: gcu.track(TRACK_BOX))  # fmt: skip
@@ -157,7 +157,7 @@ class Demo(StepEngine):
         gcu = self.gcu
         if self.supported(Opcode.RANGING):
             await self.cmd("set_ranging(False)", lambda: gcu.set_ranging(False))
-        await self.cmd("pointing_follow()", gcu.pointing_follow)
+        await self.cmd("enter_pointing_follow()", gcu.enter_pointing_follow)
         await self.cmd("centre()", gcu.centre)
         await self.expect_pose(Mode.POINTING_FOLLOW, pitch=0.0, what="back to the start")
 
