@@ -24,12 +24,7 @@ from gcu_async.bridge.commands import (
     Plan,
     result_for,
 )
-from gcu_async.bridge.geometry import (
-    METRES_PER_DEGREE,
-    euler_from_quaternion,
-    ground_point,
-    quaternion_from_euler,
-)
+from gcu_async.bridge.geometry import euler_from_quaternion, ground_point, quaternion_from_euler
 from gcu_async.bridge.view import Control, GcuView
 from gcu_async.errors import (
     CommandFailed,
@@ -42,7 +37,7 @@ from gcu_async.errors import (
 from gcu_async.protocol.aircraft import AircraftState
 from gcu_async.protocol.enums import FaultFlags, Mode, PodModel, PodStatus
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
-from gcu_async.protocol.units import GeoPosition
+from gcu_async.protocol.units import METRES_PER_DEGREE, GeoPosition
 
 NAN = math.nan
 GCS = (255, 190)

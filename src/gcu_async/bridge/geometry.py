@@ -16,12 +16,16 @@ from __future__ import annotations
 
 import math
 
-from gcu_async.protocol.units import Attitude, GeoPosition, wrap_degrees_180, wrap_degrees_360
+from gcu_async.protocol.units import (
+    Attitude,
+    GeoPosition,
+    offset_position,
+    wrap_degrees_180,
+    wrap_degrees_360,
+)
 
 Quaternion = tuple[float, float, float, float]
 """(w, x, y, z); (1, 0, 0, 0) is no rotation."""
-METRES_PER_DEGREE = 111_320.0
-"""Length of one degree of latitude (and of longitude at the equator), metres."""
 MAX_GROUND_RANGE_M = 10_000.0
 """A line of sight meeting the ground farther than this counts as not meeting it (a ray
 near the horizon gives a meaningless point)."""
@@ -61,15 +65,6 @@ def euler_from_quaternion(q: tuple[float, ...] | list[float]) -> Attitude:
         math.degrees(pitch),
         wrap_degrees_180(math.degrees(yaw)),
     )
-
-
-def offset_position(origin: GeoPosition, north: float, east: float, up: float) -> GeoPosition:
-    """``origin`` moved by a local north/east/up offset in metres (flat earth)."""
-    lat = origin.latitude + north / METRES_PER_DEGREE
-    cos_lat = max(math.cos(math.radians(origin.latitude)), 1e-6)
-    lon = origin.longitude + east / (METRES_PER_DEGREE * cos_lat)
-    lon = (lon + 180.0) % 360.0 - 180.0
-    return GeoPosition(max(-90.0, min(90.0, lat)), lon, origin.altitude + up)
 
 
 def ground_point(

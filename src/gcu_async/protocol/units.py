@@ -54,6 +54,22 @@ class GeoPosition(NamedTuple):
     altitude: float
 
 
+METRES_PER_DEGREE = 111_320.0
+"""Length of one degree of latitude (and of longitude at the equator), metres: the
+flat-earth approximation, good to well under a metre over the few kilometres a gimbal camera
+sees."""
+
+
+def offset_position(origin: GeoPosition, north: float, east: float, up: float) -> GeoPosition:
+    """``origin`` moved by a local north/east/up offset in metres (flat earth; latitude kept
+    within ±90°, longitude wrapped to [-180, 180))."""
+    lat = origin.latitude + north / METRES_PER_DEGREE
+    cos_lat = max(math.cos(math.radians(origin.latitude)), 1e-6)
+    lon = origin.longitude + east / (METRES_PER_DEGREE * cos_lat)
+    lon = (lon + 180.0) % 360.0 - 180.0
+    return GeoPosition(max(-90.0, min(90.0, lat)), lon, origin.altitude + up)
+
+
 def quantize(
     field: str,
     value: float,

@@ -9,10 +9,7 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-from gcu_async.protocol.units import GeoPosition, wrap_degrees_360
-
-METRES_PER_DEGREE = 111_320.0
-"""Length of one degree of latitude (and of longitude at the equator)."""
+from gcu_async.protocol.units import METRES_PER_DEGREE, GeoPosition, wrap_degrees_360
 
 
 class Sight(NamedTuple):
@@ -22,15 +19,6 @@ class Sight(NamedTuple):
     north: float
     east: float
     up: float
-
-
-def offset(origin: GeoPosition, north: float, east: float, up: float) -> GeoPosition:
-    """``origin`` moved by a local north/east/up offset in metres."""
-    lat = origin.latitude + north / METRES_PER_DEGREE
-    cos_lat = max(math.cos(math.radians(origin.latitude)), 1e-6)
-    lon = origin.longitude + east / (METRES_PER_DEGREE * cos_lat)
-    lon = (lon + 180.0) % 360.0 - 180.0
-    return GeoPosition(max(-90.0, min(90.0, lat)), lon, origin.altitude + up)
 
 
 def direction_to(origin: GeoPosition, target: GeoPosition) -> tuple[float, float]:

@@ -33,9 +33,15 @@ from dataclasses import dataclass, field
 from gcu_async.protocol.commands import ImageBox, ImagePoint
 from gcu_async.protocol.enums import Mode
 from gcu_async.protocol.host_frames import ControlValues
-from gcu_async.protocol.units import Attitude, GeoPosition, wrap_degrees_180, wrap_degrees_360
+from gcu_async.protocol.units import (
+    Attitude,
+    GeoPosition,
+    offset_position,
+    wrap_degrees_180,
+    wrap_degrees_360,
+)
 from gcu_async.sim.aircraft import ReceivedAircraft
-from gcu_async.sim.geometry import along, direction_to, ground_hit, offset
+from gcu_async.sim.geometry import along, direction_to, ground_hit
 from gcu_async.sim.profiles import ASPECT, HORIZONTAL_FOV_DEG
 
 ROLL, PITCH, YAW = 0, 1, 2
@@ -227,7 +233,7 @@ class Gimbal:
         sight = ground_hit(att.pitch, att.yaw, self.aircraft.height, GAZE_RANGE_M)
         if sight is None:
             sight = along(att.pitch, att.yaw, GAZE_FALLBACK_M)
-        return offset(position, sight.north, sight.east, sight.up)
+        return offset_position(position, sight.north, sight.east, sight.up)
 
     # -- inputs and time ---------------------------------------------------------------
     def control_input(self, control: ControlValues, valid: bool, zoom: float) -> None:

@@ -12,9 +12,9 @@ from __future__ import annotations
 import random
 from dataclasses import dataclass
 
-from gcu_async.protocol.units import Attitude, GeoPosition
+from gcu_async.protocol.units import Attitude, GeoPosition, offset_position
 from gcu_async.sim.aircraft import ReceivedAircraft
-from gcu_async.sim.geometry import ground_hit, offset
+from gcu_async.sim.geometry import ground_hit
 
 MAX_RANGE_M = 3_000.0
 NOISE_M = 0.2
@@ -45,4 +45,4 @@ class Rangefinder:
             return
         self.distance = max(sight.distance + rng.uniform(-self.noise, self.noise), 0.1)
         if aircraft.position is not None:
-            self.position = offset(aircraft.position, sight.north, sight.east, sight.up)
+            self.position = offset_position(aircraft.position, sight.north, sight.east, sight.up)
