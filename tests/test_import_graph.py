@@ -15,8 +15,6 @@ import re
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
-import pytest
-
 ROOT = Path(__file__).resolve().parent.parent
 SRC = ROOT / "src"
 PACKAGE = "gcu_async"
@@ -50,10 +48,6 @@ ALLOWED: Mapping[str, frozenset[str]] = {
 }  # fmt: skip
 """unit → the units it may import (``gcu_async``: the package's own ``__init__``)."""
 
-PENDING: Mapping[tuple[str, str], str] = {}
-"""Edges the layering forbids that are still there, each with the work that removes it:
-tolerated here, and :func:`test_pending_edges_are_still_there` fails once one is gone, so
-the entry is deleted with it."""
 
 
 def module_name(path: Path) -> str:
@@ -156,18 +150,9 @@ def test_every_import_is_allowed() -> None:
         f"{source} -> {target}"
         for source, targets in sorted(UNITS.items())
         for target in sorted(targets)
-        if target not in ALLOWED.get(source, frozenset()) and (source, target) not in PENDING
+        if target not in ALLOWED.get(source, frozenset())
     ]
     assert not wrong, "imports the layering forbids (docs/architecture.md): " + ", ".join(wrong)
-
-
-@pytest.mark.parametrize(("edge", "why"), sorted(PENDING.items()))
-def test_pending_edges_are_still_there(edge: tuple[str, str], why: str) -> None:
-    source, target = edge
-    assert target not in ALLOWED[source], f"{edge} is allowed: it is not pending"
-    assert target in UNITS.get(source, set()), (
-        f"{source} no longer imports {target} ({why}): delete it from PENDING"
-    )
 
 
 def test_the_named_rules() -> None:
@@ -181,8 +166,7 @@ def test_the_named_rules() -> None:
 
 
 def test_no_cycle_between_units() -> None:
-    allowed_now = {s: {t for t in ts if (s, t) not in PENDING} for s, ts in UNITS.items()}
-    assert find_cycle(allowed_now) is None, find_cycle(allowed_now)
+    assert find_cycle(UNITS) is None, find_cycle(UNITS)
     assert find_cycle(ALLOWED) is None, "the table itself has a cycle"
 
 
