@@ -49,7 +49,6 @@ ALLOWED: Mapping[str, frozenset[str]] = {
 """unit → the units it may import (``gcu_async``: the package's own ``__init__``)."""
 
 
-
 def module_name(path: Path) -> str:
     parts = path.relative_to(SRC).with_suffix("").parts
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
