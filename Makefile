@@ -13,8 +13,9 @@ STAMP := $(VENV)/.installed-stamp
 # version runs in its own .venv-3.X with GCU_TEST_SIZE=reduced (set per run by the script):
 # the generated heavy tests shrink (the session contract from 100,000 to 10,000 commands,
 # Hypothesis to 25 examples a test, ...; tests/_scale.py), so each CI run has exactly one
-# full-size run, and `make test` on a fresh clone with all four takes ~20 minutes on 2
-# cores (6.5 min full, ~4 min per reduced run, ~1 min to create each extra venv).
+# full-size run, and `make test` on a fresh clone with all four took 36.5 minutes on a
+# shared 2-core VM (10.5 min full, ~8 min per reduced run: most of the suite is real-time
+# waiting on sockets, subprocesses and the browser, which the reduced size does not shrink).
 # `make test PYTHONS=` runs the main venv only.
 PYTHONS ?= 3.10 3.11 3.12 3.13
 TEST_EXTRAS := test,bench,mavlink,web,capture

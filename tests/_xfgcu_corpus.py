@@ -181,7 +181,21 @@ def anomalous_packets() -> list[bytes]:
         seal(HOST_HEADER, body + b"\x07\x02"),  # image auto-flip byte 2
         seal(HOST_HEADER, body + b"\x30\x00\x03" + (10001).to_bytes(2, "little") * 2
              + bytes(4)),  # area temperature: every box check
+        seal(GCU_HEADER, _frame_fields(body, {3: (2000, 2, True), 17: (36000, 2, False)})
+             + b"\x00"),  # miss distance x 2000, camera yaw 360.00°
+        seal(HOST_HEADER, _frame_fields(body, {6: (0x07, 1, False), 9: (9500, 2, True),
+                                               32: (1, 1, False), 46: (604_800_000, 4, False)})
+             + b"\x00"),  # reserved flag bit, aircraft pitch 95°, a GNSS ms past the week
     ]  # fmt: skip
+
+
+def _frame_fields(body: bytes, fields: dict[int, tuple[int, int, bool]]) -> bytes:
+    """``body`` (bytes 5–68) with little-endian values written at body offsets (wire offset
+    less 5): {offset: (value, size, signed)}."""
+    out = bytearray(body)
+    for offset, (value, size, signed) in fields.items():
+        out[offset : offset + size] = value.to_bytes(size, "little", signed=signed)
+    return bytes(out)
 
 
 def corrupt(packet: bytes, rng: random.Random) -> bytes:

@@ -4,15 +4,18 @@ Receive is liberal, send is strict (docs/client.md, "Liberal receive, strict sen
 packet whose header, length and CRC are right always decodes; each value outside what the
 document defines (a version other than 1 or 2, an execution status a command does not
 answer, status bytes beyond the one it defines, a command parameter outside its range or
-of the wrong length) becomes one :class:`Anomaly` on the decoded object. An anomaly holds
-exactly what a :class:`~gcu_async.errors.FieldRangeError` holds — the strict side raises
-that error for the same value (:meth:`Anomaly.error`).
+of the wrong length, a frame field outside its documented range or with reserved bits set)
+becomes one :class:`Anomaly` on the decoded object. An anomaly holds exactly what a
+:class:`~gcu_async.errors.FieldRangeError` holds — the strict side raises that error for
+the same value (:meth:`Anomaly.error`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import Any, NamedTuple
 
+from gcu_async._checks import check_int
 from gcu_async.errors import FieldRangeError
 
 
@@ -50,3 +53,29 @@ def check_raw(field: str, value: int, low: int, high: int, unit: str = "",
 
 
 VERSION_DETAIL = "V2.0.6 defines versions 1 and 2; decoded with its layout"
+
+
+class FieldRange(NamedTuple):
+    """The raw range V2.0.6 gives one frame field: what the frame's ``validate()`` enforces
+    on the send side and what its ``anomalies`` flag on the receive side (one table, so the
+    two sides cannot disagree)."""
+
+    field: str
+    low: int
+    high: int
+    unit: str = ""
+
+
+def check_ranges(frame: tuple[Any, ...], ranges: Iterable[FieldRange]) -> None:
+    """Send side: raise ``TypeError`` / :class:`FieldRangeError` for the first field of
+    ``frame`` (a NamedTuple) that is not an ``int`` in its range."""
+    for r in ranges:
+        check_int(r.field, getattr(frame, r.field), r.low, r.high, r.unit)
+
+
+def range_anomalies(frame: tuple[Any, ...], ranges: Iterable[FieldRange]) -> tuple[Anomaly, ...]:
+    """Receive side: one :class:`Anomaly` per field of a decoded ``frame`` outside its range."""
+    found: tuple[Anomaly, ...] = ()
+    for r in ranges:
+        found += check_raw(r.field, getattr(frame, r.field), r.low, r.high, r.unit)
+    return found

@@ -10,6 +10,7 @@ from typing import Any, NamedTuple
 
 from gcu_async._checks import check_int, type_error
 from gcu_async.errors import FieldRangeError
+from gcu_async.protocol.anomalies import Anomaly, FieldRange, check_ranges, range_anomalies
 from gcu_async.protocol.enums import (
     PIP_MODE_MASK,
     CameraFlags,
@@ -28,6 +29,35 @@ GCU_MAIN = struct.Struct("<BHhhhhhhhHhhh7x")
 GCU_SUB = struct.Struct("<BBBHiiiiHHBHb2x")
 """Bytes 38–68 of a GCU packet when the sub frame header (byte 37) is 0x01."""
 
+GCU_MAIN_RANGES = (
+    FieldRange("mode_raw", 0, 255),
+    FieldRange("pod_status_raw", 0, 0xFFFF),
+    FieldRange("miss_x", -1000, 1000),
+    FieldRange("miss_y", -1000, 1000),
+    *(FieldRange(f"relative_{axis}_raw", -18000, 17999, "0.01 deg") for axis in "xyz"),
+    FieldRange("roll_raw", -9000, 9000, "0.01 deg"),
+    FieldRange("pitch_raw", -18000, 17999, "0.01 deg"),
+    FieldRange("yaw_raw", 0, 35999, "0.01 deg"),
+    *(FieldRange(f"rate_{axis}_raw", *S16, "0.1 deg/s") for axis in "xyz"),
+)
+"""Each main-frame field's raw range, in wire order (:class:`FieldRange`)."""
+GCU_SUB_RANGES = (
+    FieldRange("hardware_version_raw", 0, 255),
+    FieldRange("firmware_version_raw", 0, 255),
+    FieldRange("pod_code", 0, 255),
+    FieldRange("fault_raw", 0, 0xFFFF),
+    FieldRange("target_distance_raw", *S32, "0.1 m"),
+    FieldRange("target_longitude_raw", *S32, "1e-7 deg"),
+    FieldRange("target_latitude_raw", *S32, "1e-7 deg"),
+    FieldRange("target_altitude_raw", *S32, "mm"),
+    FieldRange("camera1_zoom_raw", 0, 0xFFFF, "0.1x"),
+    FieldRange("camera2_zoom_raw", 0, 0xFFFF, "0.1x"),
+    FieldRange("thermal_flags_raw", 0, 0xFF),
+    FieldRange("camera_flags_raw", 0, 0xFFFF),
+    FieldRange("time_zone", -128, 127, "h"),
+)
+"""Each sub-frame field's raw range, in wire order (:class:`FieldRange`): none narrower
+than its wire type, so a decoded sub frame has no anomalies."""
 
 
 def _flag_names(flags: Any) -> list[str]:
@@ -155,16 +185,13 @@ class GcuMainFrame(NamedTuple):
             and -32768 <= wx <= 32767 and -32768 <= wy <= 32767 and -32768 <= wz <= 32767
         ):  # fmt: skip
             return
-        check_int("mode_raw", self.mode_raw, 0, 255)
-        check_int("pod_status_raw", self.pod_status_raw, 0, 0xFFFF)
-        check_int("miss_x", self.miss_x, -1000, 1000)
-        check_int("miss_y", self.miss_y, -1000, 1000)
-        for name in ("relative_x_raw", "relative_y_raw", "relative_z_raw", "pitch_raw"):
-            check_int(name, getattr(self, name), -18000, 17999, "0.01 deg")
-        check_int("roll_raw", self.roll_raw, -9000, 9000, "0.01 deg")
-        check_int("yaw_raw", self.yaw_raw, 0, 35999, "0.01 deg")
-        for name in ("rate_x_raw", "rate_y_raw", "rate_z_raw"):
-            check_int(name, getattr(self, name), *S16, "0.1 deg/s")
+        check_ranges(self, GCU_MAIN_RANGES)
+
+    @property
+    def anomalies(self) -> tuple[Anomaly, ...]:
+        """Fields of a decoded frame outside the ranges V2.0.6 gives them (miss distances,
+        angles), kept raw and flagged (docs/client.md, "Liberal receive, strict send")."""
+        return range_anomalies(self, GCU_MAIN_RANGES)
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -334,19 +361,7 @@ class GcuSubFrame(NamedTuple):
             and 0 <= cam <= 0xFFFF and -128 <= tz <= 127
         ):  # fmt: skip
             return
-        check_int("hardware_version_raw", self.hardware_version_raw, 0, 255)
-        check_int("firmware_version_raw", self.firmware_version_raw, 0, 255)
-        check_int("pod_code", self.pod_code, 0, 255)
-        check_int("fault_raw", self.fault_raw, 0, 0xFFFF)
-        check_int("target_distance_raw", self.target_distance_raw, *S32, "0.1 m")
-        check_int("target_longitude_raw", self.target_longitude_raw, *S32, "1e-7 deg")
-        check_int("target_latitude_raw", self.target_latitude_raw, *S32, "1e-7 deg")
-        check_int("target_altitude_raw", self.target_altitude_raw, *S32, "mm")
-        check_int("camera1_zoom_raw", self.camera1_zoom_raw, 0, 0xFFFF, "0.1x")
-        check_int("camera2_zoom_raw", self.camera2_zoom_raw, 0, 0xFFFF, "0.1x")
-        check_int("thermal_flags_raw", self.thermal_flags_raw, 0, 0xFF)
-        check_int("camera_flags_raw", self.camera_flags_raw, 0, 0xFFFF)
-        check_int("time_zone", self.time_zone, -128, 127, "h")
+        check_ranges(self, GCU_SUB_RANGES)
 
     def as_dict(self) -> dict[str, Any]:
         return {

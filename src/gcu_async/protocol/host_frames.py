@@ -11,6 +11,7 @@ from datetime import datetime
 from typing import Any, NamedTuple
 
 from gcu_async._checks import check_bool, check_instance, check_int, check_real
+from gcu_async.protocol.anomalies import Anomaly, FieldRange, check_ranges, range_anomalies
 from gcu_async.protocol.enums import HostFlags, SubFrameRequest
 from gcu_async.protocol.layout import S16, S32
 from gcu_async.protocol.layout import SUB_FRAME_HEADER as SUB_FRAME_HEADER  # re-exported
@@ -38,6 +39,29 @@ for _flag in HostFlags:
     _FLAG_BITS |= int(_flag)
 _NOT_FLAG_BITS = ~_FLAG_BITS
 """Reserved bits of byte 11 (what ``check_flags(..., HostFlags)`` rejects)."""
+
+HOST_MAIN_RANGES = (
+    *(FieldRange(f"control_{axis}_raw", -CONTROL_ANGLE_RAW, CONTROL_ANGLE_RAW)
+      for axis in ("roll", "pitch", "yaw")),
+    FieldRange("aircraft_roll_raw", -18000, 17999, "0.01 deg"),
+    FieldRange("aircraft_pitch_raw", -9000, 9000, "0.01 deg"),
+    FieldRange("aircraft_yaw_raw", 0, 35999, "0.01 deg"),
+    *(FieldRange(f"{kind}_{axis}_raw", *S16)
+      for kind in ("accel", "vel") for axis in ("north", "east", "up")),
+    FieldRange("subframe_request", 0, 255),
+)  # fmt: skip
+"""Each main-frame field's raw range but ``flags_raw`` (reserved bits: ``check_flags``),
+in wire order (:class:`FieldRange`): the control values, then the rest."""
+HOST_SUB_RANGES = (
+    FieldRange("longitude_raw", -1_800_000_000, 1_800_000_000, "1e-7 deg"),
+    FieldRange("latitude_raw", -900_000_000, 900_000_000, "1e-7 deg"),
+    FieldRange("altitude_raw", *S32, "mm"),
+    FieldRange("satellites", 0, 255),
+    FieldRange("gnss_ms", 0, MS_PER_WEEK - 1, "ms"),
+    FieldRange("gnss_week", 0, 32767),
+    FieldRange("relative_altitude_raw", *S32, "mm"),
+)
+"""Each sub-frame field's raw range, in wire order (:class:`FieldRange`)."""
 
 
 class ControlValues(NamedTuple):
@@ -234,19 +258,21 @@ class HostMainFrame(NamedTuple):
             and 0 <= req <= 255
         ):  # fmt: skip
             return
-        lo, hi = S16
-        for name in ("control_roll_raw", "control_pitch_raw", "control_yaw_raw"):
-            check_int(name, getattr(self, name), -CONTROL_ANGLE_RAW, CONTROL_ANGLE_RAW)
+        check_ranges(self, HOST_MAIN_RANGES[:3])
         check_flags("flags_raw", self.flags_raw, HostFlags)
-        check_int("aircraft_roll_raw", self.aircraft_roll_raw, -18000, 17999, "0.01 deg")
-        check_int("aircraft_pitch_raw", self.aircraft_pitch_raw, -9000, 9000, "0.01 deg")
-        check_int("aircraft_yaw_raw", self.aircraft_yaw_raw, 0, 35999, "0.01 deg")
-        for name in (
-            "accel_north_raw", "accel_east_raw", "accel_up_raw",
-            "vel_north_raw", "vel_east_raw", "vel_up_raw",
-        ):  # fmt: skip
-            check_int(name, getattr(self, name), lo, hi)
-        check_int("subframe_request", self.subframe_request, 0, 255)
+        check_ranges(self, HOST_MAIN_RANGES[3:])
+
+    @property
+    def anomalies(self) -> tuple[Anomaly, ...]:
+        """Fields of a decoded frame outside the ranges V2.0.6 gives them (control values,
+        aircraft attitude) and reserved flag bits, kept raw and flagged (docs/client.md,
+        "Liberal receive, strict send")."""
+        found = range_anomalies(self, HOST_MAIN_RANGES[:3])
+        reserved = self.flags_raw & _NOT_FLAG_BITS
+        if reserved:
+            detail = f"reserved bits 0x{reserved:X} must be zero"  # as check_flags words it
+            found += (Anomaly("flags_raw", self.flags_raw, 0, _FLAG_BITS, "", detail),)
+        return found + range_anomalies(self, HOST_MAIN_RANGES[3:])
 
     def as_dict(self) -> dict[str, Any]:
         """Every field, in units and raw, for JSON output."""
@@ -380,13 +406,14 @@ class HostSubFrame(NamedTuple):
             and -(2**31) <= rel <= 2**31 - 1
         ):  # fmt: skip
             return
-        check_int("longitude_raw", self.longitude_raw, -1_800_000_000, 1_800_000_000, "1e-7 deg")
-        check_int("latitude_raw", self.latitude_raw, -900_000_000, 900_000_000, "1e-7 deg")
-        check_int("altitude_raw", self.altitude_raw, -(2**31), 2**31 - 1, "mm")
-        check_int("satellites", self.satellites, 0, 255)
-        check_int("gnss_ms", self.gnss_ms, 0, MS_PER_WEEK - 1, "ms")
-        check_int("gnss_week", self.gnss_week, 0, 32767)
-        check_int("relative_altitude_raw", self.relative_altitude_raw, -(2**31), 2**31 - 1, "mm")
+        check_ranges(self, HOST_SUB_RANGES)
+
+    @property
+    def anomalies(self) -> tuple[Anomaly, ...]:
+        """Fields of a decoded frame outside the ranges V2.0.6 gives them (longitude,
+        latitude, GNSS time), kept raw and flagged (docs/client.md, "Liberal receive,
+        strict send")."""
+        return range_anomalies(self, HOST_SUB_RANGES)
 
     def as_dict(self) -> dict[str, Any]:
         return {

@@ -129,9 +129,13 @@ class HostPacket(NamedTuple):
 
     @property
     def anomalies(self) -> tuple[Anomaly, ...]:
-        """Everything V2.0.6 does not expect in this packet: its version, its command's
-        parameters (an :class:`AnomalousCommand`); empty for an ordinary packet."""
-        found = version_anomalies(self.version)
+        """Everything V2.0.6 does not expect in this packet, in wire order: its version, its
+        frames' fields (:attr:`HostMainFrame.anomalies`, :attr:`HostSubFrame.anomalies`),
+        its command's parameters (an :class:`AnomalousCommand`); empty for an ordinary
+        packet."""
+        found = version_anomalies(self.version) + self.main.anomalies
+        if isinstance(self.sub, HostSubFrame):
+            found += self.sub.anomalies
         if isinstance(self.command, AnomalousCommand):
             found += self.command.anomalies
         return found
@@ -191,9 +195,10 @@ class GcuPacket(NamedTuple):
 
     @property
     def anomalies(self) -> tuple[Anomaly, ...]:
-        """Everything V2.0.6 does not expect in this reply: its version, its feedback
+        """Everything V2.0.6 does not expect in this reply, in wire order: its version, its
+        main frame's fields (:attr:`GcuMainFrame.anomalies`), its feedback
         (:attr:`Feedback.anomalies`); empty for an ordinary reply."""
-        return version_anomalies(self.version) + self.feedback.anomalies
+        return version_anomalies(self.version) + self.main.anomalies + self.feedback.anomalies
 
 
 def _anomalies_dict(anomalies: tuple[Anomaly, ...]) -> dict[str, Any]:

@@ -697,6 +697,11 @@ local function anomaly(ctx, field, value, low, high, unit, detail)
   ctx.err(msg)
 end
 
+-- a frame field outside the raw range V2.0.6 gives it (gcu_async's FieldRange tables)
+local function range_anomaly(ctx, field, value, low, high, unit)
+  if value < low or value > high then anomaly(ctx, field, value, low, high, unit) end
+end
+
 local IMAGE_UNIT = "1/10000 of the image"
 
 local function p_mask(ctx, off)
@@ -867,17 +872,25 @@ local function host_main(ctx, tree)
       " (the mode gives its meaning: rate in 0.1/zoom deg/s, or angle in 0.01 deg)")
     item:add(F["host.main.control_as_angles_deg"], range, raw / 100,
       "As an angle: " .. pyfloat(raw / 100) .. " deg"):set_generated()
+    range_anomaly(ctx, "control_" .. axis .. "_raw", raw, -18000, 18000, "")
   end
   local flags = r(11, 1):uint()
   local fitem = t:add(F["host.main.flags_raw"], r(11, 1), flags, string.format("Flags: 0x%02x", flags))
   fitem:add(F["host.main.control_valid"], r(11, 1))
   fitem:add(F["host.main.ins_valid"], r(11, 1))
   local reserved = fitem:add(F["host.main.flags_reserved"], r(11, 1))
-  if band(flags, 0xFA) ~= 0 then reserved:add_proto_expert_info(E.reserved) end
+  if band(flags, 0xFA) ~= 0 then
+    reserved:add_proto_expert_info(E.reserved)
+    anomaly(ctx, "flags_raw", flags, 0, 0x05, "",
+      string.format("reserved bits 0x%X must be zero", band(flags, 0xFA)))
+  end
   local att = {le_int(r(12, 2)), le_int(r(14, 2)), le_uint(r(16, 2))}
+  local att_range = {{-18000, 17999}, {-9000, 9000}, {0, 35999}}
   for k, axis in ipairs(axes) do
     add_scaled(t, "host.main.aircraft_attitude_deg." .. axis, "host.main.aircraft_attitude_raw",
       r(10 + 2 * k, 2), att[k], 100, "Aircraft " .. axis, " deg")
+    range_anomaly(ctx, "aircraft_" .. axis .. "_raw", att[k], att_range[k][1], att_range[k][2],
+      "0.01 deg")
   end
   for k, axis in ipairs({"north", "east", "up"}) do
     add_scaled(t, "host.main.acceleration_m_s2." .. axis, "host.main.acceleration_raw",
@@ -901,6 +914,8 @@ local function host_sub(ctx, tree)
     1e7, "Latitude", " deg")
   add_scaled(t, "host.sub.longitude_deg", "host.sub.longitude_raw", r(38, 4), le_int(r(38, 4)),
     1e7, "Longitude", " deg")
+  range_anomaly(ctx, "longitude_raw", le_int(r(38, 4)), -1800000000, 1800000000, "1e-7 deg")
+  range_anomaly(ctx, "latitude_raw", le_int(r(42, 4)), -900000000, 900000000, "1e-7 deg")
   add_scaled(t, "host.sub.altitude_m", "host.sub.altitude_raw", r(46, 4), le_int(r(46, 4)),
     1000, "Altitude", " m (MSL)")
   t:add(F["host.sub.satellites"], r(50, 1))
@@ -912,6 +927,8 @@ local function host_sub(ctx, tree)
     "Document's rule: " .. doc .. " (leap seconds ignored)")
   item:add(F["host.sub.gnss_week"], r(55, 2), week, "GNSS week: " .. int_text(week))
   item:add(F["host.sub.gnss_ms"], r(51, 4), ms, "Milliseconds of week: " .. int_text(ms))
+  range_anomaly(ctx, "gnss_ms", ms, 0, 604799999, "ms")
+  range_anomaly(ctx, "gnss_week", week, 0, 32767, "")
   add_scaled(t, "host.sub.relative_altitude_m", "host.sub.relative_altitude_raw", r(57, 4),
     le_int(r(57, 4)), 1000, "Relative altitude", " m")
   add_reserved(t, r(61, 8))
@@ -973,17 +990,22 @@ local function gcu_main(ctx, tree)
     "Pod status: 0x%04x%s", status, #names > 0 and " (" .. table.concat(names, ", ") .. ")" or ""))
   add_bits(sitem, POD_STATUS, r(6, 2), true)
   for k, axis in ipairs({"x (right +)", "y (down +)"}) do
-    add_int(t, "gcu.main.miss_distance", r(6 + 2 * k, 2), le_int(r(6 + 2 * k, 2)),
-      "Miss distance " .. axis)
+    local miss = le_int(r(6 + 2 * k, 2))
+    add_int(t, "gcu.main.miss_distance", r(6 + 2 * k, 2), miss, "Miss distance " .. axis)
+    range_anomaly(ctx, "miss_" .. axis:sub(1, 1), miss, -1000, 1000, "")
   end
   for k, axis in ipairs({"x", "y", "z"}) do
+    local angle = le_int(r(10 + 2 * k, 2))
     add_scaled(t, "gcu.main.relative_angles_deg." .. axis, "gcu.main.relative_angles_raw",
-      r(10 + 2 * k, 2), le_int(r(10 + 2 * k, 2)), 100, "Relative angle " .. axis:upper(), " deg")
+      r(10 + 2 * k, 2), angle, 100, "Relative angle " .. axis:upper(), " deg")
+    range_anomaly(ctx, "relative_" .. axis .. "_raw", angle, -18000, 17999, "0.01 deg")
   end
   local att = {le_int(r(18, 2)), le_int(r(20, 2)), le_uint(r(22, 2))}
+  local att_range = {{-9000, 9000}, {-18000, 17999}, {0, 35999}}
   for k, axis in ipairs({"roll", "pitch", "yaw"}) do
     add_scaled(t, "gcu.main.attitude_deg." .. axis, "gcu.main.attitude_raw", r(16 + 2 * k, 2),
       att[k], 100, "Camera " .. axis, " deg")
+    range_anomaly(ctx, axis .. "_raw", att[k], att_range[k][1], att_range[k][2], "0.01 deg")
   end
   for k, axis in ipairs({"x", "y", "z"}) do
     add_scaled(t, "gcu.main.angular_rates_deg_s." .. axis, "gcu.main.angular_rates_raw",
