@@ -6,7 +6,7 @@ interpreter (the one that also lints and builds the docs), reduced on the others
 CI run has one full-size run and stays well inside its time budget (.ci/pythons.py).
 Reduced: the 100,000-command session contract runs 10,000 commands, the 500-command bad-link
 test one seed instead of two, the UDP exactly-once test over real sockets 200 commands at the
-13 ms hold instead of 500 at each of 5, 10 and 13 ms, and Hypothesis tests without their own
+10 ms hold instead of 500 at each of 5 and 10 ms, and Hypothesis tests without their own
 ``max_examples`` 25 examples instead of 100.
 """
 

@@ -74,12 +74,21 @@ def check_truthful(
 
 @pytest.mark.timeout(300)
 async def test_udp_loss_corruption_duplication_and_reordering_below_the_guard() -> None:
-    """30 % loss, 5 % corruption, 5 % duplication each way, 20 % of packets held 5, 10 or
-    13 ms (below the 15 ms guard): 500 commands per hold, half of them repeating one opcode
-    (each needs a proven null separation). 0 executed twice, 0 false outcomes. A reduced-size
-    run (tests/_scale.py): the 13 ms hold only, 200 commands."""
+    """30 % loss, 5 % corruption, 5 % duplication each way, 20 % of packets held 5 or 10 ms
+    (below the 15 ms guard): 500 commands per hold, half of them repeating one opcode (each
+    needs a proven null separation). 0 executed twice, 0 false outcomes. A reduced-size run
+    (tests/_scale.py): the 10 ms hold only, 200 commands.
 
-    holds = [(0.005, 1), (0.010, 2), (0.013, 3)] if FULL else [(0.013, 3)]
+    The hold is a timer in another Python process, so the delay a packet really gets is the
+    hold plus that process's event-loop latency (reading the datagram, firing the timer),
+    which this test cannot see. A 13 ms hold left 2 ms for that latency, and on the shared
+    2-core CI machine a command was executed twice at 13 ms (3.13, one of 200 commands)
+    with nothing else running: the run broke assumption A4, not the client. So the holds
+    keep at least 5 ms of slack; the boundary itself (13 ms, and the guard x 0.999) is
+    tested in virtual time, where delays are exact (test_session_contract.py,
+    test_session_regressions.py)."""
+
+    holds = [(0.005, 1), (0.010, 2)] if FULL else [(0.010, 3)]
     n = scaled(500, 200)
 
     async def one(hold: float, seed: int) -> Counter[str]:
