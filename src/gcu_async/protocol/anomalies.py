@@ -55,6 +55,11 @@ def check_raw(field: str, value: int, low: int, high: int, unit: str = "",
 VERSION_DETAIL = "V2.0.6 defines versions 1 and 2; decoded with its layout"
 
 
+def reserved_bits_detail(reserved: int) -> str:
+    """The detail of a flags value with ``reserved`` bits set, on both sides."""
+    return f"reserved bits 0x{reserved:X} must be zero"
+
+
 class FieldRange(NamedTuple):
     """The raw range V2.0.6 gives one frame field: what the frame's ``validate()`` enforces
     on the send side and what its ``anomalies`` flag on the receive side (one table, so the

@@ -11,7 +11,13 @@ from datetime import datetime
 from typing import Any, NamedTuple
 
 from gcu_async._checks import check_bool, check_instance, check_int, check_real
-from gcu_async.protocol.anomalies import Anomaly, FieldRange, check_ranges, range_anomalies
+from gcu_async.protocol.anomalies import (
+    Anomaly,
+    FieldRange,
+    check_ranges,
+    range_anomalies,
+    reserved_bits_detail,
+)
 from gcu_async.protocol.enums import HostFlags, SubFrameRequest
 from gcu_async.protocol.layout import S16, S32
 from gcu_async.protocol.layout import SUB_FRAME_HEADER as SUB_FRAME_HEADER  # re-exported
@@ -270,7 +276,7 @@ class HostMainFrame(NamedTuple):
         found = range_anomalies(self, HOST_MAIN_RANGES[:3])
         reserved = self.flags_raw & _NOT_FLAG_BITS
         if reserved:
-            detail = f"reserved bits 0x{reserved:X} must be zero"  # as check_flags words it
+            detail = reserved_bits_detail(reserved)
             found += (Anomaly("flags_raw", self.flags_raw, 0, _FLAG_BITS, "", detail),)
         return found + range_anomalies(self, HOST_MAIN_RANGES[3:])
 

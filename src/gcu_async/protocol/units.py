@@ -16,6 +16,7 @@ from typing import Any, NamedTuple, TypeVar
 
 from gcu_async._checks import check_enum, check_int, check_real, type_error
 from gcu_async.errors import FieldRangeError
+from gcu_async.protocol.anomalies import reserved_bits_detail
 
 _NT = TypeVar("_NT", bound=tuple[Any, ...])
 _new = tuple.__new__
@@ -117,7 +118,7 @@ def check_flags(field: str, value: object, allowed: int | type[IntFlag]) -> int:
     bits = check_int(field, value, 0, 0xFFFF)
     if bits & ~mask:
         raise FieldRangeError(
-            field, value, 0, mask, detail=f"reserved bits 0x{bits & ~mask:X} must be zero"
+            field, value, 0, mask, detail=reserved_bits_detail(bits & ~mask)
         )
     return bits
 
