@@ -312,3 +312,12 @@ def test_a_bad_body_limit_is_refused_at_once(max_body: Any) -> None:
 
     with pytest.raises(ValueError, match=r"max_body: .* is outside the allowed range \[2, 1048576\]"):
         create_app("udp://127.0.0.1:2337", local_port=0, max_body=max_body)
+
+
+async def test_a_null_body_is_not_an_empty_one(web: Web) -> None:
+    """JSON ``null`` used to read as "no body": every default, executed."""
+    for name in ("take_photo", "enter_euler_control", "centre"):
+        response = await post(web, name, b"null", **JSON)
+        assert response.status_code == 422, (name, response.text)
+        assert "the body must be a JSON object, got null" in response.json()["error"]
+    assert executed(web) == 0

@@ -225,7 +225,10 @@ async def run_command(request: Request) -> Response:
     try:
         body = await read_json(request, request.app.state.max_body)
     except BodyError as exc:
-        return _error(exc.status, exc, exc.kind)
+        response = _error(exc.status, exc, exc.kind)
+        if exc.status == 413:  # the rest of the body is unread: end the connection, not drain it
+            response.headers["connection"] = "close"
+        return response
     connection = _connection(request)
     try:
         values = parse_params(spec, body)

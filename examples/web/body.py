@@ -98,14 +98,14 @@ def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
 
 
 def parse_json(raw: bytes) -> object:
-    """The decoded body (``None`` for an empty one); :class:`BodyError` 400 naming what is
-    wrong."""
+    """The decoded body (``{}`` for an empty one: all defaults; JSON ``null`` is not an
+    empty body); :class:`BodyError` 400 naming what is wrong."""
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise BodyError(400, "BadRequest", f"the body is not UTF-8: {exc}") from None
     if not text.strip():
-        return None
+        return {}
     depth = nesting_depth(text)
     if depth > MAX_DEPTH:
         raise BodyError(400, "BadRequest", f"the body is not valid JSON for a command: nesting "
@@ -117,6 +117,6 @@ def parse_json(raw: bytes) -> object:
 
 
 async def read_json(request: Request, limit: int = DEFAULT_MAX_BODY) -> object:
-    """The request's JSON body (``None`` when empty), checked as the module says."""
+    """The request's JSON body (``{}`` when empty), checked as the module says."""
     _check_type(request.headers.get("content-type"))
     return parse_json(await read_bounded(request, limit))

@@ -100,10 +100,9 @@ COMMANDS: dict[str, CommandSpec] = {entry.method: _spec(entry) for entry in CATA
 
 
 def parse_params(spec: CommandSpec, body: object) -> dict[str, Any]:
-    """The parameters of ``spec`` from a decoded JSON body (an object, or ``None`` for no
-    body), with defaults filled in. Raises ``ValueError`` naming the offending parameter."""
-    if body is None:
-        body = {}
+    """The parameters of ``spec`` from a decoded JSON body (an object; an empty body reads
+    as ``{}``), with defaults filled in. Raises ``ValueError`` naming the offending
+    parameter."""
     if not isinstance(body, dict):
         raise ValueError(f"{spec.name}: the body must be a JSON object, got {_json_type(body)}")
     unknown = sorted(set(body) - set(spec.params))
@@ -112,13 +111,16 @@ def parse_params(spec: CommandSpec, body: object) -> dict[str, Any]:
         raise ValueError(f"{spec.name}: unknown parameter(s) {', '.join(unknown)} "
                          f"(allowed: {allowed})")  # fmt: skip
     values: dict[str, Any] = {}
-    for name, param in spec.params.items():
+    missing = []
+    for name, param in spec.params.items():  # the values given first: their errors name them
         if name in body:
             values[name] = _convert(name, param, body[name])
         elif param.required:
-            raise ValueError(f"{name}: required parameter of {spec.name} is missing")
+            missing.append(name)
         else:
             values[name] = param.default
+    if missing:
+        raise ValueError(f"{missing[0]}: required parameter of {spec.name} is missing")
     return values
 
 
