@@ -59,8 +59,9 @@ class Web:
         return self.base_url.replace("http://", "ws://", 1) + "/ws/telemetry"
 
     async def command(self, name: str, params: Any = None) -> httpx.Response:
-        """POST a command with a JSON body (Python's encoder: ``Infinity`` passes through)."""
-        body = json.dumps(params).encode()
+        """POST a command with a JSON body (Python's encoder: ``Infinity`` passes through;
+        ``None``: an empty body, all defaults)."""
+        body = b"" if params is None else json.dumps(params).encode()
         headers = {"content-type": "application/json"}
         return await self.http.post(f"/api/commands/{name}", content=body, headers=headers)
 
