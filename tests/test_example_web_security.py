@@ -7,6 +7,7 @@ the body limit's memory bound are tests/test_example_web_bodies.py.
 
 from __future__ import annotations
 
+import asyncio
 import json
 from collections.abc import AsyncIterator
 from typing import Any
@@ -288,13 +289,18 @@ async def test_a_body_over_the_limit_is_413(web: Web) -> None:
     assert response.status_code == 413, response.text
     assert "allowed range [0, 16384] bytes" in response.json()["error"]
 
-    async def chunks() -> AsyncIterator[bytes]:  # no Content-Length: chunked, counted as read
-        for _ in range(10):
-            yield b" " * 4096
-
-    response = await web.http.post("/api/commands/take_photo", content=chunks(), headers=JSON)
-    assert response.status_code == 413, response.text
-    assert "more than 16384 bytes" in response.json()["error"]
+    # no Content-Length (chunked): counted as it is read; one byte over is refused
+    port = int(web.base_url.rsplit(":", 1)[1])
+    reader, writer = await asyncio.open_connection("127.0.0.1", port)
+    pieces = [b" " * 4096] * 4 + [b"{}"]
+    body = b"".join(b"%x\r\n%s\r\n" % (len(p), p) for p in pieces) + b"0\r\n\r\n"
+    writer.write(b"POST /api/commands/take_photo HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+                 b"Content-Type: application/json\r\nTransfer-Encoding: chunked\r\n\r\n" + body)
+    answer = await asyncio.wait_for(reader.read(), 5.0)  # to the end: the server closes
+    writer.close()
+    assert answer.startswith(b"HTTP/1.1 413 "), answer
+    assert b"connection: close" in answer.lower()
+    assert b"more than 16384 bytes" in answer
     assert executed(web) == 0
 
 
