@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import hmac
 import json
+import logging
 import re
 from collections.abc import Awaitable, Callable, Iterable, MutableMapping
 from dataclasses import dataclass
@@ -53,6 +54,8 @@ WS_TOKEN_PREFIX = "gcu-async.bearer."
 TOKEN_PATTERN = re.compile(r"[A-Za-z0-9._~-]{16,256}")
 """A token: 16–256 URL-safe characters (``secrets.token_urlsafe()`` makes one); the set
 fits a URL fragment, a header and a WebSocket subprotocol unescaped."""
+log = logging.getLogger("gcu_async.examples.web")
+
 _DEFAULT_PORTS = {"http": 80, "https": 443, "ws": 80, "wss": 443}
 
 
@@ -203,6 +206,9 @@ class Guard:
             try:
                 check(self.policy, scope)
             except Refusal as refusal:
+                # INFO, not WARNING: any page the user opens may cause these
+                log.info("refused %s %s: %s", scope.get("method", "WEBSOCKET"),
+                         scope.get("path", ""), refusal)  # fmt: skip
                 await _refuse(scope, send, refusal)
                 return
         await self.app(scope, receive, send)
