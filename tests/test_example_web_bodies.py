@@ -35,7 +35,6 @@ pytest.importorskip(
 )
 
 from _web_example import Web, running_web  # noqa: E402
-
 from gcu_async.sim import GcuSimulator  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -104,7 +103,9 @@ NON_FINITE = st.sampled_from([math.nan, math.inf, -math.inf])
 OUT_OF_RANGE_FLOAT = st.floats(min_value=1e7, allow_nan=False, allow_infinity=False) | st.floats(
     max_value=-1e7, allow_nan=False, allow_infinity=False
 )
-WRONG_TYPE = st.none() | st.booleans() | st.text(max_size=20) | st.just({}) | st.just([])
+WRONG_TYPE: st.SearchStrategy[Any] = (
+    st.none() | st.booleans() | st.text(max_size=20) | st.just({}) | st.just([])
+)
 SCALAR = HUGE | NON_FINITE | OUT_OF_RANGE_FLOAT | WRONG_TYPE
 NESTED = st.recursive(SCALAR, lambda inner: st.lists(inner, max_size=4)
                       | st.dictionaries(st.text(max_size=5), inner, max_size=3),

@@ -25,6 +25,7 @@ pytest.importorskip(
 )
 from websockets.asyncio.client import connect as ws_connect  # noqa: E402
 from websockets.exceptions import InvalidStatus  # noqa: E402
+from websockets.typing import Origin, Subprotocol  # noqa: E402
 
 from _web_example import Web, next_message, running_web  # noqa: E402
 
@@ -128,15 +129,15 @@ async def test_json_bodies_only_as_json(web: Web) -> None:
 @pytest.mark.parametrize("origin", ["http://evil.example", "null", "http://127.0.0.2:8000"])
 async def test_websocket_from_a_foreign_origin_is_refused(web: Web, origin: str) -> None:
     with pytest.raises(InvalidStatus) as caught:
-        async with ws_connect(web.ws_url, origin=origin, open_timeout=5):  # type: ignore[arg-type]
+        async with ws_connect(web.ws_url, origin=Origin(origin), open_timeout=5):
             pass
     assert caught.value.response.status_code == 403
 
 
 async def test_websocket_from_its_own_page_streams(web: Web) -> None:
-    async with ws_connect(web.ws_url, origin=own_origin(web)) as ws:  # type: ignore[arg-type]
+    async with ws_connect(web.ws_url, origin=Origin(own_origin(web))) as ws:
         assert (await next_message(ws))["type"] in ("telemetry", "link")
-    async with ws_connect(web.ws_url, subprotocols=["gcu-async.telemetry"]) as ws:  # type: ignore[list-item]
+    async with ws_connect(web.ws_url, subprotocols=[Subprotocol("gcu-async.telemetry")]) as ws:
         assert ws.subprotocol == "gcu-async.telemetry"
         assert (await next_message(ws))["type"] in ("telemetry", "link")
 
@@ -148,7 +149,8 @@ async def test_websocket_from_its_own_page_streams(web: Web) -> None:
 async def test_foreign_host_is_refused(web: Web, host: str) -> None:
     port = web.base_url.rsplit(":", 1)[1]
     host = host.format(port=port)
-    for method, path in (("GET", "/"), ("GET", "/api/status"), ("POST", "/api/commands/take_photo")):
+    paths = (("GET", "/"), ("GET", "/api/status"), ("POST", "/api/commands/take_photo"))
+    for method, path in paths:
         response = await web.http.request(method, path, headers={"host": host, **JSON},
                                           content=b"{}")  # fmt: skip
         assert response.status_code == 403, (host, path, response.text)
@@ -193,8 +195,9 @@ async def test_token_is_needed_for_the_api_and_the_socket(web: Web) -> None:
             assert response.headers["www-authenticate"] == "Bearer"
             assert TOKEN not in response.text
     for protocols in (None, ["gcu-async.telemetry"], ["gcu-async.telemetry", "gcu-async.bearer.x"]):
+        offered = None if protocols is None else [Subprotocol(p) for p in protocols]
         with pytest.raises(InvalidStatus) as caught:
-            async with ws_connect(web.ws_url, subprotocols=protocols, open_timeout=5):  # type: ignore[arg-type]
+            async with ws_connect(web.ws_url, subprotocols=offered, open_timeout=5):
                 pass
         assert caught.value.response.status_code == 403
     assert executed(web) == 0
@@ -206,8 +209,9 @@ async def test_token_is_needed_for_the_api_and_the_socket(web: Web) -> None:
     assert web.sim.simulator.model.state.camera.photos == {1: 1}
     async with ws_connect(web.ws_url, additional_headers=bearer) as ws:
         assert (await next_message(ws))["type"] in ("telemetry", "link")
-    protocols = ["gcu-async.telemetry", f"gcu-async.bearer.{TOKEN}"]
-    async with ws_connect(web.ws_url, subprotocols=protocols, origin=own_origin(web)) as ws:  # type: ignore[arg-type]
+    offer = [Subprotocol("gcu-async.telemetry"), Subprotocol(f"gcu-async.bearer.{TOKEN}")]
+    async with ws_connect(web.ws_url, subprotocols=offer,
+                          origin=Origin(own_origin(web))) as ws:  # fmt: skip
         assert ws.subprotocol == "gcu-async.telemetry"  # never the token echoed back
         assert (await next_message(ws))["type"] in ("telemetry", "link")
 
@@ -316,7 +320,8 @@ async def test_the_body_limit_is_configurable(web: Web) -> None:
 def test_a_bad_body_limit_is_refused_at_once(max_body: Any) -> None:
     from examples.web.app import create_app
 
-    with pytest.raises(ValueError, match=r"max_body: .* is outside the allowed range \[2, 1048576\]"):
+    message = r"max_body: .* is outside the allowed range \[2, 1048576\]"
+    with pytest.raises(ValueError, match=message):
         create_app("udp://127.0.0.1:2337", local_port=0, max_body=max_body)
 
 

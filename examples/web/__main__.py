@@ -166,14 +166,28 @@ async def gcu_endpoint(args: argparse.Namespace) -> AsyncIterator[tuple[str, dic
         yield server.url, options
 
 
-def _announce(args: argparse.Namespace) -> None:
+class _Server(uvicorn.Server):
+    """uvicorn's server, announcing the console's URL once it listens (the real port,
+    also with ``--port 0``)."""
+
+    def __init__(self, config: uvicorn.Config, args: argparse.Namespace) -> None:
+        super().__init__(config)
+        self.args = args
+
+    async def startup(self, sockets: list[socket.socket] | None = None) -> None:
+        await super().startup(sockets)
+        if self.started and self.servers and self.servers[0].sockets:
+            _announce(self.args, self.servers[0].sockets[0].getsockname()[1])
+
+
+def _announce(args: argparse.Namespace, port: int) -> None:
     """Say where the page is (with its token) and warn about an open, token-less console."""
     host = normalize_host(args.host)
     shown = "127.0.0.1" if host in WILDCARD_HOSTS else args.host
     if ":" in shown:
         shown = f"[{normalize_host(shown)}]"
     fragment = f"#token={args.token}" if args.token else ""
-    print(f"console: http://{shown}:{args.port}/{fragment}", flush=True)
+    print(f"console: http://{shown}:{port}/{fragment}", flush=True)
     if host not in LOOPBACK_HOSTS and args.token is None:
         print(f"warning: listening on {args.host} without a token: anyone who reaches the "
               "port can move the gimbal (use --token)", flush=True)  # fmt: skip
@@ -183,13 +197,12 @@ async def main(args: argparse.Namespace) -> None:
     async with gcu_endpoint(args) as (url, options):
         app = create_app(url, telemetry_hz=args.telemetry_hz, token=args.token,
                          allowed_hosts=args.allowed_hosts, **options)  # fmt: skip
-        _announce(args)
         feed = None
         if args.aircraft_heading is not None:
             feed = asyncio.create_task(feed_parked_aircraft(app.state.gcu, args.aircraft_heading))
         config = uvicorn.Config(app, host=args.host, port=args.port, log_level="info")
         try:
-            await uvicorn.Server(config).serve()
+            await _Server(config, args).serve()
         finally:
             if feed is not None:
                 feed.cancel()
