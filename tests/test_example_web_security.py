@@ -176,6 +176,13 @@ async def test_loopback_names_are_served(web: Web) -> None:
 async def test_allowed_hosts_replace_the_default(web: Web) -> None:
     assert (await web.http.get("/", headers={"host": "gimbal.lan:8000"})).status_code == 200
     assert (await web.http.get("/", headers={"host": "localhost"})).status_code == 403
+    # behind a TLS proxy: Host without a port, the page's origin https on 443
+    for origin, status in (("https://gimbal.lan", 200), ("https://gimbal.lan:443", 200),
+                           ("http://gimbal.lan", 200), ("https://gimbal.lan:8443", 403),
+                           ("https://evil.lan", 403)):  # fmt: skip
+        response = await post(web, "take_photo", b"{}", **JSON, host="gimbal.lan", origin=origin)
+        assert response.status_code == status, (origin, response.text)
+    assert executed(web) == 3
 
 
 # -- the bearer token ------------------------------------------------------------------------

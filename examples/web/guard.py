@@ -10,7 +10,8 @@ sees them:
   names without port): a rebound name arrives with the attacker's name in ``Host``;
 - **a state-changing request (any method but GET, HEAD, OPTIONS) or a WebSocket from
   another origin**: a browser sends ``Origin`` with both; it must be this server itself
-  (scheme ``http``/``https``, the same host and port as ``Host``). ``Origin: null`` (a
+  (scheme ``http``/``https``, the same host and port as ``Host``; a ``Host`` without a
+  port matches the default port of the origin's scheme, as behind a TLS proxy). ``Origin: null`` (a
   sandboxed frame, a ``data:`` page, a redirect) is refused. Without ``Origin`` (curl, a
   script) ``Sec-Fetch-Site``, when sent, must be ``same-origin`` or ``none``;
 - **with a token** (:attr:`Policy.token`): any ``/api/`` request or ``/ws/`` socket without
@@ -56,7 +57,7 @@ TOKEN_PATTERN = re.compile(r"[A-Za-z0-9._~-]{16,256}")
 fits a URL fragment, a header and a WebSocket subprotocol unescaped."""
 log = logging.getLogger("gcu_async.examples.web")
 
-_DEFAULT_PORTS = {"http": 80, "https": 443, "ws": 80, "wss": 443}
+_DEFAULT_PORTS = {"http": 80, "https": 443}
 
 
 def check_token(token: str | None) -> str | None:
@@ -136,7 +137,7 @@ def check(policy: Policy, scope: Scope) -> None:
     host = _check_host(policy, headers.get("host"))
     websocket = scope["type"] == "websocket"
     if websocket or scope.get("method", "GET") not in SAFE_METHODS:
-        _check_origin(headers, host, scope.get("scheme", "http"))
+        _check_origin(headers, host)
     if policy.token is not None and scope.get("path", "").startswith(PROTECTED_PREFIXES):
         _check_token(policy.token, headers, websocket)
 
@@ -154,7 +155,7 @@ def _check_host(policy: Policy, value: str | None) -> tuple[str, int | None]:
     return host
 
 
-def _check_origin(headers: dict[str, str], host: tuple[str, int | None], scheme: str) -> None:
+def _check_origin(headers: dict[str, str], host: tuple[str, int | None]) -> None:
     origin = headers.get("origin")
     if origin is None:
         site = headers.get("sec-fetch-site")
@@ -165,10 +166,11 @@ def _check_origin(headers: dict[str, str], host: tuple[str, int | None], scheme:
     allowed = False
     if parts is not None and parts.scheme in ("http", "https") and parts.path == "":
         theirs = _split_host(parts.netloc)
-        default = _DEFAULT_PORTS.get(scheme, 80)
-        if theirs is not None:
-            ours = (host[0], host[1] or default)
-            allowed = (theirs[0], theirs[1] or _DEFAULT_PORTS[parts.scheme]) == ours
+        if theirs is not None and theirs[0] == host[0]:
+            port = theirs[1] or _DEFAULT_PORTS[parts.scheme]
+            # Host without a port: the default of the scheme the browser used (behind a
+            # TLS proxy the app sees http, the page is https)
+            allowed = port == (host[1] or _DEFAULT_PORTS[parts.scheme])
     if not allowed:
         raise Refusal(403, "ForbiddenOrigin",
                       f"Origin {origin[:100]!r} is not this console: requests that change "
