@@ -307,3 +307,34 @@ def test_a_declared_huge_body_is_refused_before_it_is_read(
     assert result.get("closed") and result["sent"] < 16 * 2**20, result["sent"]
     with httpx.Client(base_url=f"http://127.0.0.1:{port}", timeout=5.0) as http:
         assert http.get("/api/commands").status_code == 200  # still serving
+
+
+HEADER_TEXT = st.text(st.characters(min_codepoint=0x20, max_codepoint=0x7E), max_size=60).map(
+    str.strip
+)
+"""Printable ASCII, no surrounding space: what an HTTP client can put in a header."""
+LOOPBACK_PORTISH = st.sampled_from(["127.0.0.1", "localhost", "[::1]", "LOCALHOST.", "evil"])
+
+
+@settings(deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(host=HEADER_TEXT | LOOPBACK_PORTISH, origin=st.none() | HEADER_TEXT | st.builds(
+    lambda scheme, name, port: f"{scheme}://{name}{port}",
+    st.sampled_from(["http", "https", "ws", "file", "null"]), LOOPBACK_PORTISH | HEADER_TEXT,
+    st.sampled_from(["", ":80", ":0", ":99999", ":x"]) | st.integers(0, 70000).map(
+        lambda p: f":{p}")))  # fmt: skip
+def test_hostile_host_and_origin_headers_are_answered_never_500(
+    threaded_web: ThreadedWeb, host: str, origin: str | None
+) -> None:
+    """Whatever ``Host`` and ``Origin`` say, the answer is the guard's 403 or (where both
+    are the console's own) the command's own 422 for its bad ratio; never a 500."""
+    web = threaded_web.web
+    assert web is not None
+    headers = {"host": host, "content-type": "application/json"}
+    if origin is not None:
+        headers["origin"] = origin
+    with httpx.Client(base_url=web.base_url, timeout=10.0) as http:
+        response = http.post("/api/commands/zoom_to", content=b'{"ratio": 0}', headers=headers)
+    assert response.status_code in (400, 403, 422), (host, origin, response.text[:300])
+    if response.status_code == 403:
+        assert response.json()["kind"] in ("ForbiddenHost", "ForbiddenOrigin")
+    assert threaded_web.executed == 0

@@ -162,7 +162,10 @@ def _check_origin(headers: dict[str, str], host: tuple[str, int | None]) -> None
         if site is not None and site not in ("same-origin", "none"):
             raise Refusal(403, "ForbiddenOrigin", f"a {site} request without Origin is refused")
         return
-    parts = urlsplit(origin) if origin != "null" else None
+    try:
+        parts = urlsplit(origin) if origin != "null" else None
+    except ValueError:  # "http://[" and the like
+        parts = None
     allowed = False
     if parts is not None and parts.scheme in ("http", "https") and parts.path == "":
         theirs = _split_host(parts.netloc)
