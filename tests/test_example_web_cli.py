@@ -93,3 +93,19 @@ def test_the_entry_point_prints_the_url_with_its_token() -> None:
         except subprocess.TimeoutExpired:
             process.kill()
             process.communicate()
+
+
+def test_app_from_env_takes_the_token_and_hosts(monkeypatch: pytest.MonkeyPatch) -> None:
+    from examples.web.app import app_from_env
+
+    monkeypatch.setenv("GCU_LOCAL_PORT", "0")
+    monkeypatch.setenv("GCU_WEB_TOKEN", "env-token-0123456789abcdef")
+    monkeypatch.setenv("GCU_WEB_ALLOWED_HOSTS", "gimbal.lan,,pod.local ")
+    policy = app_from_env().state.policy
+    assert policy.token == "env-token-0123456789abcdef"
+    assert policy.allowed_hosts == {"127.0.0.1", "localhost", "::1", "gimbal.lan", "pod.local"}
+    monkeypatch.setenv("GCU_WEB_TOKEN", "")  # empty: no token
+    assert app_from_env().state.policy.token is None
+    monkeypatch.setenv("GCU_WEB_TOKEN", "too-short")
+    with pytest.raises(ValueError, match="token: expected 16 to 256 characters"):
+        app_from_env()
