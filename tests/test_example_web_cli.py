@@ -109,3 +109,15 @@ def test_app_from_env_takes_the_token_and_hosts(monkeypatch: pytest.MonkeyPatch)
     monkeypatch.setenv("GCU_WEB_TOKEN", "too-short")
     with pytest.raises(ValueError, match="token: expected 16 to 256 characters"):
         app_from_env()
+
+
+def test_the_page_uses_the_servers_names_for_the_token() -> None:
+    """app.js cannot import guard.py: the subprotocol names and the token's characters it
+    uses are checked here against the server's."""
+    from examples.web.guard import TOKEN_PATTERN, WS_PROTOCOL, WS_TOKEN_PREFIX
+
+    script = (ROOT / "examples" / "web" / "static" / "app.js").read_text(encoding="utf-8")
+    assert f'"{WS_PROTOCOL}"' in script
+    assert f"`{WS_TOKEN_PREFIX}${{TOKEN}}`" in script
+    characters = TOKEN_PATTERN.pattern.split("{")[0]  # "[A-Za-z0-9._~-]"
+    assert f"token=({characters}+)" in script

@@ -11,9 +11,10 @@ sees them:
 - **a state-changing request (any method but GET, HEAD, OPTIONS) or a WebSocket from
   another origin**: a browser sends ``Origin`` with both; it must be this server itself
   (scheme ``http``/``https``, the same host and port as ``Host``; a ``Host`` without a
-  port matches the default port of the origin's scheme, as behind a TLS proxy). ``Origin: null`` (a
-  sandboxed frame, a ``data:`` page, a redirect) is refused. Without ``Origin`` (curl, a
-  script) ``Sec-Fetch-Site``, when sent, must be ``same-origin`` or ``none``;
+  port matches the default port of the origin's scheme, as behind a TLS proxy).
+  ``Origin: null`` (a sandboxed frame, a ``data:`` page, a redirect) is refused. Without
+  ``Origin`` (curl, a script) ``Sec-Fetch-Site``, when sent, must be ``same-origin`` or
+  ``none``;
 - **with a token** (:attr:`Policy.token`): any ``/api/`` request or ``/ws/`` socket without
   ``Authorization: Bearer <token>``. A browser cannot set headers on a WebSocket, so there
   the token may come as the subprotocol ``gcu-async.bearer.<token>`` offered beside
