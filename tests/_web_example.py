@@ -29,6 +29,12 @@ if str(ROOT) not in sys.path:  # the examples live beside src/, not inside the p
 from examples.web.app import create_app  # noqa: E402
 from examples.web.connection import GcuConnection  # noqa: E402
 
+CHROMIUM = "/usr/bin/chromium"
+"""Debian's Chromium, driven by Playwright (never ``playwright install``)."""
+CHROMIUM_ARGS = [
+    "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+    "--disable-background-networking", "--disable-component-update", "--disable-sync",
+]  # fmt: skip
 START_TIMEOUT = 5.0
 CONNECT_TIMEOUT = 5.0
 """Bound on the wait for the app's client to open against a running simulator."""
@@ -59,8 +65,9 @@ class Web:
         return self.base_url.replace("http://", "ws://", 1) + "/ws/telemetry"
 
     async def command(self, name: str, params: Any = None) -> httpx.Response:
-        """POST a command with a JSON body (Python's encoder: ``Infinity`` passes through)."""
-        body = json.dumps(params).encode()
+        """POST a command with a JSON body (Python's encoder: ``Infinity`` passes through;
+        ``None``: an empty body, all defaults)."""
+        body = b"" if params is None else json.dumps(params).encode()
         headers = {"content-type": "application/json"}
         return await self.http.post(f"/api/commands/{name}", content=body, headers=headers)
 
@@ -72,9 +79,10 @@ class Web:
 
 
 @contextlib.asynccontextmanager
-async def serve(app: Any) -> AsyncIterator[str]:
-    """Run ``app`` under uvicorn on 127.0.0.1, an ephemeral port; yield its base URL."""
-    config = uvicorn.Config(app, host="127.0.0.1", port=0, log_level="warning", lifespan="on")
+async def serve(app: Any, host: str = "127.0.0.1") -> AsyncIterator[str]:
+    """Run ``app`` under uvicorn on ``host`` (loopback), an ephemeral port; yield its base
+    URL."""
+    config = uvicorn.Config(app, host=host, port=0, log_level="warning", lifespan="on")
     server = uvicorn.Server(config)
 
     async def run() -> None:
@@ -93,7 +101,7 @@ async def serve(app: Any) -> AsyncIterator[str]:
         raise RuntimeError(f"uvicorn did not start within {START_TIMEOUT} s")
     port = server.servers[0].sockets[0].getsockname()[1]
     try:
-        yield f"http://127.0.0.1:{port}"
+        yield f"http://{host}:{port}"
     finally:
         server.should_exit = True
         await asyncio.wait_for(task, START_TIMEOUT)

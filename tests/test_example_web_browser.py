@@ -32,22 +32,20 @@ async_api = pytest.importorskip(
     reason="the browser tests need Playwright: pip install playwright (never `playwright "
     "install`: they drive Debian's chromium)",
 )
-CHROMIUM = "/usr/bin/chromium"
+from _web_example import CHROMIUM  # noqa: E402
+
 if not os.access(CHROMIUM, os.X_OK):
     pytest.skip(f"the browser tests need {CHROMIUM}: apt-get install chromium",
                 allow_module_level=True)  # fmt: skip
 
 from _web_example import (  # noqa: E402
+    CHROMIUM_ARGS,
     Web,
     aircraft_heading,
     free_udp_port,
     running_web,
 )
 
-CHROMIUM_ARGS = [
-    "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-    "--disable-background-networking", "--disable-component-update", "--disable-sync",
-]  # fmt: skip
 DESKTOP = {"width": 1280, "height": 800}
 PHONE = {"width": 390, "height": 844}
 WAIT_MS = 5000

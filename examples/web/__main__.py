@@ -6,6 +6,11 @@ connects to it; otherwise the app connects to ``--gcu`` (default ``$GCU_URL`` or
 when it does: ``--sim-delay 10`` powers the simulated GCU 10 s after the app, to see the
 page wait. ``--aircraft-heading DEG`` (with ``--sim`` only) feeds a parked aircraft facing
 DEG, so that "Ahead" points somewhere other than north.
+
+``--token`` (or ``$GCU_WEB_TOKEN``; ``--token auto`` makes one) makes ``/api/`` and ``/ws/``
+need ``Authorization: Bearer <token>``; the page is opened as ``/#token=<token>`` (printed
+at start). ``--allowed-host NAME`` allows one more name in ``Host`` (loopback addresses,
+``localhost`` and a non-wildcard ``--host`` are allowed already).
 """
 
 from __future__ import annotations
@@ -14,6 +19,7 @@ import argparse
 import asyncio
 import contextlib
 import os
+import secrets
 import socket
 from collections.abc import AsyncIterator
 from typing import Any
@@ -23,7 +29,18 @@ import uvicorn
 from gcu_async.sim import GcuSimulator
 
 from .aircraft import check_heading, feed_parked_aircraft
-from .app import DEFAULT_GCU_URL, DEFAULT_TELEMETRY_HZ, create_app
+from .app import (
+    DEFAULT_GCU_URL,
+    DEFAULT_TELEMETRY_HZ,
+    HOSTS_ENV,
+    TOKEN_ENV,
+    allowed_hosts_from,
+    create_app,
+)
+from .guard import LOOPBACK_HOSTS, check_token, normalize_host
+
+WILDCARD_HOSTS = frozenset({"0.0.0.0", "::", ""})
+"""Bind addresses that are no host name a browser would send in ``Host``."""
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -69,7 +86,31 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         default=DEFAULT_TELEMETRY_HZ,
         help="WebSocket telemetry rate bound, (0, 50] (default 20)",
     )
+    parser.add_argument(
+        "--token",
+        default=os.environ.get(TOKEN_ENV) or None,
+        help=f"bearer token /api/ and /ws/ need (default ${TOKEN_ENV}; 'auto': a random one; "
+        "16-256 characters A-Z a-z 0-9 . _ ~ -)",
+    )
+    parser.add_argument(
+        "--allowed-host",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help=f"also accept requests for this host name (repeatable; also ${HOSTS_ENV}, "
+        "comma-separated)",
+    )
     args = parser.parse_args(argv)
+    if args.token == "auto":
+        args.token = secrets.token_urlsafe(24)
+    try:
+        check_token(args.token)
+    except ValueError as exc:
+        parser.error(f"--token: {exc}")
+    extra = [*os.environ.get(HOSTS_ENV, "").split(","), *args.allowed_host]
+    if normalize_host(args.host) not in WILDCARD_HOSTS:
+        extra.append(args.host)
+    args.allowed_hosts = allowed_hosts_from(extra)
     if not args.sim and (args.sim_delay or args.aircraft_heading is not None):
         parser.error("--sim-delay and --aircraft-heading need --sim (a real GCU gets the "
                      "aircraft state from the real aircraft)")  # fmt: skip
@@ -125,15 +166,43 @@ async def gcu_endpoint(args: argparse.Namespace) -> AsyncIterator[tuple[str, dic
         yield server.url, options
 
 
+class _Server(uvicorn.Server):
+    """uvicorn's server, announcing the console's URL once it listens (the real port,
+    also with ``--port 0``)."""
+
+    def __init__(self, config: uvicorn.Config, args: argparse.Namespace) -> None:
+        super().__init__(config)
+        self.args = args
+
+    async def startup(self, sockets: list[socket.socket] | None = None) -> None:
+        await super().startup(sockets)
+        if self.started and self.servers and self.servers[0].sockets:
+            _announce(self.args, self.servers[0].sockets[0].getsockname()[1])
+
+
+def _announce(args: argparse.Namespace, port: int) -> None:
+    """Say where the page is (with its token) and warn about an open, token-less console."""
+    host = normalize_host(args.host)
+    shown = "127.0.0.1" if host in WILDCARD_HOSTS else args.host
+    if ":" in shown:
+        shown = f"[{normalize_host(shown)}]"
+    fragment = f"#token={args.token}" if args.token else ""
+    print(f"console: http://{shown}:{port}/{fragment}", flush=True)
+    if host not in LOOPBACK_HOSTS and args.token is None:
+        print(f"warning: listening on {args.host} without a token: anyone who reaches the "
+              "port can move the gimbal (use --token)", flush=True)  # fmt: skip
+
+
 async def main(args: argparse.Namespace) -> None:
     async with gcu_endpoint(args) as (url, options):
-        app = create_app(url, telemetry_hz=args.telemetry_hz, **options)
+        app = create_app(url, telemetry_hz=args.telemetry_hz, token=args.token,
+                         allowed_hosts=args.allowed_hosts, **options)  # fmt: skip
         feed = None
         if args.aircraft_heading is not None:
             feed = asyncio.create_task(feed_parked_aircraft(app.state.gcu, args.aircraft_heading))
         config = uvicorn.Config(app, host=args.host, port=args.port, log_level="info")
         try:
-            await uvicorn.Server(config).serve()
+            await _Server(config, args).serve()
         finally:
             if feed is not None:
                 feed.cancel()

@@ -12,14 +12,20 @@ its transport gives up, and closes it on shutdown. Routes:
   ``connection`` (:meth:`GcuConnection.snapshot`); 503 ``NotConnected`` (with
   ``connection``) while the client is not open yet.
 - ``GET /api/commands`` — the commands below with their parameters.
-- ``POST /api/commands/{name}`` — run a command; JSON object body of parameters. Errors:
-  404 unknown command, 400 body not JSON, 422 bad parameter (``ValueError`` /
+- ``POST /api/commands/{name}`` — run a command; JSON object body of parameters
+  (``Content-Type: application/json``, at most ``max_body`` bytes). Errors:
+  404 unknown command, 415 not declared JSON, 413 too large, 400 body not JSON (or nested
+  too deep, or with duplicate keys), 422 bad parameter (``ValueError`` /
   ``FieldRangeError``), 409 GCU answered failure (``CommandFailed``) or pod lacks the command
   (``UnsupportedCommandError``), 504 no feedback in time (``CommandTimeout``), 503 link down
   (``LinkLost``) or client not open yet (``NotConnected``).
 - ``WS /ws/telemetry`` — JSON telemetry at most ``telemetry_hz`` times a second (newest
   sample wins: a slow browser never backs up the client), and a ``{"type": "link"}``
   message every 0.5 s while no replies arrive (link down, or still waiting for the GCU).
+
+Every request and WebSocket passes :class:`~examples.web.guard.Guard` first: ``Host`` in
+``allowed_hosts``, same-origin ``Origin`` on POST and WebSocket, and the bearer ``token``
+on ``/api/`` and ``/ws/`` when one is set (README, "Security").
 """
 
 from __future__ import annotations
@@ -30,11 +36,12 @@ import json
 import logging
 import math
 import os
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Iterable
 from pathlib import Path
 from typing import Any
 
 from starlette.applications import Starlette
+from starlette.middleware import Middleware
 from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, Response
 from starlette.routing import Mount, Route, WebSocketRoute
@@ -53,8 +60,10 @@ from gcu_async import (
 )
 from gcu_async.protocol import opcode_name
 
+from .body import DEFAULT_MAX_BODY, BodyError, read_json
 from .commands import COMMANDS, parse_params
 from .connection import ConnectionState, GcuConnection, check_retry
+from .guard import LOOPBACK_HOSTS, WS_PROTOCOL, Guard, Policy
 from .snapshot import client_state, link_json, state_json
 
 log = logging.getLogger("gcu_async.examples.web")
@@ -74,6 +83,9 @@ def create_app(
     telemetry_hz: float = DEFAULT_TELEMETRY_HZ,
     retry_initial: float = 0.5,
     retry_max: float = 5.0,
+    token: str | None = None,
+    allowed_hosts: Iterable[str] | None = None,
+    max_body: int = DEFAULT_MAX_BODY,
     **client_options: Any,
 ) -> Starlette:
     """The ASGI app for the GCU at ``gcu_url``.
@@ -85,9 +97,16 @@ def create_app(
     reply; between attempts ``retry_initial`` seconds, doubling up to ``retry_max``) and
     closed when the app stops. ``app.state.gcu`` is the client, ``app.state.connection`` the
     :class:`~examples.web.connection.GcuConnection` while the app runs.
+
+    ``token`` (16–256 URL-safe characters, ``None``: none) is the bearer token ``/api/`` and
+    ``/ws/`` need; ``allowed_hosts`` the host names ``Host`` may carry (default loopback
+    and ``localhost``); ``max_body`` the largest command body in bytes, [2, 1 MiB].
     """
     if not 0 < telemetry_hz <= MAX_TELEMETRY_HZ:
         raise ValueError(f"telemetry_hz: {telemetry_hz!r} is outside the allowed range (0, 50] Hz")
+    if isinstance(max_body, bool) or not isinstance(max_body, int) or not 2 <= max_body <= 2**20:
+        raise ValueError(f"max_body: {max_body!r} is outside the allowed range [2, 1048576] bytes")
+    policy = Policy.make(allowed_hosts, token)
     retry_initial, retry_max = check_retry(retry_initial, retry_max)
     gcu = connect(gcu_url, **client_options)
 
@@ -113,8 +132,11 @@ def create_app(
         WebSocketRoute("/ws/telemetry", telemetry),
         Mount("/static", StaticFiles(directory=STATIC_DIR), name="static"),
     ]
-    app = Starlette(routes=routes, lifespan=lifespan)
+    app = Starlette(routes=routes, lifespan=lifespan,
+                    middleware=[Middleware(Guard, policy=policy)])  # fmt: skip
     app.state.gcu_url = gcu_url
+    app.state.policy = policy
+    app.state.max_body = max_body
     app.state.gcu = gcu
     return app
 
@@ -122,12 +144,29 @@ def create_app(
 def app_from_env() -> Starlette:
     """The app configured from the environment, for ``uvicorn --factory``: ``GCU_URL``
     (default ``udp://127.0.0.1:2337``), ``GCU_LOCAL_PORT`` (UDP port the client binds,
-    default 2338; 0 = any), ``GCU_TELEMETRY_HZ`` (default 20)."""
+    default 2338; 0 = any), ``GCU_TELEMETRY_HZ`` (default 20), ``GCU_WEB_TOKEN`` (the
+    bearer token; unset or empty: none), ``GCU_WEB_ALLOWED_HOSTS`` (comma-separated host
+    names allowed besides loopback and ``localhost``)."""
     options: dict[str, Any] = {}
     if "GCU_LOCAL_PORT" in os.environ:
         options["local_port"] = int(os.environ["GCU_LOCAL_PORT"])
     hz = float(os.environ.get("GCU_TELEMETRY_HZ", DEFAULT_TELEMETRY_HZ))
-    return create_app(os.environ.get("GCU_URL", DEFAULT_GCU_URL), telemetry_hz=hz, **options)
+    return create_app(os.environ.get("GCU_URL", DEFAULT_GCU_URL), telemetry_hz=hz,
+                      token=os.environ.get(TOKEN_ENV) or None,
+                      allowed_hosts=allowed_hosts_from(os.environ.get(HOSTS_ENV, "")),
+                      **options)  # fmt: skip
+
+
+TOKEN_ENV = "GCU_WEB_TOKEN"
+"""The environment variable holding the bearer token (``--token`` overrides it)."""
+HOSTS_ENV = "GCU_WEB_ALLOWED_HOSTS"
+"""The environment variable listing extra allowed host names, comma-separated."""
+
+
+def allowed_hosts_from(extra: Iterable[str] | str) -> frozenset[str]:
+    """Loopback and ``localhost`` plus ``extra`` (names, or one comma-separated string)."""
+    names = extra.split(",") if isinstance(extra, str) else list(extra)
+    return LOOPBACK_HOSTS | {name.strip() for name in names if name.strip()}
 
 
 def _connection(conn: Request | WebSocket) -> GcuConnection:
@@ -183,11 +222,13 @@ async def run_command(request: Request) -> Response:
     spec = COMMANDS.get(name)
     if spec is None:
         return _error(404, f"unknown command {name!r}", commands=sorted(COMMANDS))
-    raw = await request.body()
     try:
-        body = json.loads(raw) if raw.strip() else None
-    except ValueError as exc:
-        return _error(400, f"the body is not valid JSON: {exc}")
+        body = await read_json(request, request.app.state.max_body)
+    except BodyError as exc:
+        response = _error(exc.status, exc, exc.kind)
+        if exc.status == 413:  # the rest of the body is unread: end the connection, not drain it
+            response.headers["connection"] = "close"
+        return response
     connection = _connection(request)
     try:
         values = parse_params(spec, body)
@@ -221,8 +262,11 @@ async def run_command(request: Request) -> Response:
 
 # -- WebSocket ----------------------------------------------------------------------------
 async def stream_telemetry(websocket: WebSocket, connection: GcuConnection, period: float) -> None:
-    """Send telemetry until the browser leaves or the app stops (then code 1001)."""
-    await websocket.accept()
+    """Send telemetry until the browser leaves or the app stops (then code 1001). A client
+    offering the :data:`~examples.web.guard.WS_PROTOCOL` subprotocol (the page does, beside
+    its token) gets it."""
+    offered = websocket.scope.get("subprotocols", [])
+    await websocket.accept(subprotocol=WS_PROTOCOL if WS_PROTOCOL in offered else None)
     sender = asyncio.create_task(_send_telemetry(websocket, connection, period))
     receiver = asyncio.create_task(_until_disconnect(websocket))
     try:

@@ -13,7 +13,9 @@ background task around the client the app owns:
    checks whether the transport is gone for good (link down, transport not connected and
    not reconnecting); then it closes the client and goes back to 1.
 
-The library has no start-up retry of its own yet: this loop is the example's. Only
+The client's own start-up retry (``open_timeout``) is bounded in time and does not reopen a
+client whose transport gave up; a web app keeps serving its page however long the GCU
+takes, so it runs this loop instead (each ``open()`` one attempt). Only
 :class:`~gcu_async.LinkLost` and ``OSError`` count as "GCU not there yet"; anything else
 is a bug and ends the task (logged).
 """

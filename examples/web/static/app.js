@@ -4,6 +4,21 @@
 const $ = (id) => document.getElementById(id);
 const SVG = "http://www.w3.org/2000/svg";
 const PX_PER_DEG = 1.4; // horizon pitch scale
+// The bearer token, when the server wants one: opened as /#token=..., kept for this tab
+// (sessionStorage) and taken out of the address bar, so it is not shared with the URL.
+const TOKEN = (() => {
+  const match = /(?:^#|&)token=([A-Za-z0-9._~-]+)/.exec(location.hash);
+  if (match) {
+    sessionStorage.setItem("gcu-token", match[1]);
+    history.replaceState(null, "", location.pathname + location.search);
+  }
+  return sessionStorage.getItem("gcu-token");
+})();
+const AUTH = TOKEN ? { Authorization: `Bearer ${TOKEN}` } : {};
+// A browser cannot set headers on a WebSocket: the token travels as a subprotocol, beside
+// the one the server accepts (it never echoes the token back).
+const WS_PROTOCOLS = TOKEN ? ["gcu-async.telemetry", `gcu-async.bearer.${TOKEN}`]
+  : ["gcu-async.telemetry"];
 const fmt = (v, digits = 2) => (v === null || v === undefined ? "—" : v.toFixed(digits));
 
 function svg(parent, tag, attrs, text) {
@@ -173,7 +188,7 @@ function countMessage() {
 let retryMs = 500;
 function connect() {
   const scheme = location.protocol === "https:" ? "wss" : "ws";
-  const ws = new WebSocket(`${scheme}://${location.host}/ws/telemetry`);
+  const ws = new WebSocket(`${scheme}://${location.host}/ws/telemetry`, WS_PROTOCOLS);
   ws.onopen = () => { retryMs = 500; };
   ws.onmessage = (event) => {
     const message = JSON.parse(event.data);
@@ -200,7 +215,7 @@ async function send(name, params) {
   try {
     const response = await fetch(`/api/commands/${encodeURIComponent(name)}`, {
       method: "POST",
-      headers: { "Content-Type": "application/json" },
+      headers: { "Content-Type": "application/json", ...AUTH },
       body: JSON.stringify(params),
     });
     const body = await response.json();
@@ -233,8 +248,13 @@ async function start() {
   wireButtons();
   setView("connecting");
   try {
-    const response = await fetch("/api/status");
+    const response = await fetch("/api/status", { headers: AUTH });
     const body = await response.json();
+    if (response.status === 401) {
+      setView("offline", null, null, "this console needs its token: open the URL the "
+        + "server printed (…/#token=…)");
+      return;
+    }
     if (response.ok) {
       const age = body.link.last_reply_age;
       lastTelemetry = performance.now() - (age === null ? 0 : age * 1000);
