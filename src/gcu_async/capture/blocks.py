@@ -213,7 +213,8 @@ def _pcapng(source: Source, magic: bytes) -> Iterator[Packet]:
         name = f"{what} (type 0x{kind:08x})"
         if length < 12 or length % 4:
             raise CaptureError(f"{name} at offset {start}: block length {length} is not a "
-                               f"multiple of 4 of at least 12", offset=start, block=number)  # fmt: skip
+                               f"multiple of 4 of at least 12",
+                               offset=start, block=number)  # fmt: skip
         kept = kind in (_SHB, _IDB, _PB, _SPB, _EPB)
         if not kept:
             body_length = length - 12

@@ -27,7 +27,6 @@ from gcu_async.protocol.packets import (
     CRC_STRUCT,
     GCU_HEADER,
     HOST_HEADER,
-    PREFIX,
     decode_gcu_packet,
     decode_host_packet,
 )
@@ -159,7 +158,7 @@ class PacketScanner:
             if j < len(spans) and spans[j][0] <= i:  # inside a packet: not a candidate
                 i = window.find(header, spans[j][1])
                 continue
-            length = PREFIX.unpack_from(window, i)[1]
+            length = window[i + 2] | (window[i + 3] << 8)
             if not BASE_LENGTH <= length <= limit:
                 if self.rejection is None:
                     self._note(Rejection("length", begin + i,
@@ -187,12 +186,11 @@ class PacketScanner:
         header = direction.header
         i = window.find(header, start)
         while i >= 0 and i + 4 <= len(window):
-            length = PREFIX.unpack_from(window, i)[1]
-            if BASE_LENGTH <= length <= direction.deframer.max_length:
-                if i + length > len(window):
-                    have = len(window) - i
-                    self._note(Rejection("cut", begin + i,
-                        f"a {direction.name} at offset {begin + i} is cut short: its header "
-                        f"declares {length} bytes, the input ends after {have}"))  # fmt: skip
-                    return
+            length = window[i + 2] | (window[i + 3] << 8)
+            if BASE_LENGTH <= length <= direction.deframer.max_length and i + length > len(window):
+                have = len(window) - i
+                self._note(Rejection("cut", begin + i,
+                    f"a {direction.name} at offset {begin + i} is cut short: its header "
+                    f"declares {length} bytes, the input ends after {have}"))  # fmt: skip
+                return
             i = window.find(header, i + 1)

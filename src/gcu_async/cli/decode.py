@@ -19,7 +19,7 @@ from typing import Any, BinaryIO, TextIO
 from gcu_async.capture.blocks import CaptureError, Source
 from gcu_async.capture.reader import is_capture
 from gcu_async.capture.scan import PacketScanner, Rejection
-from gcu_async.cli._exit import EXIT_FAILED, EXIT_OK, EXIT_USAGE
+from gcu_async.cli._exit import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
 
 _HEX_TOKEN = re.compile(r"0x|[\s,;:]+", re.IGNORECASE)
 CHUNK = 1 << 16
@@ -86,6 +86,10 @@ def _last_separator_end(text: str) -> int:
 
 def _hex_bytes(text: str, base: int, continued: bool) -> bytes:
     """The bytes of ``text`` (``continued``: its first token goes on an earlier one)."""
+    try:  # fast path: bytes.fromhex skips the spaces between whole pairs, and fails on
+        return bytes.fromhex(_HEX_TOKEN.sub(" ", text))  # any odd-length token
+    except ValueError:
+        pass  # a one-digit token (read as 0X), or not hex: token by token
     out = bytearray()
     pos = 0
     for match in [*_HEX_TOKEN.finditer(text), None]:
@@ -179,8 +183,9 @@ def _scan_bytes(chunks: Iterable[bytes], output: _Output, *, probe: int | None =
         for _, _, obj in scanner.feed(chunk):
             output(obj)
         if probe is not None and not output.count and scanner.fed >= probe:
+            why = _why(scanner.rejection)
             raise _Failure(f"{what}: no valid packet in its first {scanner.fed} bytes, so not "
-                           f"a GCU byte stream{_why(scanner.rejection)}; stopped reading")  # fmt: skip
+                           f"a GCU byte stream{why}; stopped reading")  # fmt: skip
     for _, _, obj in scanner.flush():
         output(obj)
     if not output.count:
@@ -210,8 +215,8 @@ def _decode_file(path: Path, output: _Output) -> None:
         head = stream.read(4)
         if not is_capture(head):
             shown = head.hex(" ") or "nothing"
-            _scan_bytes(_read_chunks(stream, head), output, probe=RAW_PROBE,
-                        what=f"{path} (not a pcap or pcapng file: offset 0 holds {shown})")  # fmt: skip
+            what = f"{path} (not a pcap or pcapng file: offset 0 holds {shown})"
+            _scan_bytes(_read_chunks(stream, head), output, probe=RAW_PROBE, what=what)
             return
         from gcu_async.capture.decoding import CaptureDecoder
 
@@ -236,6 +241,8 @@ def run(args: argparse.Namespace) -> int:
             text = [" ".join(args.hex)] if args.hex else _text_chunks(sys.stdin)
             _scan_bytes(iter_hex(text), output)
         sys.stdout.flush()
+    except KeyboardInterrupt:  # Ctrl-C while reading a device or a pipe
+        return _fail("interrupted", EXIT_INTERRUPTED)
     except BrokenPipeError:  # e.g. piped into `head`: the reader has all it wants
         _silence_stdout()
         return EXIT_OK if output.count else EXIT_FAILED
