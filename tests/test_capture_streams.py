@@ -5,8 +5,7 @@ header raising ``dpkt.NeedData``, a pcapng damaged mid-file ending silently with
 bad-CRC input explained), then hypothesis: mutated pcap and pcapng files (bit flips,
 truncation, insertion, damaged length fields) through the real CLI code never give a
 traceback — either the packets, or the packets before the damage and one error line that
-names the record or block and its offset — and TCP segments in any order, with overlaps and
-duplicates, give the bytes in order.
+names the record or block and its offset. (TCP segment orders: test_capture_reassembly.py.)
 """
 
 from __future__ import annotations
@@ -25,9 +24,6 @@ from hypothesis import strategies as st
 
 from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
 from _xfgcu_corpus import corpus, write_capture
-from gcu_async.capture.blocks import Source, packets
-from gcu_async.capture.reader import Record
-from gcu_async.capture.reassembly import Reassembler
 from gcu_async.capture.synth import TcpFlow, udp_packet
 from gcu_async.cli import main
 from gcu_async.cli.decode import decode_capture
@@ -86,8 +82,11 @@ def test_a_truncated_pcap_record_header_is_one_line_naming_the_offset(tmp_path: 
     status, objs, err = run_decode(path)
     assert status == 1
     assert len(objs) == 2  # the two records before the damage
-    assert err == [f"gcu-async decode: {path}: damaged capture after 2 packets: record 3 "
-                   f"header at offset {len(data)}: truncated: 16 bytes needed, 8 present"]  # fmt: skip
+    want = (
+        f"gcu-async decode: {path}: damaged capture after 2 packets: record 3 header at "
+        f"offset {len(data)}: truncated: 16 bytes needed, 8 present"
+    )
+    assert err == [want]
 
 
 def test_a_pcapng_damaged_mid_file_shows_the_packets_before_then_fails(tmp_path: Path) -> None:
@@ -161,11 +160,18 @@ def base(kind: str, tmp: Path) -> bytes:
 
 
 def frame_ends(data: bytes) -> list[int]:
-    """The file offset where each frame's record or block ends (the reader's own count)."""
-    source = Source(io.BytesIO(data))
+    """The file offset where each frame's record or block ends (read here, independently:
+    pcap records, or the packet blocks 2, 3, 6 of a little-endian pcapng)."""
     ends = []
-    for _ in packets(source):
-        ends.append(source.offset)
+    if data[:4] == b"\x0a\x0d\x0d\x0a":
+        for at, length in _block_offsets(data):
+            if struct.unpack_from("<I", data, at)[0] in (2, 3, 6):
+                ends.append(at + length)
+        return ends
+    at = 24
+    while at + 16 <= len(data):
+        at += 16 + struct.unpack_from("<I", data, at + 8)[0]
+        ends.append(at)
     return ends
 
 
@@ -222,64 +228,3 @@ def test_mutated_captures_give_packets_or_one_clear_error(
     before = Counter(repr(o) for o in full if o["capture"]["frame"] <= intact)
     got = Counter(repr(o) for o in objs)
     assert not before - got
-
-
-# -- fuzzing: TCP segment orders -------------------------------------------------------------
-@st.composite
-def segment_schedules(draw: st.DrawFn) -> tuple[bytes, list[tuple[int, int]]]:
-    """A stream and segments covering it: any cuts, reordered, some duplicated or
-    overlapping a neighbour."""
-    stream = draw(st.binary(min_size=1, max_size=300))
-    cuts = sorted(draw(st.sets(st.integers(1, max(1, len(stream) - 1)), max_size=30)))
-    bounds = [0, *[c for c in cuts if c < len(stream)], len(stream)]
-    spans = list(zip(bounds, bounds[1:], strict=False))
-    extra = draw(st.lists(st.sampled_from(spans), max_size=10))  # duplicates
-    overlaps = [(a, min(len(stream), b + draw(st.integers(0, 20)))) for a, b in
-                draw(st.lists(st.sampled_from(spans), max_size=5))]  # fmt: skip
-    order = draw(st.permutations([*spans, *extra, *overlaps]))
-    return stream, order
-
-
-@settings(max_examples=300, deadline=None)
-@given(schedule=segment_schedules(), isn=st.integers(0, 2**32 - 1))
-def test_tcp_segments_in_any_order_give_the_stream_once(
-    schedule: tuple[bytes, list[tuple[int, int]]], isn: int
-) -> None:
-    stream, order = schedule
-    reassembler = Reassembler()
-    out = bytearray()
-    syn = Record(1, 0.0, "tcp", "a:1", "b:2", b"", seq=isn, flags=0x02)
-    pieces = reassembler.push(syn)
-    for frame, (a, b) in enumerate(order, start=2):
-        rec = Record(frame, 0.0, "tcp", "a:1", "b:2", stream[a:b], seq=(isn + 1 + a) % 2**32)
-        pieces += reassembler.push(rec)
-    pieces += reassembler.finish()
-    for piece in pieces:
-        out += piece.data
-    assert bytes(out) == stream  # every segment present: no gap, nothing twice
-    assert reassembler.held == 0
-    assert sum(1 for p in pieces if p.end) == 1
-
-
-def test_waiting_segments_are_bounded_and_a_gap_is_skipped_when_over() -> None:
-    """Segments past a gap that is never filled: held up to the budget, then the gap is
-    skipped (the bytes after it come out) instead of holding more."""
-    reassembler = Reassembler(waiting_budget=10_000)
-    pieces = reassembler.push(Record(1, 0.0, "tcp", "a:1", "b:2", b"", seq=0, flags=0x02))
-    for n in range(200):  # byte 1 is never sent: everything waits for it
-        rec = Record(n + 2, 0.0, "tcp", "a:1", "b:2", bytes([n % 256]) * 100, seq=2 + 100 * n)
-        pieces += reassembler.push(rec)
-        assert reassembler.held <= 10_000
-    assert sum(len(p.data) for p in pieces) > 0  # the gap was given up on, not held forever
-    pieces += reassembler.finish()
-    assert sum(len(p.data) for p in pieces) == 200 * 100
-
-
-def test_streams_are_bounded() -> None:
-    reassembler = Reassembler(max_streams=4)
-    ended = 0
-    for n in range(50):
-        rec = Record(n + 1, 0.0, "serial", f"interface {n}", "sent", b"x")
-        ended += sum(1 for p in reassembler.push(rec) if p.end)
-    assert ended == 46  # each new stream past 4 ended the least recently active
-    assert sum(1 for p in reassembler.finish() if p.end) == 4
