@@ -168,3 +168,33 @@ def test_a_capture_through_a_pipe_with_a_256_mib_block(tmp_path: Path) -> None:
         writer.join(TIMEOUT)
     assert result["status"] == 0, result["stderr"]
     assert [o["capture"]["frame"] for o in packets_of(result)] == [1, 2]
+
+
+def test_hex_from_a_live_pipe_is_decoded_before_the_pipe_ends() -> None:
+    """Hex is decoded as it arrives: a packet is out while stdin is still open, once the
+    bytes after it show it is not the start of a longer one (fewer than 256 bytes later:
+    the deframer's hold-back bound, docs/cli.md)."""
+    proc = subprocess.Popen([_script(), "decode"], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)  # fmt: skip
+    try:
+        assert proc.stdin is not None and proc.stdout is not None
+        proc.stdin.write((GCU_EXAMPLE * 4).hex(" ").encode() + b"\n")
+        proc.stdin.flush()
+        line = _readline_within(proc.stdout, TIMEOUT)
+        assert json.loads(line)["direction"] == "gcu_to_host"
+        assert proc.poll() is None  # still reading
+        proc.stdin.close()
+        assert proc.wait(TIMEOUT) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(TIMEOUT)
+
+
+def _readline_within(stream: Any, seconds: float) -> bytes:
+    got: list[bytes] = []
+    reader = threading.Thread(target=lambda: got.append(stream.readline()), daemon=True)
+    reader.start()
+    reader.join(seconds)
+    assert got, f"no output within {seconds} s"
+    return got[0]

@@ -24,7 +24,7 @@ import stat
 import struct
 from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import BinaryIO
+from typing import BinaryIO, NamedTuple
 
 PCAP_MAGICS = {
     b"\xd4\xc3\xb2\xa1": ("<", 1e-6), b"\xa1\xb2\xc3\xd4": (">", 1e-6),
@@ -56,8 +56,7 @@ class CaptureError(ValueError):
         """1-based number of the damaged record (pcap) or block (pcapng), if any."""
 
 
-@dataclass(frozen=True)
-class Packet:
+class Packet(NamedTuple):
     """One packet record: its time, link type, bytes, pcapng direction flags, interface."""
 
     time: float
@@ -158,10 +157,17 @@ def _pcap(source: Source, magic: bytes) -> Iterator[Packet]:
             return
         if len(header) < 16:
             raise _truncated(f"{what} header", 16, len(header), start, number)
-        seconds, fraction, caplen, _origlen = record.unpack(header)
+        seconds, fraction, caplen, origlen = record.unpack(header)
         if caplen > MAX_PACKET:
             raise CaptureError(f"{what} at offset {start}: captured length {caplen} is more "
                                f"than {MAX_PACKET}", offset=start, block=number)  # fmt: skip
+        if origlen == 0:  # what a zero-filled stretch (a sparse or preallocated file) reads as
+            raise CaptureError(f"{what} at offset {start}: original length 0 (no packet is 0 "
+                               f"bytes long)", offset=start, block=number)  # fmt: skip
+        if caplen > origlen:
+            raise CaptureError(f"{what} at offset {start}: captured length {caplen} is more "
+                               f"than the original length {origlen}", offset=start,
+                               block=number)  # fmt: skip
         data = source.read(caplen)
         if len(data) < caplen:
             raise _truncated(what, 16 + caplen, 16 + len(data), start, number)

@@ -162,6 +162,7 @@ class _Output:
     def __call__(self, obj: dict[str, Any]) -> None:
         self.count += 1
         sys.stdout.write(json.dumps(obj, indent=self.indent) + "\n")
+        sys.stdout.flush()  # a live pipe or device: each packet as soon as it is read
         for anomaly in obj.get("anomalies", ()):
             print(f"gcu-async decode: packet {self.count} ({obj['direction']}): flagged: "
                   f"{anomaly['message']}", file=sys.stderr)  # fmt: skip
@@ -195,14 +196,17 @@ def _scan_bytes(chunks: Iterable[bytes], output: _Output, *, probe: int | None =
 
 
 def _read_chunks(stream: BinaryIO, head: bytes) -> Iterator[bytes]:
+    """What the file has, as it comes (a device or pipe: what it has now, not a full chunk)."""
     if head:
         yield head
-    while chunk := stream.read(CHUNK):
+    read = getattr(stream, "read1", stream.read)
+    while chunk := read(CHUNK):
         yield chunk
 
 
 def _text_chunks(stream: TextIO) -> Iterator[str]:
-    while chunk := stream.read(CHUNK):
+    """Lines of at most CHUNK characters, so that a live pipe is decoded line by line."""
+    while chunk := stream.readline(CHUNK):
         yield chunk
 
 
