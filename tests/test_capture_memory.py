@@ -174,21 +174,20 @@ def test_hex_from_a_live_pipe_is_decoded_before_the_pipe_ends() -> None:
     """Hex is decoded as it arrives: a packet is out while stdin is still open, once the
     bytes after it show it is not the start of a longer one (fewer than 256 bytes later:
     the deframer's hold-back bound, docs/cli.md)."""
-    proc = subprocess.Popen([_script(), "decode"], stdin=subprocess.PIPE,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)  # fmt: skip
-    try:
-        assert proc.stdin is not None and proc.stdout is not None
-        proc.stdin.write((GCU_EXAMPLE * 4).hex(" ").encode() + b"\n")
-        proc.stdin.flush()
-        line = _readline_within(proc.stdout, TIMEOUT)
-        assert json.loads(line)["direction"] == "gcu_to_host"
-        assert proc.poll() is None  # still reading
-        proc.stdin.close()
-        assert proc.wait(TIMEOUT) == 0
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait(TIMEOUT)
+    with subprocess.Popen([_script(), "decode"], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE) as proc:  # fmt: skip
+        try:
+            assert proc.stdin is not None and proc.stdout is not None
+            proc.stdin.write((GCU_EXAMPLE * 4).hex(" ").encode() + b"\n")
+            proc.stdin.flush()
+            line = _readline_within(proc.stdout, TIMEOUT)
+            assert json.loads(line)["direction"] == "gcu_to_host"
+            assert proc.poll() is None  # still reading
+            proc.stdin.close()
+            assert proc.wait(TIMEOUT) == 0
+        finally:
+            if proc.poll() is None:
+                proc.kill()
 
 
 def _readline_within(stream: Any, seconds: float) -> bytes:
