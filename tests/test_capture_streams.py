@@ -228,3 +228,21 @@ def test_mutated_captures_give_packets_or_one_clear_error(
     before = Counter(repr(o) for o in full if o["capture"]["frame"] <= intact)
     got = Counter(repr(o) for o in objs)
     assert not before - got
+
+
+def test_the_documented_bounds_are_the_codes() -> None:
+    """docs/wireshark.md and docs/cli.md state the reader's bounds: the same numbers."""
+    from gcu_async.capture.blocks import CHUNK, MAX_BLOCK, MAX_PACKET
+    from gcu_async.capture.decoding import MAX_HELD
+    from gcu_async.capture.reassembly import MAX_STREAMS, SEGMENT_COST, WAITING_BUDGET
+    from gcu_async.cli.decode import RAW_PROBE
+
+    docs = Path(__file__).resolve().parent.parent / "docs"
+    wireshark = " ".join((docs / "wireshark.md").read_text().split())
+    cli = " ".join((docs / "cli.md").read_text().split())
+    for fact in (f"longer than {MAX_PACKET:,} bytes", f"over {MAX_BLOCK:,} bytes",
+                 f"{CHUNK >> 20} MiB reads", f"at most {WAITING_BUDGET >> 20} MiB",
+                 f"with {SEGMENT_COST} bytes", f"most {MAX_STREAMS} TCP/serial",
+                 f"at most {MAX_HELD:,} of them"):  # fmt: skip
+        assert fact in wireshark, fact
+    assert f"first {RAW_PROBE >> 20} MiB" in cli
