@@ -42,6 +42,8 @@ CHUNK = 1 << 20
 
 _SHB, _IDB, _PB, _SPB, _EPB = 0x0A0D0D0A, 1, 2, 3, 6
 _BYTE_ORDER_MAGIC = 0x1A2B3C4D
+_SHB_LENGTH = 28
+"""Shortest section header block: 12 bytes of framing, byte-order magic, version, length."""
 _FLAGS_OPTION, _TSRESOL_OPTION, _TSOFFSET_OPTION = 2, 9, 14
 
 
@@ -217,9 +219,10 @@ def _pcapng(source: Source, magic: bytes) -> Iterator[Packet]:
             interfaces = []
         kind, length = struct.unpack(order + "II", head[:8])
         name = f"{what} (type 0x{kind:08x})"
-        if length < 12 or length % 4:
+        shortest = _SHB_LENGTH if kind == _SHB else 12
+        if length < shortest or length % 4:
             raise CaptureError(f"{name} at offset {start}: block length {length} is not a "
-                               f"multiple of 4 of at least 12",
+                               f"multiple of 4 of at least {shortest}",
                                offset=start, block=number)  # fmt: skip
         kept = kind in (_SHB, _IDB, _PB, _SPB, _EPB)
         if not kept:
@@ -270,8 +273,6 @@ def _options(body: bytes, at: int, order: str) -> dict[int, bytes]:
 
 def _block(kind: int, body: bytes, order: str, interfaces: list[_Interface]) -> Packet | None:
     if kind == _SHB:
-        if len(body) < 12:
-            raise _Damage(f"section header body of {len(body)} bytes is shorter than 12")
         major = struct.unpack_from(order + "H", body, 4)[0]
         if major != 1:
             raise _Damage(f"section version {major} is not 1")
