@@ -1,5 +1,6 @@
 """``gcu-async decode``: hex, a raw binary capture or a pcap/pcapng capture in, one JSON
-object per packet out.
+object per packet out, read as a stream (bounded memory whatever the input; docs/cli.md,
+"Input read as a stream").
 
 Every packet that frames (header, length, CRC) decodes: values V2.0.6 does not expect are
 shown as an ``anomalies`` list in its JSON object and one line each on stderr, and do not
@@ -43,7 +44,8 @@ def register(sub: Any) -> None:
         "--file",
         type=Path,
         help="decode this file instead of hex: a pcap or pcapng capture (UDP, TCP, gcu_async's "
-        "serial link type; needs the 'capture' extra) or raw bytes",
+        "serial link type; needs the 'capture' extra) or raw bytes; a pipe or device is read "
+        "as it comes",
     )
     p.add_argument("--indent", type=int, default=None, help="pretty-print JSON with this indent")
     p.set_defaults(run=run)
