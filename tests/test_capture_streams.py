@@ -246,3 +246,27 @@ def test_the_documented_bounds_are_the_codes() -> None:
                  f"at most {MAX_HELD:,} of them"):  # fmt: skip
         assert fact in wireshark, fact
     assert f"first {RAW_PROBE >> 20} MiB" in cli
+
+
+def test_a_quiet_stream_with_a_partial_packet_does_not_hold_everything_back() -> None:
+    """A TCP stream ends in a false header (its span could still complete) and goes quiet;
+    2,000 UDP packets follow. They wait to be put in frame order only up to MAX_HELD: the
+    first comes out after at most MAX_HELD more, well before the end of the file."""
+    from gcu_async.capture.blocks import Source
+    from gcu_async.capture.decoding import MAX_HELD, CaptureDecoder
+
+    flow = TcpFlow(HOST, GCU)
+    records = [*flow.handshake(), flow.data(True, HOST_EXAMPLE + b"\xa8\xe5\x49\x00")]
+    records += [udp_packet(GCU, HOST, GCU_EXAMPLE)] * 2000
+    stream = io.BytesIO(pcap(records))
+    decoder = iter(CaptureDecoder(Source(stream)))
+    first = next(decoder)
+    assert first["capture"]["frame"] == 4  # the TCP packet before its stream's false header
+    frames = [next(decoder)["capture"]["frame"]]
+    udp_record = 16 + len(records[-1])
+    assert stream.tell() <= len(pcap(records[:4])) + (MAX_HELD + 2) * udp_record
+    assert stream.tell() < len(stream.getvalue()) * 0.6
+    assert frames == [5]
+    rest = [obj["capture"]["frame"] for obj in decoder]
+    assert rest == list(range(6, 6 + 1999))
+    assert MAX_HELD < 1999
