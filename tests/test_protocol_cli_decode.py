@@ -5,7 +5,9 @@ when there is no valid packet."""
 
 from __future__ import annotations
 
+import itertools
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -13,8 +15,11 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
+from gcu_async.cli import decode as decode_cli
 from gcu_async.protocol import (
     Feedback,
     GcuMainFrame,
@@ -290,3 +295,39 @@ def test_the_simulator_answers_a_packet_inside_a_false_headers_span_in_a_datagra
     packets = model.split(bytes.fromhex("a8e55000") + HOST_EXAMPLE, Deframer.for_host_packets(),
                           end=True)  # fmt: skip
     assert packets == [HOST_EXAMPLE]
+
+
+def _whole_text_parse(text: str) -> bytes:
+    """The reference: the whole text at once, token by token (a one-digit token is 0X)."""
+    out = bytearray()
+    for token in re.sub(r"0x|[\s,;:]+", " ", text, flags=re.IGNORECASE).split():
+        out += bytes.fromhex("0" + token if len(token) == 1 else token)
+    return bytes(out)
+
+
+@settings(max_examples=300, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(tokens=st.lists(st.sampled_from(["8a", "5E", "0x49", "0X0", "f", "abcd", "0", "x", "7",
+                                         " ", ",", ";", ":", "\n", "\t", "  ", "0x"]),
+                       max_size=60),
+       cuts=st.lists(st.integers(0, 400), max_size=8), hold=st.integers(2, 9))  # fmt: skip
+def test_hex_in_pieces_reads_as_the_whole_text(
+    tokens: list[str], cuts: list[int], hold: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """However stdin splits the text (and however short the hold for one long token), the
+    bytes, or the error, are those of the whole text."""
+    monkeypatch.setattr(decode_cli, "HEX_TOKEN_HOLD", hold)
+    text = "".join(tokens)
+    bounds = sorted({min(c, len(text)) for c in cuts} | {0, len(text)})
+    pieces = [text[a:b] for a, b in itertools.pairwise(bounds)]
+    try:
+        want: bytes | None = _whole_text_parse(text)
+    except ValueError:
+        want = None
+    error = ""
+    try:
+        got: bytes | None = b"".join(decode_cli.iter_hex(pieces))
+    except ValueError as exc:
+        error, got = str(exc), None
+    assert got == want
+    assert got is not None or error.startswith("not hex: ")

@@ -8,6 +8,7 @@ the package (``gcu-async wireshark --install``); see docs/wireshark.md.
 """
 
 from gcu_async.capture._deps import CaptureUnavailable
+from gcu_async.capture.blocks import CaptureError
 from gcu_async.capture.reader import Record, is_capture, read_records
 from gcu_async.capture.writer import (
     RAW_IP_LINKTYPE,
@@ -17,6 +18,6 @@ from gcu_async.capture.writer import (
 )
 
 __all__ = [
-    "RAW_IP_LINKTYPE", "SERIAL_LINKTYPE", "CaptureUnavailable", "PacketCapture", "Record",
-    "as_capture", "is_capture", "read_records",
+    "RAW_IP_LINKTYPE", "SERIAL_LINKTYPE", "CaptureError", "CaptureUnavailable", "PacketCapture",
+    "Record", "as_capture", "is_capture", "read_records",
 ]  # fmt: skip

@@ -1,14 +1,16 @@
 """The capture libraries, imported only when a capture is written or read.
 
 gcu_async's runtime dependencies are the standard library and pyserial-asyncio; captures
-use two small, pure-Python libraries from the ``capture`` extra: **python-pcapng** (pcapng
-files: sections, several interfaces with their link types, per-packet options such as the
-direction flags) and **dpkt** (IPv4/IPv6, UDP and TCP headers with their checksums; classic
-pcap files; Ethernet and Linux cooked-capture framing of captures made by tcpdump/dumpcap).
+use two small, pure-Python libraries from the ``capture`` extra: **python-pcapng** (writing
+pcapng files: sections, several interfaces with their link types, per-packet options such as
+the direction flags) and **dpkt** (IPv4/IPv6, UDP and TCP headers with their checksums;
+Ethernet and Linux cooked-capture framing of captures made by tcpdump/dumpcap). Reading a
+file's record and block structure is :mod:`~gcu_async.capture.blocks`' own (it says why).
 """
 
 from __future__ import annotations
 
+import functools
 from types import ModuleType
 from typing import Any
 
@@ -26,6 +28,7 @@ def _missing(exc: ImportError) -> CaptureUnavailable:
     )
 
 
+@functools.cache  # called per packet when reading: import statements are not free
 def dpkt() -> Any:
     """The ``dpkt`` package with its IP, UDP, TCP, Ethernet, SLL and pcap modules loaded."""
     try:

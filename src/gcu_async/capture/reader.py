@@ -12,16 +12,15 @@ from __future__ import annotations
 
 import io
 import socket
-import warnings
+import struct
 from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, BinaryIO
 
 from gcu_async.capture import _deps
+from gcu_async.capture.blocks import PCAP_MAGICS, PCAPNG_MAGIC, Packet, Source, packets
 from gcu_async.capture.writer import FLAG_INBOUND, FLAG_OUTBOUND, SERIAL_LINKTYPE
 
-PCAP_MAGICS = (b"\xd4\xc3\xb2\xa1", b"\xa1\xb2\xc3\xd4", b"\x4d\x3c\xb2\xa1", b"\xa1\xb2\x3c\x4d")
-PCAPNG_MAGIC = b"\x0a\x0d\x0d\x0a"
 LINKTYPE_NULL, LINKTYPE_EN10MB, LINKTYPE_RAW, LINKTYPE_LOOP = 0, 1, 101, 108
 LINKTYPE_LINUX_SLL, LINKTYPE_IPV4, LINKTYPE_IPV6, LINKTYPE_LINUX_SLL2 = 113, 228, 229, 276
 _RAW_ALIASES = (12, 14, LINKTYPE_RAW, LINKTYPE_IPV4, LINKTYPE_IPV6)  # DLT_RAW differs by OS
@@ -54,68 +53,21 @@ def is_capture(data: bytes) -> bool:
     return data[:4] in PCAP_MAGICS or data[:4] == PCAPNG_MAGIC
 
 
-def read_records(data: bytes) -> Iterator[Record]:
-    """Every UDP, TCP and serial record of a pcap or pcapng file, in file order. Raises
-    ``ValueError`` when ``data`` is not such a file (or is damaged before the first record)."""
-    if data[:4] == PCAPNG_MAGIC:
-        packets = _pcapng_packets(data)
-    elif data[:4] in PCAP_MAGICS:
-        packets = _pcap_packets(data)
+def read_records(data: bytes | BinaryIO | Source) -> Iterator[Record]:
+    """Every UDP, TCP and serial record of a pcap or pcapng file (bytes, or a binary stream
+    read as it goes, in bounded memory), in file order. Raises
+    :class:`~gcu_async.capture.CaptureError` (a ``ValueError``) naming the record or block
+    and its offset at the first damage, after the records before it."""
+    if isinstance(data, (bytes, bytearray, memoryview)):
+        source = Source(io.BytesIO(bytes(data)))
+    elif isinstance(data, Source):
+        source = data
     else:
-        raise ValueError("not a pcap or pcapng file")
-    for frame, (ts, linktype, buf, flags, iface) in enumerate(packets, start=1):
-        record = _decode(frame, ts, linktype, buf, flags, iface)
+        source = Source(data)
+    for frame, packet in enumerate(packets(source), start=1):
+        record = _decode(frame, packet)
         if record is not None:
             yield record
-
-
-_Packet = tuple[float, int, bytes, int | None, int]
-"""(time, link type, bytes, pcapng direction flags, interface id)"""
-
-
-def _pcap_packets(data: bytes) -> Iterator[_Packet]:
-    dpkt = _deps.dpkt()
-    try:
-        reader = dpkt.pcap.Reader(io.BytesIO(data))
-    except (ValueError, dpkt.dpkt.Error) as exc:
-        raise ValueError(f"damaged pcap file: {exc}") from None
-    linktype = reader.datalink()
-    for ts, buf in reader:
-        yield float(ts), linktype, bytes(buf), None, 0
-
-
-def _pcapng_packets(data: bytes) -> Iterator[_Packet]:
-    pcapng = _deps.pcapng()
-    blocks = pcapng.blocks
-    with warnings.catch_warnings():  # questionable options of other writers: still read
-        warnings.simplefilter("ignore")
-        pcapng.strictness.set_strictness(pcapng.strictness.Strictness.NONE)
-        try:
-            scanner = iter(pcapng.FileScanner(io.BytesIO(data)))
-        except Exception as exc:  # the library raises several types for damaged files
-            raise ValueError(f"damaged pcapng file: {exc}") from None
-        while True:
-            try:
-                block = next(scanner)
-            except StopIteration:
-                return
-            except Exception:  # a truncated last block (a capture still being written)
-                return
-            if not isinstance(block, (blocks.EnhancedPacket, blocks.SimplePacket,
-                                      blocks.ObsoletePacket)):  # fmt: skip
-                continue
-            try:
-                interface = block.interface
-                linktype, iface = int(interface.link_type), int(interface.interface_id)
-                ts = float(block.timestamp) if hasattr(block, "timestamp") else 0.0
-            except Exception:
-                linktype, iface, ts = -1, 0, 0.0
-            flags: int | None = None
-            options = getattr(block, "options", None)
-            if options is not None and "epb_flags" in options:
-                inout = getattr(options["epb_flags"], "inout", "NA")
-                flags = {"inbound": FLAG_INBOUND, "outbound": FLAG_OUTBOUND}.get(inout, 0)
-            yield ts, linktype, bytes(block.packet_data), flags, iface
 
 
 def _hostport(packed: bytes, port: int) -> str:
@@ -153,25 +105,25 @@ def _raw_ip(buf: bytes) -> Any:
     return None
 
 
-def _decode(
-    frame: int, ts: float, linktype: int, buf: bytes, flags: int | None, iface: int
-) -> Record | None:
+def _decode(frame: int, packet: Packet) -> Record | None:
+    ts, linktype, buf = packet.time, packet.linktype, packet.data
     if linktype == SERIAL_LINKTYPE:
-        direction = {FLAG_OUTBOUND: "sent", FLAG_INBOUND: "received"}.get(flags or 0, "unknown")
-        return Record(frame, ts, "serial", f"interface {iface}", direction, buf)
+        direction = {FLAG_OUTBOUND: "sent", FLAG_INBOUND: "received"}.get(packet.flags or 0,
+                                                                         "unknown")  # fmt: skip
+        return Record(frame, ts, "serial", f"interface {packet.interface}", direction, buf)
     dpkt = _deps.dpkt()
-    try:
+    try:  # a damaged packet inside a sound record is skipped, as one that is not UDP/TCP
         ip = _network_layer(linktype, buf)
-    except (dpkt.dpkt.Error, ValueError, IndexError):
+        if ip is None:
+            return None
+        segment = ip.data
+        if isinstance(segment, dpkt.udp.UDP):
+            return Record(frame, ts, "udp", _hostport(ip.src, segment.sport),
+                          _hostport(ip.dst, segment.dport), bytes(segment.data))  # fmt: skip
+        if isinstance(segment, dpkt.tcp.TCP):
+            return Record(frame, ts, "tcp", _hostport(ip.src, segment.sport),
+                          _hostport(ip.dst, segment.dport), bytes(segment.data),
+                          seq=int(segment.seq), flags=int(segment.flags))  # fmt: skip
+    except (dpkt.dpkt.Error, ValueError, IndexError, struct.error):
         return None
-    if ip is None:
-        return None
-    segment = ip.data
-    if isinstance(segment, dpkt.udp.UDP):
-        return Record(frame, ts, "udp", _hostport(ip.src, segment.sport),
-                      _hostport(ip.dst, segment.dport), bytes(segment.data))  # fmt: skip
-    if isinstance(segment, dpkt.tcp.TCP):
-        return Record(frame, ts, "tcp", _hostport(ip.src, segment.sport),
-                      _hostport(ip.dst, segment.dport), bytes(segment.data),
-                      seq=int(segment.seq), flags=int(segment.flags))  # fmt: skip
     return None

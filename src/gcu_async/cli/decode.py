@@ -1,5 +1,6 @@
 """``gcu-async decode``: hex, a raw binary capture or a pcap/pcapng capture in, one JSON
-object per packet out.
+object per packet out, read as a stream (bounded memory whatever the input; docs/cli.md,
+"Input read as a stream").
 
 Every packet that frames (header, length, CRC) decodes: values V2.0.6 does not expect are
 shown as an ``anomalies`` list in its JSON object and one line each on stderr, and do not
@@ -8,23 +9,27 @@ change the exit status (docs/client.md, "Liberal receive, strict send")."""
 from __future__ import annotations
 
 import argparse
+import io
 import json
 import re
 import sys
+from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO, TextIO
 
+from gcu_async.capture.blocks import CaptureError, Source
 from gcu_async.capture.reader import is_capture
-from gcu_async.cli._exit import EXIT_FAILED, EXIT_OK, EXIT_USAGE
-from gcu_async.protocol.deframer import Deframer
-from gcu_async.protocol.packets import (
-    GCU_HEADER,
-    HOST_HEADER,
-    decode_gcu_packet,
-    decode_host_packet,
-)
+from gcu_async.capture.scan import PacketScanner, Rejection
+from gcu_async.cli._exit import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
 
 _HEX_TOKEN = re.compile(r"0x|[\s,;:]+", re.IGNORECASE)
+CHUNK = 1 << 16
+"""Bytes (or hex characters) read at a time."""
+HEX_TOKEN_HOLD = 1 << 16
+"""Hex digits without a separator held before their whole pairs are parsed."""
+RAW_PROBE = 1 << 20
+"""A file that is not a capture and holds no packet in this many bytes is not a GCU byte
+stream: an error (``/dev/zero``, a sparse file), not a read to its end."""
 
 
 def register(sub: Any) -> None:
@@ -39,7 +44,8 @@ def register(sub: Any) -> None:
         "--file",
         type=Path,
         help="decode this file instead of hex: a pcap or pcapng capture (UDP, TCP, gcu_async's "
-        "serial link type; needs the 'capture' extra) or raw bytes",
+        "serial link type; needs the 'capture' extra) or raw bytes; a pipe or device is read "
+        "as it comes",
     )
     p.add_argument("--indent", type=int, default=None, help="pretty-print JSON with this indent")
     p.set_defaults(run=run)
@@ -47,15 +53,60 @@ def register(sub: Any) -> None:
 
 def parse_hex(text: str) -> bytes:
     """Bytes from hex text; tolerates any whitespace, ``0x`` prefixes, commas, colons."""
-    digits = _HEX_TOKEN.sub(" ", text).split()
+    return b"".join(iter_hex([text]))
+
+
+def iter_hex(chunks: Iterable[str]) -> Iterator[bytes]:
+    """Bytes from hex text that comes in pieces (stdin), as it comes: what :func:`parse_hex`
+    reads from the whole text, whatever the split, holding at most one piece plus
+    :data:`HEX_TOKEN_HOLD` characters. ``ValueError`` names the first token that is not hex
+    and the character offset it starts at."""
+    carry, base = "", 0  # text not yet parsed, and the offset of its first character
+    continued = False  # carry goes on a token whose first digits were parsed already
+    for chunk in chunks:
+        text = carry + chunk
+        cut = _last_separator_end(text)
+        if cut:
+            yield _hex_bytes(text[:cut], base, continued)
+            continued = False
+        elif len(text) > HEX_TOKEN_HOLD:  # one long token: parse its whole pairs
+            cut = len(text) - 2 + len(text) % 2  # keep the last digit(s): "0" may begin "0x"
+            yield _hex_bytes(text[:cut], base, continued)
+            continued = True
+        carry, base = text[cut:], base + cut
+    if carry:
+        yield _hex_bytes(carry, base, continued)
+
+
+def _last_separator_end(text: str) -> int:
+    """Where the text after the last separator starts (0: no separator)."""
+    end = 0
+    for match in _HEX_TOKEN.finditer(text):
+        end = match.end()
+    return end
+
+
+def _hex_bytes(text: str, base: int, continued: bool) -> bytes:
+    """The bytes of ``text`` (``continued``: its first token goes on an earlier one)."""
+    try:  # fast path: bytes.fromhex skips the spaces between whole pairs, and fails on
+        return bytes.fromhex(_HEX_TOKEN.sub(" ", text))  # any odd-length token
+    except ValueError:
+        pass  # a one-digit token (read as 0X), or not hex: token by token
     out = bytearray()
-    for token in digits:
-        if len(token) % 2:
-            token = "0" + token if len(token) == 1 else token
-        try:
-            out += bytes.fromhex(token)
-        except ValueError:
-            raise ValueError(f"not hex: {token!r}") from None
+    pos = 0
+    for match in [*_HEX_TOKEN.finditer(text), None]:
+        stop = match.start() if match else len(text)
+        token = text[pos:stop]
+        if token:
+            if len(token) == 1 and not (continued and pos == 0):
+                token = "0" + token
+            try:
+                out += bytes.fromhex(token)
+            except ValueError:
+                shown = token if len(token) <= 40 else token[:40] + "..."
+                raise ValueError(f"not hex: {shown!r} at character {base + pos}") from None
+        if match:
+            pos = match.end()
     return bytes(out)
 
 
@@ -63,17 +114,8 @@ def decode_spans(data: bytes) -> list[tuple[int, int, dict[str, Any]]]:
     """Every packet of both directions in ``data`` as (offset, length, JSON object), in
     stream order: one deframer per direction reads the whole of ``data`` and is flushed at
     its end (a datagram, or a stream that ended)."""
-    found: list[tuple[int, int, dict[str, Any]]] = []
-    for header, decoder in ((GCU_HEADER, decode_gcu_packet), (HOST_HEADER, decode_host_packet)):
-        deframer = Deframer(header)
-        offset = 0
-        for raw in [*deframer.feed(data), *deframer.flush()]:
-            offset = data.find(raw, offset)
-            # the deframer checked header, length and CRC: nothing else makes decode raise
-            found.append((offset, len(raw), decoder(raw).as_dict()))
-            offset += len(raw)
-    found.sort(key=lambda item: item[0])
-    return found
+    scanner = PacketScanner()
+    return [*scanner.feed(data), *scanner.flush()]
 
 
 def decode_stream(data: bytes) -> tuple[list[dict[str, Any]], dict[str, int]]:
@@ -84,25 +126,23 @@ def decode_stream(data: bytes) -> tuple[list[dict[str, Any]], dict[str, int]]:
     return [obj for _, _, obj in spans], {"packets": len(spans), "flagged": flagged}
 
 
-def decode_capture(data: bytes) -> list[dict[str, Any]]:
-    """Every packet of a pcap or pcapng capture, each with a ``capture`` object: the
-    ``frame`` (1-based, as in Wireshark) that brought its last byte, its ``link`` (udp, tcp,
-    serial), ``src`` and ``dst``, and the ``stream`` it belongs to. UDP datagrams are
-    decoded one by one; the bytes of each TCP or serial direction are put in order first.
-    Ordered by frame, then by position. Raises ``ValueError`` for a damaged file and
+def decode_capture(data: bytes | BinaryIO) -> list[dict[str, Any]]:
+    """Every packet of a pcap or pcapng capture (bytes or a binary stream), each with a
+    ``capture`` object (see :mod:`gcu_async.capture.decoding`). Raises
+    :class:`~gcu_async.capture.CaptureError` (a ``ValueError``) for a damaged file and
     :class:`~gcu_async.capture.CaptureUnavailable` without the ``capture`` extra."""
-    from gcu_async.capture.reader import read_records
-    from gcu_async.capture.reassembly import units
+    from gcu_async.capture.decoding import CaptureDecoder
 
-    found: list[tuple[int, int, int, dict[str, Any]]] = []
-    for number, unit in enumerate(units(read_records(data))):
-        for offset, length, obj in decode_spans(bytes(unit.data)):
-            frame = unit.frame_of(offset + length - 1)
-            where = {"frame": frame, "link": unit.link, "src": unit.src, "dst": unit.dst,
-                     "stream": unit.name}  # fmt: skip
-            found.append((frame, number, offset, {**obj, "capture": where}))
-    found.sort(key=lambda item: item[:3])
-    return [obj for *_, obj in found]
+    stream = io.BytesIO(bytes(data)) if isinstance(data, (bytes, bytearray)) else data
+    return list(CaptureDecoder(Source(stream)))
+
+
+class _Failure(Exception):
+    """Ends the run with one line on stderr and this exit status."""
+
+    def __init__(self, message: str, status: int = EXIT_FAILED) -> None:
+        super().__init__(message)
+        self.status = status
 
 
 def _silence_stdout() -> None:
@@ -113,39 +153,120 @@ def _silence_stdout() -> None:
     os.close(devnull)
 
 
-def _report_anomalies(number: int, obj: dict[str, Any]) -> None:
-    """One stderr line per anomaly of packet ``number`` (1-based, in output order)."""
-    for anomaly in obj.get("anomalies", ()):
-        print(f"gcu-async decode: packet {number} ({obj['direction']}): flagged: "
-              f"{anomaly['message']}", file=sys.stderr)  # fmt: skip
+class _Output:
+    """Prints each packet as it is found: one JSON line (stdout), one line per anomaly
+    (stderr)."""
+
+    def __init__(self, indent: int | None) -> None:
+        self.indent = indent
+        self.count = 0
+
+    def __call__(self, obj: dict[str, Any]) -> None:
+        self.count += 1
+        sys.stdout.write(json.dumps(obj, indent=self.indent) + "\n")
+        sys.stdout.flush()  # a live pipe or device: each packet as soon as it is read
+        for anomaly in obj.get("anomalies", ()):
+            print(f"gcu-async decode: packet {self.count} ({obj['direction']}): flagged: "
+                  f"{anomaly['message']}", file=sys.stderr)  # fmt: skip
+
+
+def _why(rejection: Rejection | None, stream: str | None = None) -> str:
+    if rejection is None:
+        return ""
+    where = f" of {stream}" if stream else ""
+    return f": {rejection.message}{where}"
+
+
+def _scan_bytes(chunks: Iterable[bytes], output: _Output, *, probe: int | None = None,
+                what: str = "input") -> int:  # fmt: skip
+    """Decode a raw byte stream as it comes; returns the bytes read. With ``probe``, give up
+    (an error) when its first ``probe`` bytes hold no packet: not a GCU byte stream."""
+    scanner = PacketScanner()
+    for chunk in chunks:
+        for _, _, obj in scanner.feed(chunk):
+            output(obj)
+        if probe is not None and not output.count and scanner.fed >= probe:
+            why = _why(scanner.rejection)
+            raise _Failure(f"{what}: no valid packet in its first {scanner.fed} bytes, so not "
+                           f"a GCU byte stream{why}; stopped reading")  # fmt: skip
+    for _, _, obj in scanner.flush():
+        output(obj)
+    if not output.count:
+        raise _Failure(f"no valid packet in {scanner.fed} bytes of {what}"
+                       f"{_why(scanner.rejection)}")  # fmt: skip
+    return scanner.fed
+
+
+def _read_chunks(stream: BinaryIO, head: bytes) -> Iterator[bytes]:
+    """What the file has, as it comes (a device or pipe: what it has now, not a full chunk)."""
+    if head:
+        yield head
+    read = getattr(stream, "read1", stream.read)
+    while chunk := read(CHUNK):
+        yield chunk
+
+
+def _text_chunks(stream: TextIO) -> Iterator[str]:
+    """Lines of at most CHUNK characters, so that a live pipe is decoded line by line."""
+    while chunk := stream.readline(CHUNK):
+        yield chunk
+
+
+def _decode_file(path: Path, output: _Output) -> None:
+    try:
+        stream = path.open("rb")
+    except OSError as exc:  # no such file, a directory, no permission: a usage error
+        raise _Failure(str(exc), EXIT_USAGE) from None
+    with stream:
+        head = stream.read(4)
+        if not is_capture(head):
+            shown = head.hex(" ") or "nothing"
+            what = f"{path} (not a pcap or pcapng file: offset 0 holds {shown})"
+            _scan_bytes(_read_chunks(stream, head), output, probe=RAW_PROBE, what=what)
+            return
+        from gcu_async.capture.decoding import CaptureDecoder
+
+        decoder = CaptureDecoder(Source(stream, head))
+        try:
+            for obj in decoder:
+                output(obj)
+        except CaptureError as exc:
+            raise _Failure(f"{path}: damaged capture after {output.count} packets: {exc}") from None
+        if not output.count:
+            stream_name, rejection = decoder.rejection or (None, None)
+            raise _Failure(f"{path}: no valid packet in {decoder.bytes_read} bytes of capture"
+                           f"{_why(rejection, stream_name)}")  # fmt: skip
 
 
 def run(args: argparse.Namespace) -> int:
+    output = _Output(args.indent)
     try:
         if args.file is not None:
-            data = args.file.read_bytes()
+            _decode_file(args.file, output)
         else:
-            text = " ".join(args.hex) if args.hex else sys.stdin.read()
-            data = parse_hex(text)
-        if args.file is not None and is_capture(data):
-            packets = decode_capture(data)
-        else:
-            packets, _ = decode_stream(data)
-    except ImportError as exc:  # a capture file without the capture extra
-        print(f"gcu-async decode: {exc}", file=sys.stderr)
-        return EXIT_FAILED
-    except (OSError, ValueError) as exc:  # unreadable file, not hex: a usage error
-        print(f"gcu-async decode: {exc}", file=sys.stderr)
-        return EXIT_USAGE
-    try:
-        for number, obj in enumerate(packets, 1):
-            print(json.dumps(obj, indent=args.indent))
-            _report_anomalies(number, obj)
+            text = [" ".join(args.hex)] if args.hex else _text_chunks(sys.stdin)
+            _scan_bytes(iter_hex(text), output)
         sys.stdout.flush()
+    except KeyboardInterrupt:  # Ctrl-C while reading a device or a pipe
+        return _fail("interrupted", EXIT_INTERRUPTED)
     except BrokenPipeError:  # e.g. piped into `head`: the reader has all it wants
         _silence_stdout()
-        return EXIT_OK if packets else EXIT_FAILED
-    if not packets:
-        print(f"gcu-async decode: no valid packet in {len(data)} bytes of input", file=sys.stderr)
-        return EXIT_FAILED
+        return EXIT_OK if output.count else EXIT_FAILED
+    except _Failure as exc:
+        return _fail(str(exc), exc.status)
+    except ImportError as exc:  # a capture file without the capture extra
+        return _fail(str(exc), EXIT_FAILED)
+    except ValueError as exc:  # not hex: a usage error
+        return _fail(str(exc), EXIT_USAGE)
+    except OSError as exc:  # a read error (a device that went away)
+        return _fail(str(exc), EXIT_FAILED)
     return EXIT_OK
+
+
+def _fail(message: str, status: int) -> int:
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        _silence_stdout()
+    print(f"gcu-async decode: {message}", file=sys.stderr)
+    return status
