@@ -19,7 +19,7 @@ from typing import Any
 from gcu_async.bridge import CameraConfig, MavlinkBridge
 from gcu_async.bridge._mavlink import mavlink, mavutil
 from gcu_async.client.connect import connect
-from gcu_async.sim import GcuSimulator
+from gcu_async.sim import GcuSimulator, SimulatorModel
 
 SYSTEM = 1
 GIMBAL = mavlink.MAV_COMP_ID_GIMBAL
@@ -112,6 +112,8 @@ class Rig:
     bridge: MavlinkBridge
     gcs: Peer
     autopilot: Peer
+    packet_times: list[float]
+    """When the simulator handled each host packet (its clock: ``time.monotonic``)."""
 
     @property
     def state(self) -> Any:
@@ -154,7 +156,15 @@ async def bridge_rig(pod: str = "D-90Pro(TA)", *, max_zoom: float | None = 30.0,
                      video_url: str | None = "rtsp://127.0.0.1:8554/main",
                      **bridge_options: Any) -> AsyncIterator[Rig]:  # fmt: skip
     """The whole chain running; the ground station has seen both heartbeats."""
-    sim = GcuSimulator(pod=pod)
+    sim = GcuSimulator(SimulatorModel(pod, record_executions=True))
+    packet_times: list[float] = []
+    handle = sim.model.handle
+
+    def timed_handle(packet: Any) -> Any:
+        packet_times.append(time.monotonic())
+        return handle(packet)
+
+    sim.model.handle = timed_handle  # type: ignore[method-assign]
     gcs = Peer(*GCS)
     autopilot = Peer(*AUTOPILOT)
     try:
@@ -167,7 +177,7 @@ async def bridge_rig(pod: str = "D-90Pro(TA)", *, max_zoom: float | None = 30.0,
                 await gcs.wait("HEARTBEAT", lambda m: m.get_srcComponent() == GIMBAL
                                and m.system_status == mavlink.MAV_STATE_ACTIVE, timeout=5.0)
                 await autopilot.wait("HEARTBEAT", timeout=5.0)
-                yield Rig(sim, bridge, gcs, autopilot)
+                yield Rig(sim, bridge, gcs, autopilot, packet_times)
     finally:
         gcs.close()
         autopilot.close()
