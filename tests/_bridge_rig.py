@@ -154,8 +154,10 @@ class Rig:
 @contextlib.asynccontextmanager
 async def bridge_rig(pod: str = "D-90Pro(TA)", *, max_zoom: float | None = 30.0,
                      video_url: str | None = "rtsp://127.0.0.1:8554/main",
+                     extra_links: tuple[str, ...] = (),
                      **bridge_options: Any) -> AsyncIterator[Rig]:  # fmt: skip
-    """The whole chain running; the ground station has seen both heartbeats."""
+    """The whole chain running; the ground station has seen both heartbeats.
+    ``extra_links``: more connection strings for the bridge (after the two peers')."""
     sim = GcuSimulator(SimulatorModel(pod, record_executions=True))
     packet_times: list[float] = []
     handle = sim.model.handle
@@ -170,7 +172,8 @@ async def bridge_rig(pod: str = "D-90Pro(TA)", *, max_zoom: float | None = 30.0,
     try:
         async with sim.serve_udp("127.0.0.1", 0) as server:
             client = connect(server.url, local_port=0, check_support=True)
-            bridge = MavlinkBridge(client, [gcs.url, autopilot.url], system_id=SYSTEM,
+            bridge = MavlinkBridge(client, [gcs.url, autopilot.url, *extra_links],
+                                   system_id=SYSTEM,
                                    camera=CameraConfig(video_url=video_url, max_zoom=max_zoom),
                                    **bridge_options)  # fmt: skip
             async with bridge:

@@ -9,8 +9,8 @@
   :data:`RECENT_SECONDS` of the first is its retransmission.
 - **Kinds**: commands acting on one function of the GCU (the zoom, the pointing, tracking,
   recording, focus, the picture source) share a *slot*. A new command of a slot
-  supersedes the commands of that slot still waiting — except that nothing supersedes a
-  *stop*: a stop always runs. Photos have no slot: every one waits its turn.
+  supersedes the commands of that slot still waiting — except a *stop*: nothing
+  supersedes a stop, it always gets its turn. Photos have no slot: every one waits its turn.
 - **Bounds**: at most :data:`MAX_WAITING` commands wait in all, :data:`MAX_WAITING_PER_LINK`
   from one link, :data:`MAX_WAITING_PER_SOURCE` from one sender; a command waits at most
   :data:`COMMAND_WAIT` seconds for its first packet to the GCU.
@@ -41,8 +41,10 @@ RECENT_SECONDS = 5.0
 """How long a finished command is remembered, so that a retransmission of it gets its
 answer again instead of running again."""
 MAX_REMEMBERED = 1024
-"""Senders' (source, component, command) keys remembered at most (oldest finished first
-out)."""
+"""(source, component, command) keys remembered per link. Beyond it the oldest key whose
+commands all ended without running is forgotten first; a key with a command that ran (or
+may have) is kept for :data:`RECENT_SECONDS` after its answer. (The GCU runs at most one
+command per host packet, so those keys stay few: at most 50/s × 5 s, plus the waiting.)"""
 PER_KEY = 4
 """Commands remembered per (source, component, command) key."""
 
@@ -100,6 +102,8 @@ class Entry:
     """A control message's call (commands are planned again when their turn comes)."""
     state: str = "waiting"
     """"waiting", "running" or "done"."""
+    ran: bool = False
+    """Handed to the client: it ran, or may have."""
     confirmation: int = 0
     """Highest ``confirmation`` seen for it (COMMAND_LONG)."""
     result: int | None = None
@@ -147,7 +151,7 @@ class Memory:
                 return entry
         return None
 
-    def add(self, entry: Entry) -> None:
+    def add(self, entry: Entry, now: float) -> None:
         assert entry.cmd is not None
         key = (entry.cmd.source, entry.component, entry.cmd.command)
         entries = self.keys.get(key)
@@ -162,11 +166,18 @@ class Memory:
                     break
         entries.append(entry)
         if len(self.keys) > MAX_REMEMBERED:
-            self._evict()
+            self._evict(now)
 
-    def _evict(self) -> None:
+    def _evict(self, now: float) -> None:
+        """Forget the oldest key whose commands all ended without running, else the oldest
+        whose commands were all answered more than :data:`RECENT_SECONDS` ago."""
         for key, entries in self.keys.items():
-            if all(e.state == "done" for e in entries):
+            if all(e.state == "done" and not e.ran for e in entries):
+                del self.keys[key]
+                return
+        for key, entries in self.keys.items():
+            if all(e.done_at is not None and now - e.done_at > RECENT_SECONDS
+                   for e in entries):  # fmt: skip
                 del self.keys[key]
                 return
 
@@ -199,11 +210,11 @@ class Queue:
         return None
 
     def superseded_by(self, entry: Entry) -> list[Entry]:
-        """The waiting entries of ``entry``'s slot it replaces (a stop only by a stop)."""
+        """The waiting entries of ``entry``'s slot it replaces (never a stop)."""
         if entry.slot is None:
             return []
         return [e for e in self if e.slot == entry.slot and e.component == entry.component
-                and (entry.stop or not e.stop)]  # fmt: skip
+                and not e.stop]  # fmt: skip
 
     def push(self, entry: Entry) -> None:
         self.links.setdefault(entry.link, deque()).append(entry)
@@ -226,3 +237,39 @@ class Queue:
                 self.links[link] = entries  # to the back: the next link's turn
             return entry
         return None
+
+
+COMMANDS_PER_SECOND = 200.0
+"""Commands one link may bring per second (sustained); beyond it (and a burst of
+:data:`COMMAND_BURST`) a command is dropped unanswered, as a lossy link would lose it, so a
+flood costs the bridge a bounded amount of work; ground stations retransmit."""
+COMMAND_BURST = 100.0
+CONTROL_INTERVAL = 0.02
+"""Gimbal control messages are taken at most once per this many seconds (50 Hz, the GCU's
+own rate): the latest one received meanwhile wins, the others are counted, not used."""
+
+
+MESSAGE_MODE_INTERVAL = 0.5
+"""Control messages change the pod's mode at most once per this many seconds (a stream
+alternating between yaw lock and follow is a stream of intents, not of mode commands)."""
+IMMEDIATE_CALLS = frozenset({"set_angles", "set_rates", "release_control"})
+"""Client calls that only change control values (no GCU command, nothing waits)."""
+
+
+@dataclass
+class Budget:
+    """A token bucket: ``take(now)`` is True while the rate allows."""
+
+    rate: float = COMMANDS_PER_SECOND
+    burst: float = COMMAND_BURST
+    tokens: float = COMMAND_BURST
+    at: float | None = None
+
+    def take(self, now: float) -> bool:
+        if self.at is not None:
+            self.tokens = min(self.burst, self.tokens + (now - self.at) * self.rate)
+        self.at = now
+        if self.tokens >= 1.0:
+            self.tokens -= 1.0
+            return True
+        return False

@@ -13,6 +13,7 @@ import asyncio
 import contextlib
 import inspect
 import logging
+import math
 import time
 from collections.abc import Sequence
 from dataclasses import replace
@@ -106,19 +107,28 @@ class MavlinkBridge:
         self._recording: bool | None = None
         self._recording_since: int | None = None
         self._was_tracking = False
-        self._memory = admission.Memory()
+        self._memory: dict[Any, admission.Memory] = {}
+        """Link → the commands it brought (retransmissions are told per link)."""
         self._queue = admission.Queue()
         self._wake = asyncio.Event()
         self._logs = LogLimiter(log)
+        self._budgets: dict[Any, admission.Budget] = {}
+        self._latest_control: tuple[Any, Any] | None = None
+        self._control_timer: asyncio.TimerHandle | None = None
+        self._control_at = -math.inf
+        self._mode_message_at = -math.inf
         self._tasks: set[asyncio.Task[Any]] = set()
         self._main: asyncio.Task[None] | None = None
         self._aircraft_errors: set[str] = set()
         self.stats = dict.fromkeys(
             ("commands", "acks", "sent", "handler_errors", "retransmissions", "superseded",
-             "rejected", "expired", "control_messages"), 0)  # fmt: skip
+             "rejected", "expired", "shed", "control_messages", "control_coalesced"),
+            0)  # fmt: skip
         """Counters: commands received, retransmissions answered without running,
         commands superseded (CANCELLED), rejected because a bound was full, expired
-        (waited :data:`~gcu_async.bridge.admission.COMMAND_WAIT`), control messages."""
+        (waited :data:`~gcu_async.bridge.admission.COMMAND_WAIT`), shed (over a link's
+        command rate, dropped unanswered), control messages received and coalesced
+        (replaced by a newer one before they were taken)."""
 
     # -- lifecycle ------------------------------------------------------------------------
     async def __aenter__(self) -> MavlinkBridge:
@@ -147,6 +157,9 @@ class MavlinkBridge:
     async def close(self) -> None:
         """Stop streaming, cancel running commands, close the links and the client (each
         link's reader stops within about 0.1 s; :mod:`~gcu_async.bridge.links`)."""
+        if self._control_timer is not None:
+            self._control_timer.cancel()
+            self._control_timer = None
         tasks = [t for t in (self._main, *self._tasks) if t is not None]
         for task in tasks:
             task.cancel()
@@ -223,14 +236,15 @@ class MavlinkBridge:
         return int((now - self._started) * 1000) & 0xFFFFFFFF
 
     # -- sending ----------------------------------------------------------------------------
-    def send(self, component: int, message: Any) -> None:
-        """Pack ``message`` as ``component`` of this system and write it to every link."""
+    def send(self, component: int, message: Any, link: Any = None) -> None:
+        """Pack ``message`` as ``component`` of this system and write it to ``link``, or to
+        every link (``None``)."""
         packer = self._packers[component]
         data = message.pack(packer)
         packer.seq = (packer.seq + 1) % 256
         self.stats["sent"] += 1
-        for link in self.links:
-            link.send(data)
+        for each in self.links if link is None else (link,):
+            each.send(data)
 
     def _heartbeat(self, now: float) -> None:
         view = self.view()
@@ -257,11 +271,13 @@ class MavlinkBridge:
                 if message is not None:
                     self.send(component, message)
 
-    def _ack(self, component: int, cmd: CommandIn, result: int, param2: int = 0,
+    def _ack(self, component: int, cmd: CommandIn, link: Any, result: int, param2: int = 0,
              progress: int = 0) -> None:  # fmt: skip
+        """COMMAND_ACK to the sender, on the link the command came by (a flood on one link
+        is not echoed to the others)."""
         self.stats["acks"] += 1
         self.send(component, mavlink.MAVLink_command_ack_message(
-            cmd.command, result, progress, param2, *cmd.source))
+            cmd.command, result, progress, param2, *cmd.source), link)
 
     # -- receiving --------------------------------------------------------------------------
     def _on_message(self, link: Any, msg: Any) -> None:
@@ -280,21 +296,72 @@ class MavlinkBridge:
             return  # our own messages echoed by a router
         if self.autopilot.accepts(msg):
             self._aircraft(msg, now)
-        cmd = CommandIn.from_message(msg)
-        if cmd is not None:
+        kind = msg.get_type()
+        if kind in ("COMMAND_LONG", "COMMAND_INT"):
+            budget = self._budgets.get(link)
+            if budget is None:
+                budget = self._budgets[link] = admission.Budget()
+            if not budget.take(now):
+                self.stats["shed"] += 1
+                self._logs.log(logging.WARNING, "shed command", "bridge: more than %g "
+                               "commands/s on %s: dropped unanswered", budget.rate,
+                               getattr(link, "url", link))  # fmt: skip
+                return
+            cmd = CommandIn.from_message(msg)
+            assert cmd is not None
             for component in dispatch.components_for(cmd, self.system_id, self.camera):
                 self._command(cmd, component, link, now)
             return
-        target = (getattr(msg, "target_system", 0), getattr(msg, "target_component", 0))
-        if target[0] in (0, self.system_id) and target[1] in (0, gimbal.COMPONENT):
-            try:
-                call = gimbal.message_call(msg, self.view())
-            except ValueError as exc:
-                self._logs.log(logging.WARNING, "ignored control message",
-                               "bridge: %s ignored: %s", msg.get_type(), exc)  # fmt: skip
+        if kind in gimbal.CONTROL_MESSAGES:
+            target = (msg.target_system, msg.target_component)
+            if target[0] in (0, self.system_id) and target[1] in (0, gimbal.COMPONENT):
+                self._coalesce_control(link, msg, now)
+
+    def _coalesce_control(self, link: Any, msg: Any, now: float) -> None:
+        """Keep the latest control message; take one per :data:`admission.CONTROL_INTERVAL`
+        (a flood costs a store per message, not a mode change)."""
+        self.stats["control_messages"] += 1
+        if not self._control.allows((msg.get_srcSystem(), msg.get_srcComponent())):
+            return  # another component holds control (checked here: before coalescing)
+        if self._latest_control is not None:
+            self.stats["control_coalesced"] += 1
+        self._latest_control = (link, msg)
+        if self._control_timer is None:
+            self._control_later(self._control_at + admission.CONTROL_INTERVAL - now)
+
+    def _control_later(self, delay: float) -> None:
+        self._control_timer = asyncio.get_running_loop().call_later(max(0.0, delay),
+                                                                   self._take_control)
+
+    def _take_control(self) -> None:
+        self._control_timer = None
+        latest, self._latest_control = self._latest_control, None
+        if latest is None:
+            return
+        link, msg = latest
+        now = self._control_at = time.monotonic()
+        try:
+            call = gimbal.message_call(msg, self.view())
+        except ValueError as exc:
+            self._logs.log(logging.WARNING, "ignored control message",
+                           "bridge: %s ignored: %s", msg.get_type(), exc)  # fmt: skip
+            return
+        except Exception:
+            self.stats["handler_errors"] += 1
+            self._logs.log(logging.ERROR, "handler failure", "bridge: handling %s failed",
+                           msg.get_type(), exc_info=True)  # fmt: skip
+            return
+        if call is None:
+            return
+        if call.method not in admission.IMMEDIATE_CALLS:  # a mode change: spaced out
+            due = self._mode_message_at + admission.MESSAGE_MODE_INTERVAL
+            if now < due:
+                if self._latest_control is None:
+                    self._latest_control = latest
+                self._control_later(due - now)
                 return
-            if call is not None:
-                self._control_message(call, link, now)
+            self._mode_message_at = now
+        self._control_message(call, link, now)
 
     def _aircraft(self, msg: Any, now: float) -> None:
         kind = msg.get_type()
@@ -311,10 +378,9 @@ class MavlinkBridge:
         self._aircraft_errors.discard(kind)
 
     def _control_message(self, call: GcuCall, link: Any, now: float) -> None:
-        """A gimbal control message: new control values apply at once; a mode change waits
-        its turn in the pointing slot, where the latest one replaces any still waiting."""
-        self.stats["control_messages"] += 1
-        immediate = call.method in ("set_angles", "set_rates", "release_control")
+        """A gimbal control message's call: new control values apply at once; a mode
+        change waits its turn in the pointing slot, where the latest replaces any waiting."""
+        immediate = call.method in admission.IMMEDIATE_CALLS
         waiting = any(e.slot == admission.POINTING for e in self._queue)
         if immediate and not waiting:
             try:
@@ -329,19 +395,22 @@ class MavlinkBridge:
 
     def _command(self, cmd: CommandIn, component: int, link: Any, now: float) -> None:
         self.stats["commands"] += 1
-        old = self._memory.find(cmd, component, now)
+        memory = self._memory.get(link)
+        if memory is None:
+            memory = self._memory[link] = admission.Memory()
+        old = memory.find(cmd, component, now)
         if old is not None:  # a retransmission: answered, never run again
             self.stats["retransmissions"] += 1
             old.confirmation = max(old.confirmation, cmd.confirmation)
             if old.result is not None:
-                self._ack(component, cmd, old.result, old.param2)
+                self._ack(component, cmd, link, old.result, old.param2)
             else:
-                self._ack(component, cmd, IN_PROGRESS, progress=255)
+                self._ack(component, cmd, link, IN_PROGRESS, progress=255)
             return
         entry = admission.Entry(cmd, component, link, now, admission.SLOTS.get(cmd.command),
                                 stop=admission.is_stop(cmd),
                                 confirmation=cmd.confirmation)  # fmt: skip
-        self._memory.add(entry)
+        memory.add(entry, now)
         plan = dispatch.plan(cmd, component, self.view(), self.camera)
         if plan.call is None:
             self._answer_plan(entry, plan)
@@ -359,7 +428,7 @@ class MavlinkBridge:
             self._take(plan, entry.component)
         self._finish(entry, plan.result)
         for reply in plan.replies:
-            self.send(entry.component, reply)
+            self.send(entry.component, reply, entry.link)
 
     def _admit(self, entry: admission.Entry) -> None:
         """Queue ``entry``: it replaces what waits in its slot (answered CANCELLED), or is
@@ -382,7 +451,7 @@ class MavlinkBridge:
 
     def _in_progress(self, entry: admission.Entry) -> None:
         if entry.result is None and entry.cmd is not None:
-            self._ack(entry.component, entry.cmd, IN_PROGRESS, progress=255)
+            self._ack(entry.component, entry.cmd, entry.link, IN_PROGRESS, progress=255)
 
     def _finish(self, entry: admission.Entry, result: int, param2: int = 0) -> None:
         """The final answer of ``entry`` (once; a retransmission gets it again)."""
@@ -393,7 +462,7 @@ class MavlinkBridge:
             entry.timer.cancel()
             entry.timer = None
         if entry.cmd is not None:
-            self._ack(entry.component, entry.cmd, result, param2)
+            self._ack(entry.component, entry.cmd, entry.link, result, param2)
 
     def _take(self, plan: Plan, component: int) -> None:
         if plan.interval is not None:
@@ -441,6 +510,7 @@ class MavlinkBridge:
                 return
             call = plan.call
         entry.state = "running"
+        entry.ran = True
         error: BaseException | None = None
         try:
             await self._execute(call, queue_timeout=remaining)
