@@ -76,27 +76,39 @@ async def test_commands_differing_only_in_parameters_are_new_commands_latest_win
 
 
 async def test_retransmission_is_told_from_a_new_command_by_confirmation() -> None:
-    focus = mavlink.MAV_CMD_SET_CAMERA_FOCUS
+    photo = mavlink.MAV_CMD_IMAGE_START_CAPTURE
     async with bridge_rig() as rig:
-        # confirmation 0 twice, back to back: two commands, two executions
+        # confirmation 0 twice, back to back: two photos (photos share no slot)
         start = len(rig.gcs.messages)
-        rig.gcs.command(CAMERA, focus, mavlink.FOCUS_TYPE_AUTO)
-        rig.gcs.command(CAMERA, focus, mavlink.FOCUS_TYPE_AUTO)
-        acks = await final_acks(rig, focus, 2, start)
+        rig.gcs.command(CAMERA, photo, 0, 0, 1)
+        rig.gcs.command(CAMERA, photo, 0, 0, 1)
+        acks = await final_acks(rig, photo, 2, start)
         assert [a.result for a in acks] == [ACCEPTED, ACCEPTED]
-        assert len(executed(rig, Focus)) == 2
+        assert len(executed(rig, TakePhoto)) == 2
         # a retransmission (confirmation 1) of the finished one: answered again, not run
         start = len(rig.gcs.messages)
-        rig.gcs.command(CAMERA, focus, mavlink.FOCUS_TYPE_AUTO, confirmation=1)
-        acks = await final_acks(rig, focus, 1, start)
+        rig.gcs.command(CAMERA, photo, 0, 0, 1, confirmation=1)
+        acks = await final_acks(rig, photo, 1, start)
         assert acks[0].result == ACCEPTED
         await rig.gcs.collect(0.3)
-        assert len(executed(rig, Focus)) == 2
+        assert len(executed(rig, TakePhoto)) == 2
         assert rig.bridge.stats["retransmissions"] == 1
+        # focus, twice at once: one slot, the latest intent wins, nothing is lost silently
+        focus = mavlink.MAV_CMD_SET_CAMERA_FOCUS
+        start = len(rig.gcs.messages)
+        rig.gcs.command(CAMERA, focus, mavlink.FOCUS_TYPE_AUTO)
+        rig.gcs.command(CAMERA, focus, mavlink.FOCUS_TYPE_AUTO)
+        results = [a.result for a in await final_acks(rig, focus, 2, start)]
+        assert results.count(ACCEPTED) == len(executed(rig, Focus)) >= 1
+        assert set(results) <= {ACCEPTED, CANCELLED}
+
+
+BURST = int(admission.COMMAND_BURST) - 5
+"""Commands sent at once: within one link's burst budget, so none is shed."""
 
 
 async def test_a_burst_from_many_senders_waits_at_most_the_bound() -> None:
-    """200 photos from 200 senders at once: the queue holds at most MAX_WAITING, every
+    """95 photos from 95 senders at once: the queue holds at most MAX_WAITING, every
     photo is answered (once) within COMMAND_WAIT + the wire timeout, none executes after
     that, and ACCEPTED counts the executions exactly. Main waited and executed up to the
     client's 30 s queue timeout."""
@@ -106,21 +118,46 @@ async def test_a_burst_from_many_senders_waits_at_most_the_bound() -> None:
         before = len(executed(rig, TakePhoto))
         start = len(rig.gcs.messages)
         sent = time.monotonic()
-        for system in range(2, 202):
+        for system in range(2, 2 + BURST):
             mav.srcSystem = system
             mav.command_long_send(1, CAMERA, capture, 0, 0, 0, 1, 0, 0, 0, 0)
         bound = admission.COMMAND_WAIT + rig.bridge.client.command_timeout
-        acks = await final_acks(rig, capture, 200, start, timeout=bound + 2.0)
+        acks = await final_acks(rig, capture, BURST, start, timeout=bound + 2.0)
         answered = time.monotonic() - sent
         assert answered <= bound + 0.5
         by_sender = sorted(a.target_system for a in acks)
-        assert by_sender == list(range(2, 202))  # one final answer each
+        assert by_sender == list(range(2, 2 + BURST))  # one final answer each
         await rig.gcs.collect(1.0)
         runs = executed(rig, TakePhoto)[before:]
-        assert all(r.time - sent <= bound for r in runs)
+        # healthy link: a photo executes at its first packet, within COMMAND_WAIT
+        assert all(r.time - sent <= admission.COMMAND_WAIT + 0.5 for r in runs), [
+            round(r.time - sent, 2) for r in runs]
         assert [a.result for a in acks].count(ACCEPTED) == len(runs) > 0
         assert {a.result for a in acks} <= {ACCEPTED, REJECTED}
-        assert rig.bridge.stats["rejected"] + rig.bridge.stats["expired"] == 200 - len(runs)
+        stats = rig.bridge.stats
+        assert stats.get("rejected", 0) + stats.get("expired", 0) == BURST - len(runs)
+        assert stats.get("shed", 0) == 0
+
+
+async def test_a_command_flood_on_one_link_is_shed_and_costs_bounded_work() -> None:
+    """2,000 commands at once on the ground station's link: beyond the link's budget they
+    are dropped unanswered (counted), as a lossy link would lose them; the rest are
+    answered, and the GCU heartbeat holds."""
+    async with bridge_rig() as rig:
+        mav = rig.gcs.conn.mav
+        start = len(rig.gcs.messages)
+        for n in range(2000):
+            mav.srcSystem, mav.srcComponent = 2 + n % 200, 1 + n // 200
+            mav.command_long_send(1, CAMERA, mavlink.MAV_CMD_SET_CAMERA_FOCUS, 0,
+                                  mavlink.FOCUS_TYPE_AUTO, 0, 0, 0, 0, 0, 0)  # fmt: skip
+        await rig.gcs.collect(admission.COMMAND_WAIT + 1.0)
+        stats = rig.bridge.stats
+        received = stats["commands"] + stats.get("shed", 0)
+        assert received >= 500  # (loopback may drop some of the burst)
+        assert stats["commands"] <= admission.COMMAND_BURST + 4 * admission.COMMANDS_PER_SECOND
+        answered = {(m.target_system, m.target_component) for m in rig.gcs.messages[start:]
+                    if m.get_type() == "COMMAND_ACK" and m.result != IN_PROGRESS}  # fmt: skip
+        assert len(answered) == stats["commands"]  # every command taken is answered
 
 
 async def test_system_time_out_of_every_range_is_logged_once(
