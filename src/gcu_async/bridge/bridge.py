@@ -121,10 +121,11 @@ class MavlinkBridge:
         self._main: asyncio.Task[None] | None = None
         self._aircraft_errors: set[str] = set()
         self.stats = dict.fromkeys(
-            ("commands", "acks", "sent", "handler_errors", "retransmissions", "superseded",
+            ("messages", "commands", "acks", "sent", "handler_errors", "retransmissions",
+             "superseded",
              "rejected", "expired", "shed", "control_messages", "control_coalesced"),
             0)  # fmt: skip
-        """Counters: commands received, retransmissions answered without running,
+        """Counters: messages and commands received, retransmissions answered without running,
         commands superseded (CANCELLED), rejected because a bound was full, expired
         (waited :data:`~gcu_async.bridge.admission.COMMAND_WAIT`), shed (over a link's
         command rate, dropped unanswered), control messages received and coalesced
@@ -283,6 +284,7 @@ class MavlinkBridge:
     def _on_message(self, link: Any, msg: Any) -> None:
         now = time.monotonic()
         link.note_message(now)
+        self.stats["messages"] += 1
         try:
             self._handle(link, msg, now)
         except Exception:  # hostile input must never stop the bridge
