@@ -248,8 +248,8 @@ async def test_floods_from_thousands_of_senders(kind: str, rate: int, pairs: int
         growth = rss_mib() - rss
         assert growth < RSS_GROWTH_MIB
         assert rig.bridge._queue.size <= admission.MAX_WAITING
-        print(f"\n{kind} flood: {out.strip()} sent, {rig.bridge.stats['messages']} received, rate/s "
-              f"{figures['rate']}, mode changes {len(modes)}, RSS +{growth:.1f} MiB, "
+        print(f"\n{kind} flood: {out.strip()} sent, {rig.bridge.stats['messages']} received, "
+              f"rate/s {figures['rate']}, mode changes {len(modes)}, RSS +{growth:.1f} MiB, "
               f"stats {rig.bridge.stats}")
         if kind == "attitude":
             assert len(modes) <= seconds / admission.MESSAGE_MODE_INTERVAL + 2
