@@ -1,8 +1,9 @@
 """The bridge contract under attack (docs/mavlink-bridge.md, "The bridge contract").
 
-Real loopback sockets, a pymavlink ground station, the simulator recording every execution
-(and the time of every host packet it handles), and floods from another process
-(tests/_mavlink_flood.py) into a ``udpin:`` link. A seeded generator builds schedules of
+Real loopback sockets, a pymavlink ground station, the simulator in its own process
+recording every execution and the time of every host packet it handles
+(tests/_sim_process.py), and floods from another process (tests/_mavlink_flood.py) into a
+``udpin:`` link. A seeded generator builds schedules of
 back-to-back commands that differ only in their parameters, retransmissions with rising
 ``confirmation``, stops; every command comes from its own (system, component), so each
 answer is attributed. Checked after every step:
@@ -21,22 +22,29 @@ answer is attributed. Checked after every step:
 from __future__ import annotations
 
 import asyncio
+import base64
+import contextlib
+import os
+import pickle
 import random
 import socket
 import subprocess
 import sys
 import threading
 import time
+from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
 
-from _bridge_rig import CAMERA, Rig, bridge_rig
-from gcu_async.bridge import admission
+from _bridge_rig import AUTOPILOT, CAMERA, GCS, GIMBAL, Peer
+from gcu_async.bridge import CameraConfig, MavlinkBridge, admission
 from gcu_async.bridge._mavlink import mavlink
 from gcu_async.bridge.commands import CANCELLED
+from gcu_async.client.connect import connect
 from gcu_async.protocol import TakePhoto, ZoomIn, ZoomOut, ZoomStop, ZoomTo
+from gcu_async.sim import ExecutionRecord
 
 ZOOM = mavlink.MAV_CMD_SET_CAMERA_ZOOM
 PHOTO = mavlink.MAV_CMD_IMAGE_START_CAPTURE
@@ -49,6 +57,8 @@ FAILED = mavlink.MAV_RESULT_FAILED
 RATE_LOW, RATE_HIGH = 45, 51
 """Host packets the simulator receives in any whole second (50 Hz; G4's floor(50) + 1)."""
 FLOOD = Path(__file__).with_name("_mavlink_flood.py")
+SIM = Path(__file__).with_name("_sim_process.py")
+ENV = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
 RSS_GROWTH_MIB = 30.0
 THREAD_GROWTH = 2
 
@@ -63,6 +73,85 @@ def free_udp_port() -> int:
         s.bind(("127.0.0.1", 0))
         port: int = s.getsockname()[1]
         return port
+
+
+class SimProcess:
+    """The simulator in its own process (tests/_sim_process.py): the bridge's load does not
+    delay when it receives the host packets it counts."""
+
+    def __init__(self, proc: asyncio.subprocess.Process, url: str) -> None:
+        self.proc = proc
+        self.url = url
+
+    @classmethod
+    async def start(cls, pod: str = "D-90Pro(TA)") -> SimProcess:
+        proc = await asyncio.create_subprocess_exec(
+            sys.executable, str(SIM), pod, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+            env=ENV)
+        assert proc.stdout is not None
+        url = (await asyncio.wait_for(proc.stdout.readline(), 20)).decode().strip()
+        assert url.startswith("udp://"), url
+        return cls(proc, url)
+
+    async def ask(self, line: str) -> None:
+        assert self.proc.stdin is not None
+        self.proc.stdin.write(line.encode() + b"\n")
+        await self.proc.stdin.drain()
+
+    async def report(self) -> tuple[list[float], list[ExecutionRecord]]:
+        await self.ask("report")
+        assert self.proc.stdout is not None
+        line = await asyncio.wait_for(self.proc.stdout.readline(), 10)
+        times, log = pickle.loads(base64.b64decode(line))
+        return times, log
+
+    async def stop(self) -> None:
+        with contextlib.suppress(OSError):
+            await self.ask("quit")
+        try:
+            await asyncio.wait_for(self.proc.wait(), 5)
+        except TimeoutError:
+            self.proc.kill()
+            await self.proc.wait()
+
+
+@dataclass
+class Rig:
+    sim: SimProcess
+    bridge: MavlinkBridge
+    gcs: Peer
+    packet_times: list[float] = field(default_factory=list)
+    log: list[ExecutionRecord] = field(default_factory=list)
+
+    async def refresh(self) -> None:
+        self.packet_times, self.log = await self.sim.report()
+
+    async def until(self, predicate: Callable[[], bool], timeout: float,
+                    what: str) -> None:  # fmt: skip
+        deadline = time.monotonic() + timeout
+        while not predicate():
+            if time.monotonic() > deadline:
+                raise TimeoutError(f"{what}: not within {timeout} s")
+            await asyncio.sleep(0.01)
+
+
+@contextlib.asynccontextmanager
+async def rig_with(extra_links: tuple[str, ...] = ()) -> AsyncIterator[Rig]:
+    sim = await SimProcess.start()
+    gcs = Peer(*GCS)
+    autopilot = Peer(*AUTOPILOT)
+    try:
+        client = connect(sim.url, local_port=0, check_support=True)
+        bridge = MavlinkBridge(client, [gcs.url, autopilot.url, *extra_links], system_id=1,
+                               camera=CameraConfig(max_zoom=30.0))  # fmt: skip
+        async with bridge:
+            await gcs.wait("HEARTBEAT", lambda m: m.get_srcComponent() == GIMBAL
+                           and m.system_status == mavlink.MAV_STATE_ACTIVE, timeout=10.0)
+            yield Rig(sim, bridge, gcs)
+    finally:
+        gcs.close()
+        autopilot.close()
+        await sim.stop()
 
 
 @dataclass
@@ -134,7 +223,9 @@ def final_answers(rig: Rig, since: int) -> dict[tuple[int, int], list[int]]:
     return out
 
 
-def check_rate(rig: Rig, start: float, end: float, figures: dict[str, list[int]]) -> None:
+async def check_rate(rig: Rig, start: float, end: float,
+                     figures: dict[str, list[int]]) -> None:  # fmt: skip
+    await rig.refresh()
     times = [t for t in rig.packet_times if start <= t < end]
     seconds = int(end - start)
     counts = [0] * seconds
@@ -150,7 +241,8 @@ async def run_step(rig: Rig, schedule: Schedule, figures: dict[str, list[int]],
                    *, link_loss: bool = False, foreign_photos: bool = False) -> None:  # fmt: skip
     step = Step(started=time.monotonic())
     since = len(rig.gcs.messages)
-    log_start = len(rig.sim.model.execution_log)
+    await rig.refresh()
+    log_start = len(rig.log)
     await send_burst(rig, schedule, step)
     sources = {s.source for s in step.sent}
     bound = admission.COMMAND_WAIT + rig.bridge.client.command_timeout
@@ -158,7 +250,8 @@ async def run_step(rig: Rig, schedule: Schedule, figures: dict[str, list[int]],
                     "every command answered")  # fmt: skip
     await asyncio.sleep(0.05)  # retransmissions' answers
     answers = final_answers(rig, since)
-    runs = rig.sim.model.execution_log[log_start:]
+    await rig.refresh()
+    runs = rig.log[log_start:]
     allowed = {ACCEPTED, CANCELLED, REJECTED} | ({FAILED} if link_loss else set())
     result: dict[tuple[int, int], int] = {}
     for s in step.sent:
@@ -211,11 +304,11 @@ async def steps_for(rig: Rig, schedule: Schedule, seconds: float,
 async def test_generated_schedules_keep_the_contract(seed: int) -> None:
     schedule = Schedule(seed)
     figures: dict[str, list[int]] = {}
-    async with bridge_rig() as rig:
+    async with rig_with() as rig:
         threads, rss = threading.active_count(), rss_mib()
         start = time.monotonic()
         await steps_for(rig, schedule, 6.0, figures)
-        check_rate(rig, start + 0.5, time.monotonic(), figures)
+        await check_rate(rig, start + 0.5, time.monotonic(), figures)
         assert threading.active_count() <= threads + THREAD_GROWTH
         assert rss_mib() - rss < RSS_GROWTH_MIB
         print(f"\nseed {seed}: {schedule.next_source} commands, rate/s {figures['rate']}")
@@ -231,9 +324,10 @@ async def test_floods_from_thousands_of_senders(kind: str, rate: int, pairs: int
     figures: dict[str, list[int]] = {}
     port = free_udp_port()
     seconds = 4.0
-    async with bridge_rig(extra_links=(f"udpin:127.0.0.1:{port}",)) as rig:
+    async with rig_with(extra_links=(f"udpin:127.0.0.1:{port}",)) as rig:
         threads, rss = threading.active_count(), rss_mib()
-        log_start = len(rig.sim.model.execution_log)
+        await rig.refresh()
+        log_start = len(rig.log)
         proc = flood(port, kind, rate, seconds, pairs)
         try:
             start = time.monotonic()
@@ -241,8 +335,8 @@ async def test_floods_from_thousands_of_senders(kind: str, rate: int, pairs: int
             end = time.monotonic()
         finally:
             out, _ = await asyncio.to_thread(proc.communicate, timeout=20)
-        check_rate(rig, start + 0.5, min(end, start + seconds), figures)
-        modes = [r for r in rig.sim.model.execution_log[log_start:]
+        await check_rate(rig, start + 0.5, min(end, start + seconds), figures)
+        modes = [r for r in rig.log[log_start:]
                  if type(r.command).__name__ in ("PointingLock", "PointingFollow")]  # fmt: skip
         assert threading.active_count() <= threads + THREAD_GROWTH
         growth = rss_mib() - rss
@@ -258,8 +352,8 @@ async def test_floods_from_thousands_of_senders(kind: str, rate: int, pairs: int
 async def test_gcu_link_loss_mid_command_is_never_accepted() -> None:
     schedule = Schedule(11)
     figures: dict[str, list[int]] = {}
-    async with bridge_rig() as rig:
-        rig.sim.silence(3.0)  # the GCU stops answering (and executing) mid-schedule
+    async with rig_with() as rig:
+        await rig.sim.ask("silence 3")  # the GCU stops answering (and executing) mid-schedule
         await run_step(rig, schedule, figures, link_loss=True)
         await asyncio.sleep(3.0)
         await rig.until(lambda: rig.bridge.view().link_up, 8.0, "GCU link back")
