@@ -191,3 +191,18 @@ async def test_a_flood_of_malformed_control_messages_logs_a_few_lines(
         lines = [r for r in caplog.records if r.name == "gcu_async.bridge"
                  and "ignored" in r.getMessage()]  # fmt: skip
         assert 1 <= len(lines) <= 5  # (≥ 1: they arrived; loopback may drop some)
+
+
+async def test_commands_for_other_components_cost_no_budget() -> None:
+    """(Rule 6, no regression: the budget is new.) A ground station talking to the
+    autopilot at any rate on the same link does not spend the bridge's command budget."""
+    async with bridge_rig() as rig:
+        mav = rig.gcs.conn.mav
+        for _ in range(1000):
+            mav.command_long_send(1, mavlink.MAV_COMP_ID_AUTOPILOT1,
+                                  mavlink.MAV_CMD_REQUEST_MESSAGE, 0, 33, 0, 0, 0, 0, 0, 0)
+        await rig.gcs.collect(1.0)  # (the burst drains; loopback drops what overflows)
+        assert rig.bridge.stats["messages"] >= admission.COMMAND_BURST + 50
+        ack = await rig.gcs.run(CAMERA, mavlink.MAV_CMD_IMAGE_START_CAPTURE, 0, 0, 1)
+        assert ack.result == ACCEPTED
+        assert rig.bridge.stats["shed"] == 0

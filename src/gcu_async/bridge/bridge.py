@@ -300,6 +300,9 @@ class MavlinkBridge:
             self._aircraft(msg, now)
         kind = msg.get_type()
         if kind in ("COMMAND_LONG", "COMMAND_INT"):
+            if (msg.target_system not in (0, self.system_id)
+                    or msg.target_component not in (0, *dispatch.COMPONENTS)):  # fmt: skip
+                return  # for another system or component: costs this link no budget
             budget = self._budgets.get(link)
             if budget is None:
                 budget = self._budgets[link] = admission.Budget()
