@@ -1,48 +1,53 @@
-"""The simulator in its own process, for measurements the bridge's process load must not
-distort: ``python _sim_process.py POD`` serves UDP on 127.0.0.1 (port 0), prints its URL,
-then answers lines on stdin: ``report`` → one line, base64 of the pickled (host-packet
-times, execution log) so far (``time.monotonic``, the same clock in every process on
-Linux); ``silence SECONDS`` → stop answering and executing for that long; ``quit`` or end
-of input → exit."""
+"""``gcu-async sim`` in a process of its own, for tests over real sockets whose faults must
+not be skewed by the test's own event loop (a reorder hold is a timer: in the test's loop,
+the client's work would stretch it). Its log tells which commands it executed."""
 
 from __future__ import annotations
 
-import asyncio
-import base64
-import pickle
+import re
+import selectors
+import signal
+import subprocess
 import sys
-import time
-from typing import Any
+from collections import Counter
 
-from gcu_async.sim import GcuSimulator, SimulatorModel
-
-
-async def main(pod: str) -> None:
-    model = SimulatorModel(pod, record_executions=True)
-    sim = GcuSimulator(model)
-    times: list[float] = []
-    handle = model.handle
-
-    def timed(packet: Any) -> Any:
-        times.append(time.monotonic())
-        return handle(packet)
-
-    model.handle = timed  # type: ignore[method-assign]
-    loop = asyncio.get_running_loop()
-    reader = asyncio.StreamReader()
-    await loop.connect_read_pipe(lambda: asyncio.StreamReaderProtocol(reader), sys.stdin)
-    async with sim.serve_udp("127.0.0.1", 0) as server:
-        print(server.url, flush=True)
-        while line := (await reader.readline()).decode().split():
-            if line[0] == "report":
-                data = pickle.dumps((list(times), list(model.execution_log)))
-                sys.stdout.write(base64.b64encode(data).decode() + "\n")
-                sys.stdout.flush()
-            elif line[0] == "silence":
-                sim.silence(float(line[1]))
-            else:
-                return
+CLI = [sys.executable, "-c", "import sys; from gcu_async.cli import main; sys.exit(main())"]
+EXECUTED = re.compile(r" executed (\w+) ([0-9a-f -]*?) -> status 0x([0-9A-F]{2})")
 
 
-if __name__ == "__main__":
-    asyncio.run(main(sys.argv[1]))
+class SimProcess:
+    """A running simulator: ``url`` to connect to; :meth:`stop` returns its log."""
+
+    def __init__(self, *args: str, timeout: float = 15.0) -> None:
+        self.proc = subprocess.Popen(
+            [*CLI, "sim", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        )
+        assert self.proc.stdout is not None
+        with selectors.DefaultSelector() as sel:
+            sel.register(self.proc.stdout, selectors.EVENT_READ)
+            if not sel.select(timeout):
+                self.kill()
+                raise TimeoutError("the simulator printed nothing")
+        line = self.proc.stdout.readline()
+        match = re.search(r"listening on (\S+)", line)
+        if not match:
+            self.kill()
+            raise AssertionError(line)
+        self.url = match.group(1)
+        self.log = ""
+
+    def stop(self) -> str:
+        """SIGTERM, wait, return everything it logged (once)."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            _, self.log = self.proc.communicate(timeout=15)
+        return self.log
+
+    def kill(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.communicate(timeout=15)
+
+    def executions(self) -> Counter[tuple[str, str]]:
+        """(opcode name, parameter bytes in hex) → times executed, from its log."""
+        return Counter((m.group(1), m.group(2)) for m in EXECUTED.finditer(self.stop()))

@@ -2,7 +2,7 @@
 
 Real loopback sockets, a pymavlink ground station, the simulator in its own process
 recording every execution and the time of every host packet it handles
-(tests/_sim_process.py), and floods from another process (tests/_mavlink_flood.py) into a
+(tests/_bridge_sim_process.py), and floods from another process (tests/_mavlink_flood.py) into a
 ``udpin:`` link. A seeded generator builds schedules of
 back-to-back commands that differ only in their parameters, retransmissions with rising
 ``confirmation``, stops; every command comes from its own (system, component), so each
@@ -57,7 +57,7 @@ FAILED = mavlink.MAV_RESULT_FAILED
 RATE_LOW, RATE_HIGH = 45, 51
 """Host packets the simulator receives in any whole second (50 Hz; G4's floor(50) + 1)."""
 FLOOD = Path(__file__).with_name("_mavlink_flood.py")
-SIM = Path(__file__).with_name("_sim_process.py")
+SIM = Path(__file__).with_name("_bridge_sim_process.py")
 ENV = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
 RSS_GROWTH_MIB = 30.0
 THREAD_GROWTH = 2
@@ -76,7 +76,7 @@ def free_udp_port() -> int:
 
 
 class SimProcess:
-    """The simulator in its own process (tests/_sim_process.py): the bridge's load does not
+    """The simulator in its own process (tests/_bridge_sim_process.py): the bridge's load does not
     delay when it receives the host packets it counts."""
 
     def __init__(self, proc: asyncio.subprocess.Process, url: str) -> None:
