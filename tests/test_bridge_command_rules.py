@@ -206,3 +206,16 @@ async def test_commands_for_other_components_cost_no_budget() -> None:
         ack = await rig.gcs.run(CAMERA, mavlink.MAV_CMD_IMAGE_START_CAPTURE, 0, 0, 1)
         assert ack.result == ACCEPTED
         assert rig.bridge.stats["shed"] == 0
+
+
+async def test_a_retransmitted_request_gets_its_message_again() -> None:
+    """A retransmission is never run again, but a request runs nothing on the GCU: its
+    message (which may be what was lost) is sent again with the repeated answer."""
+    request = mavlink.MAV_CMD_REQUEST_MESSAGE
+    info = mavlink.MAVLINK_MSG_ID_CAMERA_INFORMATION
+    async with bridge_rig() as rig:
+        rig.gcs.command(CAMERA, request, info)
+        await rig.gcs.wait("CAMERA_INFORMATION")
+        rig.gcs.command(CAMERA, request, info, confirmation=1)
+        await rig.gcs.wait("CAMERA_INFORMATION")
+        assert rig.bridge.stats["retransmissions"] == 1

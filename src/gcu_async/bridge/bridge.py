@@ -409,6 +409,12 @@ class MavlinkBridge:
             old.confirmation = max(old.confirmation, cmd.confirmation)
             if old.result is not None:
                 self._ack(component, cmd, link, old.result, old.param2)
+                if old.result == ACCEPTED and dispatch.requested_id(cmd) is not None:
+                    # its message may be what was lost: send it again (a request runs
+                    # nothing on the GCU)
+                    plan = dispatch.plan(cmd, component, self.view(), self.camera)
+                    for reply in plan.replies:
+                        self.send(component, reply, link)
             else:
                 self._ack(component, cmd, link, IN_PROGRESS, progress=255)
             return
