@@ -1,5 +1,5 @@
 """Rate-limited logging: a flood of hostile or broken input must not become a flood of
-log lines (docs/mavlink-bridge.md, "The bridge contract", G7)."""
+log lines (docs/mavlink-bridge.md, "The bridge contract", BG7)."""
 
 from __future__ import annotations
 
