@@ -137,3 +137,21 @@ def test_log_limiter(caplog: pytest.LogCaptureFixture) -> None:
         limiter.flush()
     assert [r.getMessage() for r in caplog.records] == [
         "line 0", "line 1", "line 2", "bridge: 997 more kind lines suppressed in 10 s"]
+
+
+def test_the_contract_states_the_bounds_the_code_uses() -> None:
+    from pathlib import Path
+
+    text = " ".join((Path(__file__).parents[1] / "docs" / "mavlink-bridge.md").read_text(
+        encoding="utf-8").split())
+    a = admission
+    for phrase in (
+        f"within **{a.COMMAND_WAIT:g} s**",
+        f"At most {a.MAX_WAITING} commands wait ({a.MAX_WAITING_PER_LINK} from one link, "
+        f"{a.MAX_WAITING_PER_SOURCE} from one sender)",
+        f"bring {a.COMMANDS_PER_SECOND:g} commands/s (a burst of {a.COMMAND_BURST:g})",
+        f"{a.MAX_REMEMBERED:,} (sender, component, command) keys × {a.PER_KEY} per link",
+        f"taken at most {1 / a.CONTROL_INTERVAL:g} times a second",
+        f"for {a.RECENT_SECONDS:g} s after its answer",
+    ):
+        assert phrase in text, phrase
