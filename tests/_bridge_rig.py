@@ -19,7 +19,7 @@ from typing import Any
 from gcu_async.bridge import CameraConfig, MavlinkBridge
 from gcu_async.bridge._mavlink import mavlink, mavutil
 from gcu_async.client.connect import connect
-from gcu_async.sim import GcuSimulator
+from gcu_async.sim import GcuSimulator, SimulatorModel
 
 SYSTEM = 1
 GIMBAL = mavlink.MAV_COMP_ID_GIMBAL
@@ -112,6 +112,8 @@ class Rig:
     bridge: MavlinkBridge
     gcs: Peer
     autopilot: Peer
+    packet_times: list[float]
+    """When the simulator handled each host packet (its clock: ``time.monotonic``)."""
 
     @property
     def state(self) -> Any:
@@ -152,22 +154,33 @@ class Rig:
 @contextlib.asynccontextmanager
 async def bridge_rig(pod: str = "D-90Pro(TA)", *, max_zoom: float | None = 30.0,
                      video_url: str | None = "rtsp://127.0.0.1:8554/main",
+                     extra_links: tuple[str, ...] = (),
                      **bridge_options: Any) -> AsyncIterator[Rig]:  # fmt: skip
-    """The whole chain running; the ground station has seen both heartbeats."""
-    sim = GcuSimulator(pod=pod)
+    """The whole chain running; the ground station has seen both heartbeats.
+    ``extra_links``: more connection strings for the bridge (after the two peers')."""
+    sim = GcuSimulator(SimulatorModel(pod, record_executions=True))
+    packet_times: list[float] = []
+    handle = sim.model.handle
+
+    def timed_handle(packet: Any) -> Any:
+        packet_times.append(time.monotonic())
+        return handle(packet)
+
+    sim.model.handle = timed_handle  # type: ignore[method-assign]
     gcs = Peer(*GCS)
     autopilot = Peer(*AUTOPILOT)
     try:
         async with sim.serve_udp("127.0.0.1", 0) as server:
             client = connect(server.url, local_port=0, check_support=True)
-            bridge = MavlinkBridge(client, [gcs.url, autopilot.url], system_id=SYSTEM,
+            bridge = MavlinkBridge(client, [gcs.url, autopilot.url, *extra_links],
+                                   system_id=SYSTEM,
                                    camera=CameraConfig(video_url=video_url, max_zoom=max_zoom),
                                    **bridge_options)  # fmt: skip
             async with bridge:
                 await gcs.wait("HEARTBEAT", lambda m: m.get_srcComponent() == GIMBAL
                                and m.system_status == mavlink.MAV_STATE_ACTIVE, timeout=5.0)
                 await autopilot.wait("HEARTBEAT", timeout=5.0)
-                yield Rig(sim, bridge, gcs, autopilot)
+                yield Rig(sim, bridge, gcs, autopilot, packet_times)
     finally:
         gcs.close()
         autopilot.close()

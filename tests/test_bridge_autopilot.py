@@ -169,7 +169,8 @@ async def test_long_commands_are_in_progress_first_and_retransmissions_run_once(
         gcs.command(CAMERA, focus, mavlink.FOCUS_TYPE_AUTO)
         first = await gcs.ack(CAMERA, focus, final=False)
         assert first.result == mavlink.MAV_RESULT_IN_PROGRESS and first.progress == 255
-        gcs.command(CAMERA, focus, mavlink.FOCUS_TYPE_AUTO)  # the station retransmits
+        # the station retransmits (MAVLink's rule: the same parameters, confirmation + 1)
+        gcs.command(CAMERA, focus, mavlink.FOCUS_TYPE_AUTO, confirmation=1)
         final = await gcs.ack(CAMERA, focus)
         assert final.result == ACCEPTED
         await gcs.collect(0.3)

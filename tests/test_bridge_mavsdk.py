@@ -76,7 +76,7 @@ async def mavsdk_rig() -> AsyncIterator[tuple[Rig, Any]]:
                 try:
                     await mavsdk.add_any_connection(f"udpout://127.0.0.1:{port}")
                     systems = await poll(mavsdk.get_systems, bool, "MAVSDK sees the system")
-                    rig = Rig(sim, bridge, unused, autopilot)
+                    rig = Rig(sim, bridge, unused, autopilot, [])
                     yield rig, systems[0]
                 finally:
                     mavsdk.destroy()

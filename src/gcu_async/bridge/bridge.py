@@ -13,26 +13,31 @@ import asyncio
 import contextlib
 import inspect
 import logging
+import math
 import time
 from collections.abc import Sequence
 from dataclasses import replace
 from types import TracebackType
 from typing import Any
 
-from gcu_async.bridge import camera, dispatch, gimbal, streams
+from gcu_async.bridge import admission, camera, dispatch, gimbal, streams
 from gcu_async.bridge._mavlink import mavlink
 from gcu_async.bridge.autopilot import AutopilotFeed
 from gcu_async.bridge.camera import CameraConfig
 from gcu_async.bridge.commands import (
     ACCEPTED,
+    CANCELLED,
     FAILED,
     IN_PROGRESS,
+    NO_STATUS,
+    TEMPORARILY_REJECTED,
     CommandIn,
     GcuCall,
     Plan,
     result_for,
 )
 from gcu_async.bridge.links import MavlinkLink
+from gcu_async.bridge.lograte import LogLimiter
 from gcu_async.bridge.view import Control, GcuView
 from gcu_async.client.client import ClientState, GcuClient
 from gcu_async.errors import GcuError
@@ -102,11 +107,29 @@ class MavlinkBridge:
         self._recording: bool | None = None
         self._recording_since: int | None = None
         self._was_tracking = False
-        self._inflight: set[tuple[tuple[int, int], int, int]] = set()
+        self._memory: dict[Any, admission.Memory] = {}
+        """Link → the commands it brought (retransmissions are told per link)."""
+        self._queue = admission.Queue()
+        self._wake = asyncio.Event()
+        self._logs = LogLimiter(log)
+        self._budgets: dict[Any, admission.Budget] = {}
+        self._latest_control: tuple[Any, Any] | None = None
+        self._control_timer: asyncio.TimerHandle | None = None
+        self._control_at = -math.inf
+        self._mode_message_at = -math.inf
         self._tasks: set[asyncio.Task[Any]] = set()
         self._main: asyncio.Task[None] | None = None
         self._aircraft_errors: set[str] = set()
-        self.stats = {"commands": 0, "acks": 0, "sent": 0, "handler_errors": 0}
+        self.stats = dict.fromkeys(
+            ("messages", "commands", "acks", "sent", "handler_errors", "retransmissions",
+             "superseded",
+             "rejected", "expired", "shed", "control_messages", "control_coalesced"),
+            0)  # fmt: skip
+        """Counters: messages and commands received, retransmissions answered without running,
+        commands superseded (CANCELLED), rejected because a bound was full, expired
+        (waited :data:`~gcu_async.bridge.admission.COMMAND_WAIT`), shed (over a link's
+        command rate, dropped unanswered), control messages received and coalesced
+        (replaced by a newer one before they were taken)."""
 
     # -- lifecycle ------------------------------------------------------------------------
     async def __aenter__(self) -> MavlinkBridge:
@@ -130,10 +153,14 @@ class MavlinkBridge:
                 await link.close()
             raise
         self._main = asyncio.ensure_future(self._run())
+        self._spawn(self._executor())
 
     async def close(self) -> None:
         """Stop streaming, cancel running commands, close the links and the client (each
         link's reader stops within about 0.1 s; :mod:`~gcu_async.bridge.links`)."""
+        if self._control_timer is not None:
+            self._control_timer.cancel()
+            self._control_timer = None
         tasks = [t for t in (self._main, *self._tasks) if t is not None]
         for task in tasks:
             task.cancel()
@@ -141,6 +168,9 @@ class MavlinkBridge:
             with contextlib.suppress(asyncio.CancelledError, Exception):
                 await task
         self._main = None
+        for entry in list(self._queue):  # never sent: say so before the links close
+            self._queue.remove(entry)
+            self._finish(entry, TEMPORARILY_REJECTED)
         for link in self.links:
             await link.close()
         await self.client.close()
@@ -207,14 +237,15 @@ class MavlinkBridge:
         return int((now - self._started) * 1000) & 0xFFFFFFFF
 
     # -- sending ----------------------------------------------------------------------------
-    def send(self, component: int, message: Any) -> None:
-        """Pack ``message`` as ``component`` of this system and write it to every link."""
+    def send(self, component: int, message: Any, link: Any = None) -> None:
+        """Pack ``message`` as ``component`` of this system and write it to ``link``, or to
+        every link (``None``)."""
         packer = self._packers[component]
         data = message.pack(packer)
         packer.seq = (packer.seq + 1) % 256
         self.stats["sent"] += 1
-        for link in self.links:
-            link.send(data)
+        for each in self.links if link is None else (link,):
+            each.send(data)
 
     def _heartbeat(self, now: float) -> None:
         view = self.view()
@@ -222,6 +253,7 @@ class MavlinkBridge:
         self.send(camera.COMPONENT, gimbal.heartbeat(view, mavlink.MAV_TYPE_CAMERA))
         for link in self.links:
             link.check_silence(now)
+        self._logs.flush()
 
     def _stream(self, now: float) -> None:
         due = {c: s.due(now) for c, s in self.schedules.items()}
@@ -240,42 +272,101 @@ class MavlinkBridge:
                 if message is not None:
                     self.send(component, message)
 
-    def _ack(self, component: int, cmd: CommandIn, result: int, param2: int = 0,
+    def _ack(self, component: int, cmd: CommandIn, link: Any, result: int, param2: int = 0,
              progress: int = 0) -> None:  # fmt: skip
+        """COMMAND_ACK to the sender, on the link the command came by (a flood on one link
+        is not echoed to the others)."""
         self.stats["acks"] += 1
         self.send(component, mavlink.MAVLink_command_ack_message(
-            cmd.command, result, progress, param2, *cmd.source))
+            cmd.command, result, progress, param2, *cmd.source), link)
 
     # -- receiving --------------------------------------------------------------------------
-    def _on_message(self, link: MavlinkLink, msg: Any) -> None:
+    def _on_message(self, link: Any, msg: Any) -> None:
         now = time.monotonic()
         link.note_message(now)
+        self.stats["messages"] += 1
         try:
-            self._handle(msg, now)
+            self._handle(link, msg, now)
         except Exception:  # hostile input must never stop the bridge
             self.stats["handler_errors"] += 1
-            log.exception("bridge: handling %s failed", msg.get_type())
+            self._logs.log(logging.ERROR, "handler failure", "bridge: handling %s failed",
+                           msg.get_type(), exc_info=True)  # fmt: skip
 
-    def _handle(self, msg: Any, now: float) -> None:
+    def _handle(self, link: Any, msg: Any, now: float) -> None:
         source = (msg.get_srcSystem(), msg.get_srcComponent())
         if source[0] == self.system_id and source[1] in dispatch.COMPONENTS:
             return  # our own messages echoed by a router
         if self.autopilot.accepts(msg):
             self._aircraft(msg, now)
-        cmd = CommandIn.from_message(msg)
-        if cmd is not None:
-            for component in dispatch.components_for(cmd, self.system_id, self.camera):
-                self._command(cmd, component)
-            return
-        target = (getattr(msg, "target_system", 0), getattr(msg, "target_component", 0))
-        if target[0] in (0, self.system_id) and target[1] in (0, gimbal.COMPONENT):
-            try:
-                call = gimbal.message_call(msg, self.view())
-            except ValueError as exc:
-                log.warning("bridge: %s ignored: %s", msg.get_type(), exc)
+        kind = msg.get_type()
+        if kind in ("COMMAND_LONG", "COMMAND_INT"):
+            if (msg.target_system not in (0, self.system_id)
+                    or msg.target_component not in (0, *dispatch.COMPONENTS)):  # fmt: skip
+                return  # for another system or component: costs this link no budget
+            budget = self._budgets.get(link)
+            if budget is None:
+                budget = self._budgets[link] = admission.Budget()
+            if not budget.take(now):
+                self.stats["shed"] += 1
+                self._logs.log(logging.WARNING, "shed command", "bridge: more than %g "
+                               "commands/s on %s: dropped unanswered", budget.rate,
+                               getattr(link, "url", link))  # fmt: skip
                 return
-            if call is not None:
-                self._spawn(self._message_call(msg.get_type(), call))
+            cmd = CommandIn.from_message(msg)
+            assert cmd is not None
+            for component in dispatch.components_for(cmd, self.system_id, self.camera):
+                self._command(cmd, component, link, now)
+            return
+        if kind in gimbal.CONTROL_MESSAGES:
+            target = (msg.target_system, msg.target_component)
+            if target[0] in (0, self.system_id) and target[1] in (0, gimbal.COMPONENT):
+                self._coalesce_control(link, msg, now)
+
+    def _coalesce_control(self, link: Any, msg: Any, now: float) -> None:
+        """Keep the latest control message; take one per :data:`admission.CONTROL_INTERVAL`
+        (a flood costs a store per message, not a mode change)."""
+        self.stats["control_messages"] += 1
+        if not self._control.allows((msg.get_srcSystem(), msg.get_srcComponent())):
+            return  # another component holds control (checked here: before coalescing)
+        if self._latest_control is not None:
+            self.stats["control_coalesced"] += 1
+        self._latest_control = (link, msg)
+        if self._control_timer is None:
+            self._control_later(self._control_at + admission.CONTROL_INTERVAL - now)
+
+    def _control_later(self, delay: float) -> None:
+        self._control_timer = asyncio.get_running_loop().call_later(max(0.0, delay),
+                                                                   self._take_control)
+
+    def _take_control(self) -> None:
+        self._control_timer = None
+        latest, self._latest_control = self._latest_control, None
+        if latest is None:
+            return
+        link, msg = latest
+        now = self._control_at = time.monotonic()
+        try:
+            call = gimbal.message_call(msg, self.view())
+        except ValueError as exc:
+            self._logs.log(logging.WARNING, "ignored control message",
+                           "bridge: %s ignored: %s", msg.get_type(), exc)  # fmt: skip
+            return
+        except Exception:
+            self.stats["handler_errors"] += 1
+            self._logs.log(logging.ERROR, "handler failure", "bridge: handling %s failed",
+                           msg.get_type(), exc_info=True)  # fmt: skip
+            return
+        if call is None:
+            return
+        if call.method not in admission.IMMEDIATE_CALLS:  # a mode change: spaced out
+            due = self._mode_message_at + admission.MESSAGE_MODE_INTERVAL
+            if now < due:
+                if self._latest_control is None:
+                    self._latest_control = latest
+                self._control_later(due - now)
+                return
+            self._mode_message_at = now
+        self._control_message(call, link, now)
 
     def _aircraft(self, msg: Any, now: float) -> None:
         kind = msg.get_type()
@@ -283,33 +374,106 @@ class MavlinkBridge:
             changes = self.autopilot.update(msg, now)
             if changes:
                 self.client.update_aircraft(**changes)
-        except (ValueError, TypeError) as exc:
+        except (ValueError, TypeError, ArithmeticError) as exc:
+            # ArithmeticError: OverflowError from a date or a conversion out of every range
             if kind not in self._aircraft_errors:
                 self._aircraft_errors.add(kind)
                 log.warning("bridge: autopilot %s not used: %s", kind, exc)
             return
         self._aircraft_errors.discard(kind)
 
-    def _command(self, cmd: CommandIn, component: int) -> None:
-        self.stats["commands"] += 1
-        key = (cmd.source, component, cmd.command)
-        if key in self._inflight:  # a retransmission of a command still running
-            self._ack(component, cmd, IN_PROGRESS, progress=255)
+    def _control_message(self, call: GcuCall, link: Any, now: float) -> None:
+        """A gimbal control message's call: new control values apply at once; a mode
+        change waits its turn in the pointing slot, where the latest replaces any waiting."""
+        immediate = call.method in admission.IMMEDIATE_CALLS
+        waiting = any(e.slot == admission.POINTING for e in self._queue)
+        if immediate and not waiting:
+            try:
+                getattr(self.client, call.method)(**call.kwargs)
+            except ValueError as exc:
+                self._logs.log(logging.INFO, "control message failure",
+                               "bridge: %s failed: %s", call.method, exc)  # fmt: skip
             return
+        entry = admission.Entry(None, gimbal.COMPONENT, link, now, admission.POINTING,
+                                call=call)  # fmt: skip
+        self._admit(entry)
+
+    def _command(self, cmd: CommandIn, component: int, link: Any, now: float) -> None:
+        self.stats["commands"] += 1
+        memory = self._memory.get(link)
+        if memory is None:
+            memory = self._memory[link] = admission.Memory()
+        old = memory.find(cmd, component, now)
+        if old is not None:  # a retransmission: answered, never run again
+            self.stats["retransmissions"] += 1
+            old.confirmation = max(old.confirmation, cmd.confirmation)
+            if old.result is not None:
+                self._ack(component, cmd, link, old.result, old.param2)
+                if old.result == ACCEPTED and dispatch.requested_id(cmd) is not None:
+                    # its message may be what was lost: send it again (a request runs
+                    # nothing on the GCU)
+                    plan = dispatch.plan(cmd, component, self.view(), self.camera)
+                    for reply in plan.replies:
+                        self.send(component, reply, link)
+            else:
+                self._ack(component, cmd, link, IN_PROGRESS, progress=255)
+            return
+        entry = admission.Entry(cmd, component, link, now, admission.SLOTS.get(cmd.command),
+                                stop=admission.is_stop(cmd),
+                                confirmation=cmd.confirmation)  # fmt: skip
+        memory.add(entry, now)
         plan = dispatch.plan(cmd, component, self.view(), self.camera)
         if plan.call is None:
-            assert plan.result is not None
-            if plan.reason:
-                log.info("bridge: command %d refused (%d): %s", cmd.command, plan.result,
-                         plan.reason)  # fmt: skip
-            if plan.result == ACCEPTED:
-                self._take(plan, component)
-            self._ack(component, cmd, plan.result)
-            for reply in plan.replies:
-                self.send(component, reply)
+            self._answer_plan(entry, plan)
             return
-        self._inflight.add(key)
-        self._spawn(self._command_call(cmd, component, plan, key))
+        self._admit(entry)
+
+    def _answer_plan(self, entry: admission.Entry, plan: Plan) -> None:
+        """Answer a command whose plan needs no GCU call (a refusal or a reply)."""
+        assert plan.result is not None
+        assert entry.cmd is not None
+        if plan.reason:
+            self._logs.log(logging.INFO, "refused command", "bridge: command %d refused (%d): %s",
+                           entry.cmd.command, plan.result, plan.reason)  # fmt: skip
+        if plan.result == ACCEPTED:
+            self._take(plan, entry.component)
+        self._finish(entry, plan.result)
+        for reply in plan.replies:
+            self.send(entry.component, reply, entry.link)
+
+    def _admit(self, entry: admission.Entry) -> None:
+        """Queue ``entry``: it replaces what waits in its slot (answered CANCELLED), or is
+        refused (TEMPORARILY_REJECTED) when a bound is full."""
+        for old in self._queue.superseded_by(entry):
+            self._queue.remove(old)
+            self.stats["superseded"] += 1
+            self._finish(old, CANCELLED)
+        refusal = self._queue.refusal(entry)
+        if refusal is not None:
+            self.stats["rejected"] += 1
+            self._logs.log(logging.INFO, "queue full", "bridge: command refused: %s", refusal)
+            self._finish(entry, TEMPORARILY_REJECTED)
+            return
+        self._queue.push(entry)
+        if entry.cmd is not None:
+            entry.timer = asyncio.get_running_loop().call_later(
+                self.in_progress_after, self._in_progress, entry)
+        self._wake.set()
+
+    def _in_progress(self, entry: admission.Entry) -> None:
+        if entry.result is None and entry.cmd is not None:
+            self._ack(entry.component, entry.cmd, entry.link, IN_PROGRESS, progress=255)
+
+    def _finish(self, entry: admission.Entry, result: int, param2: int = 0) -> None:
+        """The final answer of ``entry`` (once; a retransmission gets it again)."""
+        entry.state = "done"
+        entry.result, entry.param2 = result, param2
+        entry.done_at = time.monotonic()
+        if entry.timer is not None:
+            entry.timer.cancel()
+            entry.timer = None
+        if entry.cmd is not None:
+            self._ack(entry.component, entry.cmd, entry.link, result, param2)
 
     def _take(self, plan: Plan, component: int) -> None:
         if plan.interval is not None:
@@ -319,49 +483,89 @@ class MavlinkBridge:
         if plan.camera_mode is not None:
             self._camera_mode = plan.camera_mode
 
-    async def _command_call(self, cmd: CommandIn, component: int, plan: Plan,
-                            key: tuple[tuple[int, int], int, int]) -> None:  # fmt: skip
-        assert plan.call is not None
-        loop = asyncio.get_running_loop()
-        timer = loop.call_later(self.in_progress_after, self._ack, component, cmd,
-                                IN_PROGRESS, 0, 255)  # fmt: skip
+    # -- running commands, one at a time ----------------------------------------------------
+    async def _executor(self) -> None:
+        """Run the waiting entries one at a time, in turn per link."""
+        while True:
+            entry = self._queue.pop()
+            if entry is None:
+                self._wake.clear()
+                await self._wake.wait()
+                continue
+            try:
+                await self._run_entry(entry)
+            except asyncio.CancelledError:
+                raise
+            except Exception:
+                self.stats["handler_errors"] += 1
+                self._logs.log(logging.ERROR, "handler failure", "bridge: command failed "
+                               "unexpectedly", exc_info=True)  # fmt: skip
+                if entry.result is None:
+                    self._finish(entry, FAILED, NO_STATUS)
+
+    async def _run_entry(self, entry: admission.Entry) -> None:
+        remaining = entry.deadline - time.monotonic()
+        if remaining <= 0:
+            self.stats["expired"] += 1
+            self._logs.log(logging.INFO, "expired command", "bridge: command waited %g s "
+                           "without reaching the GCU: not run", admission.COMMAND_WAIT)
+            self._finish(entry, TEMPORARILY_REJECTED)
+            return
+        if entry.cmd is None:
+            call = entry.call
+            assert call is not None
+        else:  # planned again: the state may have changed while it waited
+            plan = dispatch.plan(entry.cmd, entry.component, self.view(), self.camera)
+            if plan.call is None:
+                self._answer_plan(entry, plan)
+                return
+            call = plan.call
+        entry.state = "running"
+        entry.ran = True
         error: BaseException | None = None
         try:
-            await self._execute(plan.call)
+            await self._execute(call, queue_timeout=remaining)
         except asyncio.CancelledError:
             raise
         except Exception as exc:
             error = exc
-        finally:
-            timer.cancel()
-            self._inflight.discard(key)
+        if entry.cmd is None:
+            entry.state = "done"
+            if error is not None:
+                self._logs.log(logging.INFO, "control message failure",
+                               "bridge: %s failed: %s", call.method, error)  # fmt: skip
+            return
         try:
             result, param2 = result_for(error)
         except Exception:
-            log.exception("bridge: command %d failed unexpectedly", cmd.command)
-            result, param2 = FAILED, -1
+            self._logs.log(logging.ERROR, "handler failure", "bridge: command %d failed "
+                           "unexpectedly", entry.cmd.command, exc_info=True)  # fmt: skip
+            result, param2 = FAILED, NO_STATUS
         if error is not None:
-            log.info("bridge: command %d -> %d: %s", cmd.command, result, error)
-        self._ack(component, cmd, result, param2)
-        if result == ACCEPTED and plan.call.then == "image_captured":
-            view = self.view()
-            self.send(camera.COMPONENT, camera.image_captured(view, self._images))
+            self._logs.log(logging.INFO, "failed command", "bridge: command %d -> %d: %s",
+                           entry.cmd.command, result, error)  # fmt: skip
+        self._finish(entry, result, param2)
+        if result == ACCEPTED and call.then == "image_captured":
+            self.send(camera.COMPONENT, camera.image_captured(self.view(), self._images))
             self._images += 1
 
-    async def _message_call(self, kind: str, call: GcuCall) -> None:
-        try:
-            await self._execute(call)
-        except Exception as exc:
-            log.warning("bridge: %s -> %s failed: %s", kind, call.method, exc)
-
-    async def _execute(self, call: GcuCall) -> None:
+    async def _execute(self, call: GcuCall, *, queue_timeout: float) -> None:
+        """Run ``call`` on the client; a command not sent within ``queue_timeout`` seconds
+        ends NOT_SENT (the client's own queue deadline: exact, the session drops it before
+        any packet could carry it). The bridge is the client's only user (B2), so setting
+        the session's default for this one submission and restoring it right after is
+        safe."""
         method = getattr(self.client, call.method)
         if call.mode is not None:
             self._pending_mode = call.mode
+        session = self.client.session
+        saved = session.queue_timeout
+        session.queue_timeout = queue_timeout
+        asyncio.get_running_loop().call_soon(setattr, session, "queue_timeout", saved)
         try:
             result = method(**call.kwargs)
             if inspect.isawaitable(result):
-                await result
+                await result  # submitted in this first step, before the restore runs
         except BaseException:
             if call.mode is not None:
                 self._bridge_mode = None

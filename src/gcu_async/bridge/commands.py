@@ -29,6 +29,9 @@ DENIED = mavlink.MAV_RESULT_DENIED
 UNSUPPORTED = mavlink.MAV_RESULT_UNSUPPORTED
 FAILED = mavlink.MAV_RESULT_FAILED
 IN_PROGRESS = mavlink.MAV_RESULT_IN_PROGRESS
+CANCELLED: int = getattr(mavlink, "MAV_RESULT_CANCELLED", 6)
+"""MAV_RESULT_CANCELLED (common.xml: 6; older pymavlink dialects lack the name): the
+command was replaced by a newer one of its kind before it ran, and never executed."""
 
 NO_STATUS = -1
 """COMMAND_ACK result_param2 of a FAILED command without a GCU status (timed out)."""
@@ -46,6 +49,8 @@ class CommandIn:
     target_system: int
     target_component: int
     frame: int | None = None
+    confirmation: int = 0
+    """COMMAND_LONG's retransmission counter (0 the first time; COMMAND_INT has none)."""
 
     @classmethod
     def from_message(cls, msg: Any) -> CommandIn | None:
@@ -55,7 +60,8 @@ class CommandIn:
         if kind == "COMMAND_LONG":
             params = (msg.param1, msg.param2, msg.param3, msg.param4, msg.param5, msg.param6,
                       msg.param7)  # fmt: skip
-            return cls(msg.command, params, source, msg.target_system, msg.target_component)
+            return cls(msg.command, params, source, msg.target_system, msg.target_component,
+                       confirmation=msg.confirmation)
         if kind == "COMMAND_INT":
             params = (msg.param1, msg.param2, msg.param3, msg.param4, float(msg.x),
                       float(msg.y), msg.z)  # fmt: skip

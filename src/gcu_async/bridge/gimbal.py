@@ -245,6 +245,11 @@ def flag_call(flags: int) -> GcuCall | None:
     return None
 
 
+CONTROL_MESSAGES = frozenset({"GIMBAL_MANAGER_SET_ATTITUDE", "GIMBAL_MANAGER_SET_PITCHYAW",
+                              "GIMBAL_DEVICE_SET_ATTITUDE"})  # fmt: skip
+"""The gimbal control messages :func:`message_call` takes."""
+
+
 def message_call(msg: Any, view: GcuView) -> GcuCall | None:
     """The client call for a gimbal control message addressed to this component
     (GIMBAL_MANAGER_SET_ATTITUDE, GIMBAL_MANAGER_SET_PITCHYAW, GIMBAL_DEVICE_SET_ATTITUDE);
@@ -252,8 +257,7 @@ def message_call(msg: Any, view: GcuView) -> GcuCall | None:
     from a component not in control. Raises ``ValueError`` for a malformed request (logged
     by the bridge: messages get no acknowledgement)."""
     kind = msg.get_type()
-    if kind not in ("GIMBAL_MANAGER_SET_ATTITUDE", "GIMBAL_MANAGER_SET_PITCHYAW",
-                    "GIMBAL_DEVICE_SET_ATTITUDE"):  # fmt: skip
+    if kind not in CONTROL_MESSAGES:
         return None
     if not view.control.allows((msg.get_srcSystem(), msg.get_srcComponent())):
         return None
