@@ -25,7 +25,7 @@ from typing import Any
 from gcu_async.protocol import HostPacket
 from gcu_async.protocol.gcu_frames import GcuMainFrame
 from gcu_async.protocol.packets import GcuPacket, decode_gcu_packet
-from gcu_async.sim import GcuSimulator, SimulatorModel
+from gcu_async.sim import GcuSimulator, MonotonicClock, SimulatorModel
 
 XF_PARAMS = {"MNT1_TYPE": 14, "SERIAL2_PROTOCOL": 8, "SERIAL2_BAUD": 115, "CAM1_TYPE": 4}
 """XF Robot mount on SERIAL2 at 115200 baud; the camera library drives the mount's camera."""
@@ -34,6 +34,7 @@ HOME = "35.0,139.0,10,250"
 BOOT_TIMEOUT = 30.0
 GPS_TIMEOUT = 75.0
 SETTLE_TIMEOUT = 6.0
+AGREE_WAIT = 1.5
 ANGLE_TOLERANCE = 0.5
 """Degrees: the simulator slews at 180 °/s and holds the target exactly; ArduPilot sends
 0.01° steps."""
@@ -68,18 +69,30 @@ def free_block(size: int = 12) -> int:
     raise RuntimeError("no free port block for SITL")
 
 
+class TappedClock(MonotonicClock):
+    """The monotonic clock, remembering the last time it told."""
+
+    last = 0.0
+
+    def now(self) -> float:
+        self.last = super().now()
+        return self.last
+
+
 class RecordingModel(SimulatorModel):
-    """The simulator's model, keeping every (time, host packet, reply) it handled."""
+    """The simulator's model, keeping every (time, host packet, reply) it handled; the
+    time is the one the model used for the packet (a replay on these times repeats it)."""
 
     def __init__(self, **kwargs: Any) -> None:
-        super().__init__(record_executions=True, **kwargs)
+        self.tapped = TappedClock()
+        super().__init__(record_executions=True, clock=self.tapped, **kwargs)
         self.conversation: list[tuple[float, bytes, bytes]] = []
         self.lock = threading.Lock()
 
     def handle_bytes(self, packet: bytes) -> bytes | None:
         with self.lock:
             reply = super().handle_bytes(packet)
-            self.conversation.append((self.clock.now(), packet, reply or b""))
+            self.conversation.append((self.tapped.last, packet, reply or b""))
             return reply
 
 
@@ -116,6 +129,8 @@ class SimThread:
         if self._stop is not None:
             self._loop.call_soon_threadsafe(self._stop.set)
         self._thread.join(10)
+        if not self._thread.is_alive():
+            self._loop.close()
 
 
 @dataclass
@@ -242,19 +257,14 @@ class Driver:
 
         self.pump(SETTLE_TIMEOUT, reached)
         check.settle_s = time.monotonic() - start
+        # MAVLink messages queue up in the socket: read on for a while, then take the
+        # newest status (ArduPilot sends it at 10 Hz from the GCU's latest reply) and the
+        # simulator's settled angles
+        self.last.pop("GIMBAL_DEVICE_ATTITUDE_STATUS", None)
+        self.pump(AGREE_WAIT)
         p, rel_yaw, abs_yaw = self.sim_state()
         check.sim = (p, rel_yaw if check.frame == "vehicle" else abs_yaw)
         check.sim_relative_yaw = rel_yaw
-        self.last.pop("GIMBAL_DEVICE_ATTITUDE_STATUS", None)
-
-        def agrees() -> bool:
-            status = self.last.get("GIMBAL_DEVICE_ATTITUDE_STATUS")
-            if status is None:
-                return False
-            _, ap_pitch, ap_yaw = quaternion_to_euler(list(status.q))
-            return abs(ap_pitch - p) < ANGLE_TOLERANCE and abs(wrap180(ap_yaw - rel_yaw)) < 1.0
-
-        self.pump(3.0, agrees)
         status = self.last.get("GIMBAL_DEVICE_ATTITUDE_STATUS")
         if status is not None:
             _, ap_pitch, ap_yaw = quaternion_to_euler(list(status.q))
@@ -282,9 +292,13 @@ def run_session(binary: Path, workdir: Path, *, fly: bool = True) -> Session:
                "--serial2", f"tcpclient:127.0.0.1:{sim.port}"]  # fmt: skip
         log = (workdir / "sitl.log").open("wb")
         proc = subprocess.Popen(cmd, cwd=workdir, stdout=log, stderr=subprocess.STDOUT)
+        driver = None
         try:
-            drive(Driver(base, model, session), session, fly=fly, t0=t0)
+            driver = Driver(base, model, session)
+            drive(driver, session, fly=fly, t0=t0)
         finally:
+            if driver is not None:
+                driver.m.close()
             proc.terminate()
             try:
                 proc.wait(10)
@@ -366,6 +380,14 @@ def drive(d: Driver, s: Session, *, fly: bool, t0: float) -> None:
 
 
 # -- the recorded conversation (tests/data) ----------------------------------------------------
+HEADER = """\
+A conversation between ArduPilot SITL 4.7.0 (arducopter, commit 1511f27, built unmodified;
+its AP_Mount_XFRobot driver is the host) and the gcu_async simulator (D-90Pro(TA)), recorded
+by tests/_sitl_ardupilot.py (GCU_SITL_RECORD=FILE with tests/test_sitl_ardupilot.py):
+boot, DO_MOUNT_CONTROL, DO_GIMBAL_MANAGER_PITCHYAW (vehicle and earth frame),
+GIMBAL_MANAGER_SET_ATTITUDE, photo x2, record start/stop, zoom in/stop/out/stop, focus,
+GPS lock, arm, take-off to 10 m. Home 35.0 N 139.0 E heading 250 deg.
+One line per host packet: milliseconds since the first, host packet hex, simulator reply hex."""
 def save_conversation(path: Path, rows: list[tuple[float, bytes, bytes]], header: str) -> None:
     """``# header`` lines, then one line per host packet: ``milliseconds host-hex reply-hex``
     (time since the first packet), gzip-compressed."""

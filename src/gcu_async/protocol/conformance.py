@@ -10,7 +10,8 @@ decoded), and a plain-language diagnosis where the pattern is recognisable:
   sub-frame headers; aircraft yaw ≥ 36000 that reads as a signed ±18000 value;
 - the aircraft velocity against the change of the sub frame's GNSS position over time
   (a scale off by ≈10 is 0.1 m/s sent for 0.01 m/s);
-- command packets whose main frame is all zero, and the INS-valid flag toggling;
+- command packets whose main frame is all zero right after packets with INS valid, and the
+  INS-valid flag dropping out for a few packets;
 - one non-null opcode standing in consecutive packets for more than :data:`LONG_RUN_S`
   without the null command between (only the first packet of a run executes), and the same
   opcode repeated with other parameters (the repeat does not execute);
@@ -193,6 +194,7 @@ class HostConformance:
         # INS valid
         self._ins_prev: bool | None = None
         self._ins_toggles = 0
+        self._seen_valid = False
         self._ins_invalid_run = 0
         self._dropouts = 0
         self._zero_frames_in_dropouts = 0
@@ -341,11 +343,11 @@ class HostConformance:
         main = packet.main
         valid = main.ins_valid
         zero = _zero_main(main)
-        if zero and command_code(packet.command) != Opcode.NULL:
+        if zero and self._ins_prev and command_code(packet.command) != Opcode.NULL:
             d = self._dev(
                 "main.all_zero",
-                "packets carrying a command with an all-zero main "
-                "frame (control values, flags, attitude, acceleration, velocity)",
+                "packets carrying a command with an all-zero main frame (control values, "
+                "flags, attitude, acceleration, velocity) right after INS-valid packets",
             )
             d.count += 1
             name = opcode_name(command_code(packet.command))
@@ -353,7 +355,7 @@ class HostConformance:
                           "(INS invalid, control values invalid)")  # fmt: skip
         if self._ins_prev is not None and valid is not self._ins_prev:
             self._ins_toggles += 1
-            if valid and 0 < self._ins_invalid_run <= SHORT_DROPOUT:
+            if valid and self._seen_valid and 0 < self._ins_invalid_run <= SHORT_DROPOUT:
                 self._dropouts += 1
                 self._zero_frames_in_dropouts += self._invalid_run_zero
                 d = self._dev("ins_valid.toggles", "INS-valid flag dropping out for a few packets")
@@ -361,6 +363,7 @@ class HostConformance:
                 self._example(d, t, raw, f"INS valid again after {self._ins_invalid_run} "
                               "invalid packet(s)")  # fmt: skip
         if valid:
+            self._seen_valid = True
             self._ins_invalid_run = self._invalid_run_zero = 0
         else:
             self._ins_invalid_run += 1
