@@ -22,9 +22,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from gcu_async.protocol import HostPacket
-from gcu_async.protocol.gcu_frames import GcuMainFrame
-from gcu_async.protocol.packets import GcuPacket, decode_gcu_packet
 from gcu_async.sim import GcuSimulator, MonotonicClock, SimulatorModel
 
 XF_PARAMS = {"MNT1_TYPE": 14, "SERIAL2_PROTOCOL": 8, "SERIAL2_BAUD": 115, "CAM1_TYPE": 4}
@@ -153,6 +150,8 @@ class AngleCheck:
 class Session:
     angles: list[AngleCheck] = field(default_factory=list)
     texts: list[str] = field(default_factory=list)
+    acks: list[tuple[int, int]] = field(default_factory=list)
+    """(command, MAV_RESULT) of every COMMAND_ACK."""
     recording_after_start: bool | None = None
     recording_after_stop: bool | None = None
     zoom: dict[str, float] = field(default_factory=dict)
@@ -230,6 +229,8 @@ class Driver:
             self.last[kind] = msg
             if kind == "STATUSTEXT":
                 self.session.texts.append(msg.text)
+            elif kind == "COMMAND_ACK":
+                self.session.acks.append((msg.command, msg.result))
 
     def said(self, text: str) -> bool:
         return any(text in t for t in self.session.texts)
@@ -374,7 +375,7 @@ def drive(d: Driver, s: Session, *, fly: bool, t0: float) -> None:
     if not s.armed:
         return
     d.command(22, 0, 0, 0, 0, 0, 0, 10)  # MAV_CMD_NAV_TAKEOFF to 10 m
-    d.pump(7.0)
+    d.pump(9.0)  # ≥ 4 windows of 1 s climbing for the velocity check
     pos = d.last.get("GLOBAL_POSITION_INT")
     s.climb_m = pos.relative_alt / 1000 if pos is not None else 0.0
 
@@ -388,6 +389,8 @@ boot, DO_MOUNT_CONTROL, DO_GIMBAL_MANAGER_PITCHYAW (vehicle and earth frame),
 GIMBAL_MANAGER_SET_ATTITUDE, photo x2, record start/stop, zoom in/stop/out/stop, focus,
 GPS lock, arm, take-off to 10 m. Home 35.0 N 139.0 E heading 250 deg.
 One line per host packet: milliseconds since the first, host packet hex, simulator reply hex."""
+
+
 def save_conversation(path: Path, rows: list[tuple[float, bytes, bytes]], header: str) -> None:
     """``# header`` lines, then one line per host packet: ``milliseconds host-hex reply-hex``
     (time since the first packet), gzip-compressed."""
@@ -408,11 +411,3 @@ def load_conversation(path: Path) -> list[tuple[float, bytes, bytes]]:
             ms, host, reply = line.split()
             rows.append((float(ms) / 1000, bytes.fromhex(host), bytes.fromhex(reply)))
     return rows
-
-
-def relative_angles(reply: bytes) -> GcuMainFrame:
-    packet: GcuPacket = decode_gcu_packet(reply)
-    return packet.main
-
-
-__all__ = ["HostPacket"]

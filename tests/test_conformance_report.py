@@ -10,6 +10,7 @@ import math
 
 import pytest
 
+from _protocol_strategies import seal
 from gcu_async import connect
 from gcu_async.protocol import (
     AngleControl,
@@ -26,8 +27,6 @@ from gcu_async.protocol import (
 from gcu_async.protocol.conformance import GAP_S, HostConformance, yaw_reading
 from gcu_async.protocol.packets import HOST_HEADER
 from gcu_async.sim import GcuSimulator
-
-from _protocol_strategies import seal
 
 LAT0, LON0, ALT0 = 35.0, 139.0, 100.0
 M_PER_DEG = math.pi / 180 * 6_371_000.0
@@ -185,36 +184,38 @@ async def test_this_librarys_client_conforms() -> None:
     """The client over real TCP, flying north-east and climbing, running the commands
     ArduPilot sends: the simulator's report finds nothing."""
     sim = GcuSimulator()
-    async with sim.serve_tcp("127.0.0.1", 0) as server:
-        async with connect(f"tcp://127.0.0.1:{server.address[1]}") as gcu:
-            loop = asyncio.get_running_loop()
-            t0 = loop.time()
-            velocity = (3.0, 4.0, 2.0)
+    async with (
+        sim.serve_tcp("127.0.0.1", 0) as server,
+        connect(f"tcp://127.0.0.1:{server.address[1]}") as gcu,
+    ):
+        loop = asyncio.get_running_loop()
+        t0 = loop.time()
+        velocity = (3.0, 4.0, 2.0)
 
-            async def fly() -> None:
-                while True:
-                    t = loop.time() - t0
-                    gcu.update_aircraft(
-                        attitude=(0.0, 0.0, 250.0), acceleration=(0.0, 0.0, 0.0),
-                        velocity=velocity, satellites=12,
-                        position=(LAT0 + 3.0 * t / M_PER_DEG,
-                                  LON0 + 4.0 * t / (M_PER_DEG * math.cos(math.radians(LAT0))),
-                                  ALT0 + 2.0 * t))  # fmt: skip
-                    await asyncio.sleep(0.02)
+        async def fly() -> None:
+            while True:
+                t = loop.time() - t0
+                gcu.update_aircraft(
+                    attitude=(0.0, 0.0, 250.0), acceleration=(0.0, 0.0, 0.0),
+                    velocity=velocity, satellites=12,
+                    position=(LAT0 + 3.0 * t / M_PER_DEG,
+                              LON0 + 4.0 * t / (M_PER_DEG * math.cos(math.radians(LAT0))),
+                              ALT0 + 2.0 * t))  # fmt: skip
+                await asyncio.sleep(0.02)
 
-            flying = asyncio.create_task(fly())
-            try:
-                await gcu.enter_angle_control(pitch=-30.0, yaw=40.0)
-                await gcu.take_photo()
-                await gcu.take_photo()
-                await gcu.start_recording()
-                await gcu.stop_recording()
-                for step in (gcu.zoom_in, gcu.stop_zoom, gcu.zoom_out, gcu.stop_zoom, gcu.focus):
-                    await step()
-                while loop.time() - t0 < 5.5:  # the velocity check needs ≥ 3 s of motion
-                    await asyncio.sleep(0.1)
-            finally:
-                flying.cancel()
+        flying = asyncio.create_task(fly())
+        try:
+            await gcu.enter_angle_control(pitch=-30.0, yaw=40.0)
+            await gcu.take_photo()
+            await gcu.take_photo()
+            await gcu.start_recording()
+            await gcu.stop_recording()
+            for step in (gcu.zoom_in, gcu.stop_zoom, gcu.zoom_out, gcu.stop_zoom, gcu.focus):
+                await step()
+            while loop.time() - t0 < 5.5:  # the velocity check needs ≥ 3 s of motion
+                await asyncio.sleep(0.1)
+        finally:
+            flying.cancel()
     report = sim.model.conformance.report()
     assert report.deviations == (), report.text()
     assert any("consistent" in n for n in report.notes), report.notes

@@ -119,10 +119,11 @@ def test_the_conformance_report_names_ardupilots_deviations(session: Session) ->
     report = model.conformance.report()
     print("\n" + report.text())
     assert set(ARDUPILOT_DEVIATIONS) <= set(report.keys)
-    assert "signed ±18000" in report.get("main.aircraft_yaw_raw").diagnosis  # type: ignore[union-attr]
-    assert "(dm/s)" in report.get("velocity.scale").diagnosis  # type: ignore[union-attr]
-    assert "never sends the null command" in report.get(  # type: ignore[union-attr]
-        "opcode.standing.ANGLE_CONTROL").diagnosis
+    diagnosis = {d.key: d.diagnosis for d in report.deviations}
+    assert "signed ±18000" in diagnosis["main.aircraft_yaw_raw"]
+    assert "(dm/s)" in diagnosis["velocity.scale"]
+    assert "never sends the null command" in diagnosis["opcode.standing.ANGLE_CONTROL"]
+    assert "0x00 stop" in diagnosis["command.RECORD.cameras"]
     # and the same report again from the raw bytes alone, on the packets' own times
     again = HostConformance()
     for t, packet, _ in model.conversation:
