@@ -9,6 +9,8 @@ import json
 import math
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from _protocol_strategies import seal
 from gcu_async import connect
@@ -226,3 +228,28 @@ async def test_this_librarys_client_conforms() -> None:
 def test_examples_argument_is_checked(examples: int) -> None:
     with pytest.raises(ValueError, match="examples"):
         HostConformance(examples=examples)
+
+
+@settings(max_examples=200, suppress_health_check=[HealthCheck.too_slow], deadline=None)
+@given(
+    bodies=st.lists(
+        st.tuples(st.binary(min_size=64, max_size=64), st.integers(0, 255),
+                  st.binary(max_size=16), st.integers(0, 255),
+                  st.floats(0.0, 2.0, allow_nan=False)),
+        min_size=1, max_size=30),
+)  # fmt: skip
+def test_any_crc_valid_host_packets_never_break_the_report(
+    bodies: list[tuple[bytes, int, bytes, int, float]],
+) -> None:
+    """Hostile hosts: any frame bytes, opcode, parameters, version and timing."""
+    c = HostConformance()
+    t = 0.0
+    for body, opcode, params, version, dt in bodies:
+        t += dt
+        c.add(seal(HOST_HEADER, body + bytes([opcode]) + params, version), t)
+    report = c.report()
+    assert report.packets == len(bodies)
+    assert all(d.count >= 1 and len(d.examples) <= 3 for d in report.deviations)
+    json.dumps(report.as_dict())
+    assert report.text().startswith("Host conformance to V2.0.6")
+    assert c.report().keys == report.keys  # reporting does not change the state

@@ -33,7 +33,7 @@ from gcu_async.protocol.commands import AnomalousCommand, UnknownCommand, comman
 from gcu_async.protocol.enums import Opcode, opcode_name
 from gcu_async.protocol.gcu_frames import UnknownSubFrame
 from gcu_async.protocol.host_frames import HostMainFrame, HostSubFrame
-from gcu_async.protocol.packets import HostPacket, decode_host_packet
+from gcu_async.protocol.packets import HostPacket, decode_host_packet, version_anomalies
 
 EXAMPLES = 3
 """Examples kept per deviation by default."""
@@ -79,6 +79,24 @@ def field_diagnosis(anomaly: Anomaly) -> str:
     if anomaly.field == "version":
         return "V2.0.6 defines versions 1 and 2"
     return ""
+
+
+def frame_anomalies(packet: HostPacket) -> tuple[Anomaly, ...]:
+    """The main and sub frame's anomalies (:attr:`HostMainFrame.anomalies`,
+    :attr:`HostSubFrame.anomalies`), quickly when there are none: a frame whose
+    ``validate()`` passes has none (both read one range table)."""
+    main, sub = packet.main, packet.sub
+    found: tuple[Anomaly, ...] = ()
+    try:
+        main.validate()
+    except (TypeError, ValueError):
+        found = main.anomalies
+    if isinstance(sub, HostSubFrame):
+        try:
+            sub.validate()
+        except (TypeError, ValueError):
+            found += sub.anomalies
+    return found
 
 
 @dataclass(frozen=True)
@@ -219,8 +237,10 @@ class HostConformance:
             return
         self.add_packet(packet, time, raw=data)
 
-    def add_packet(self, packet: HostPacket, time: float, *, raw: bytes = b"") -> None:
-        """One decoded host packet (``raw``: its bytes, shown in the examples)."""
+    def add_packet(self, packet: HostPacket, time: float, *, raw: bytes = b"",
+                   frame: tuple[Anomaly, ...] | None = None) -> None:  # fmt: skip
+        """One decoded host packet (``raw``: its bytes, shown in the examples; ``frame``:
+        its :func:`frame_anomalies` when the caller has them already)."""
         if self._t0 is None:
             self._t0 = self._last_t = time
         t = time - self._t0
@@ -234,7 +254,12 @@ class HostConformance:
         self._last_t = time
         self.packets += 1
         main = packet.main
-        for anomaly in packet.anomalies:
+        if frame is None:
+            frame = frame_anomalies(packet)
+        anomalies = version_anomalies(packet.version) + frame
+        if isinstance(packet.command, AnomalousCommand):
+            anomalies += packet.command.anomalies
+        for anomaly in anomalies:  # packet.anomalies, in its order
             self._anomaly(packet, anomaly, t, raw)
         if isinstance(packet.command, UnknownCommand):
             code = packet.command.code
@@ -289,12 +314,16 @@ class HostConformance:
     def _opcode(self, packet: HostPacket, t: float, raw: bytes) -> None:
         opcode = command_code(packet.command)
         command = packet.command
-        params = (command.params if isinstance(command, (AnomalousCommand, UnknownCommand))
-                  else command.encode_params())  # fmt: skip
         if opcode == Opcode.NULL:
             self._nulls += 1
             self._end_run()
             return
+        if raw:
+            params = raw[70:-2]
+        elif isinstance(command, (AnomalousCommand, UnknownCommand)):
+            params = command.params
+        else:
+            params = command.encode_params()
         if opcode != self._run_opcode:
             self._end_run()
             self._run_opcode, self._run_params, self._run_start = opcode, params, t
@@ -560,5 +589,5 @@ def _copy(d: Deviation) -> Deviation:
 
 __all__ = [
     "EXAMPLES", "GAP_S", "LONG_RUN_S", "MIN_RATE_HZ", "ConformanceReport", "Deviation",
-    "Example", "HostConformance", "field_diagnosis", "yaw_reading",
+    "Example", "HostConformance", "field_diagnosis", "frame_anomalies", "yaw_reading",
 ]  # fmt: skip

@@ -20,11 +20,10 @@ from gcu_async._checks import check_bool
 from gcu_async.errors import ProtocolErrorReason, RemoteProtocolError
 from gcu_async.protocol.anomalies import Anomaly
 from gcu_async.protocol.commands import AnomalousCommand, Command, command_code
-from gcu_async.protocol.conformance import HostConformance, field_diagnosis
+from gcu_async.protocol.conformance import HostConformance, field_diagnosis, frame_anomalies
 from gcu_async.protocol.deframer import Deframer
 from gcu_async.protocol.enums import Mode, Opcode, PodModel, SubFrameRequest, opcode_name
 from gcu_async.protocol.feedback import Feedback
-from gcu_async.protocol.host_frames import HostSubFrame
 from gcu_async.protocol.packets import (
     DEFAULT_VERSION,
     SUPPORTED_VERSIONS,
@@ -215,13 +214,11 @@ class SimulatorModel:
         self.stats.received += 1
         if packet.version not in SUPPORTED_VERSIONS:
             self._other_version(packet.version)
-        self.conformance.add_packet(packet, now, raw=raw)
+        found = frame_anomalies(packet)
+        self.conformance.add_packet(packet, now, raw=raw, frame=found)
+        if found:
+            self._frame_anomalies(found)
         main = packet.main
-        frame_anomalies = main.anomalies
-        if isinstance(packet.sub, HostSubFrame):
-            frame_anomalies += packet.sub.anomalies
-        if frame_anomalies:
-            self._frame_anomalies(frame_anomalies)
         self.state.aircraft.update(main, packet.sub)
         self.advance(now)
         opcode = command_code(packet.command)
