@@ -14,6 +14,7 @@ import asyncio
 import contextlib
 import gzip
 import math
+import random
 import socket
 import subprocess
 import threading
@@ -47,9 +48,12 @@ GIMBAL_DEVICE_ATTITUDE_STATUS = 285
 YAW_IN_VEHICLE_FRAME, YAW_IN_EARTH_FRAME, YAW_LOCK = 32, 64, 16
 
 
-def free_block(size: int = 12) -> int:
-    """A base port P with TCP P…P+2 and UDP P+10, P+11 free right now (SITL's ports)."""
-    for start in range(21000, 60000, 97):
+def free_block() -> int:
+    """A base port P with TCP P…P+2 and UDP P+10, P+11 free right now (SITL's ports),
+    tried in random order so that SITL sessions in parallel workers rarely pick the same."""
+    starts = list(range(21000, 60000, 97))
+    random.SystemRandom().shuffle(starts)
+    for start in starts:
         ok = True
         with contextlib.ExitStack() as stack:
             for offset, kind in [(0, socket.SOCK_STREAM), (1, socket.SOCK_STREAM),
