@@ -162,7 +162,9 @@ def test_version_unknown_opcode_low_rate_and_gaps() -> None:
     rows += [(3.0 + GAP_S + 0.3, v3), (3.9, unknown)]
     report = feed(rows).report()
     assert {"version", "opcode.unknown.0x42", "rate.low", "rate.gaps"} <= set(report.keys)
-    assert report.get("rate.gaps").count == 1  # type: ignore[union-attr]
+    gaps = report.get("rate.gaps")
+    assert gaps is not None and (gaps.count, gaps.total) == (1, 31)  # of the 31 intervals
+    assert "- rate.low: packet rate below 30 Hz\n" in report.text()
 
 
 def test_examples_are_few_and_distinct_and_the_report_is_json() -> None:

@@ -116,8 +116,9 @@ class Example:
 
 @dataclass
 class Deviation:
-    """One kind of deviation: ``count`` of the ``total`` packets examined show it (for the
-    rate and gap checks: the number of gaps / 1)."""
+    """One kind of deviation: ``count`` of the ``total`` packets examined show it (gaps:
+    of the intervals between packets; velocity: of the windows compared; the rate: 1 of 0,
+    a property of the whole run)."""
 
     key: str
     """Stable name, e.g. ``main.aircraft_yaw_raw``, ``command.RECORD.cameras``,
@@ -175,8 +176,8 @@ class ConformanceReport:
         if not self.deviations:
             lines.append("  no deviation found" if self.packets else "  no host packet yet")
         for d in self.deviations:
-            share = f" ({100 * d.count / d.total:.1f} %)" if d.total else ""
-            lines.append(f"- {d.key}: {d.title}: {d.count} of {d.total}{share}")
+            share = f": {d.count} of {d.total} ({100 * d.count / d.total:.1f} %)" if d.total else ""
+            lines.append(f"- {d.key}: {d.title}{share}")
             if d.diagnosis:
                 lines.append(f"  diagnosis: {d.diagnosis}")
             for e in d.examples:
@@ -248,7 +249,6 @@ class HostConformance:
         if self.packets and gap > GAP_S:
             d = self._dev("rate.gaps", f"silences longer than {GAP_S:g} s between host packets")
             d.count += 1
-            d.total = 1
             self._example(d, t, raw, f"no packet for {gap:.3f} s before this one")
         self._longest_gap = max(self._longest_gap, gap)
         self._last_t = time
@@ -452,8 +452,7 @@ class HostConformance:
          self._last_run_t, self._standing, self._longest_run, self._devs) = saved  # fmt: skip
         total = self.packets
         for d in devs.values():
-            if not d.key.startswith("rate."):
-                d.total = total
+            d.total = max(total - 1, 0) if d.key == "rate.gaps" else total  # gaps: intervals
         notes: list[str] = []
         duration = self._last_t - self._t0 if self._t0 is not None else 0.0
         self._diagnose(devs, total)
@@ -557,7 +556,7 @@ class HostConformance:
                      f"{self._longest_gap * 1000:.0f} ms")  # fmt: skip
         if duration >= 2.0 and rate < MIN_RATE_HZ:
             devs["rate.low"] = Deviation(
-                "rate.low", f"packet rate below {MIN_RATE_HZ:g} Hz", 1, 1, [],
+                "rate.low", f"packet rate below {MIN_RATE_HZ:g} Hz", 1, 0, [],
                 f"{rate:.1f} packets/s: V2.0.6 asks for 30–50 Hz; the gimbal depends on the "
                 "aircraft state they carry")  # fmt: skip
         gaps = devs.get("rate.gaps")
