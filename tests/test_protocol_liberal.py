@@ -52,6 +52,8 @@ from gcu_async.protocol import (
 from gcu_async.protocol.deframer import GCU_MAX_LENGTH, HOST_MAX_LENGTH
 from gcu_async.session.session import Session
 from gcu_async.sim import ManualClock, SimulatorModel
+from gcu_async.sim.aircraft import aircraft_yaw
+from gcu_async.sim.tolerance import tolerated
 
 MAIN_AND_SUB = HOST_EXAMPLE[5:69]
 """Bytes 5–68 of the document's host example: INS valid, a sub frame."""
@@ -284,14 +286,20 @@ def test_any_crc_valid_host_packet_decodes_and_the_simulator_answers(wire: bytes
     assert model.stats.answered == 1
     if isinstance(packet.command, AnomalousCommand):
         assert model.stats.anomalous == 1
-        # not executed: its failure status; a null command with parameter bytes is still
-        # the separator, answered without a status
-        want = ExecutionStatus.NONE if wire[69] == 0 else ExecutionStatus.FAILED
-        assert feedback.result is want
+        if tolerated(packet.command) is not None:  # run anyway: docs/protocol-notes.md §14
+            assert model.stats.tolerated == 1
+            assert model.executions[wire[69]] == 1
+        else:
+            # not executed: its failure status; a null command with parameter bytes is
+            # still the separator, answered without a status
+            want = ExecutionStatus.NONE if wire[69] == 0 else ExecutionStatus.FAILED
+            assert feedback.result is want
     aircraft = model.state.aircraft
     assert aircraft.packets == 1  # the aircraft data were taken
-    if packet.main.ins_valid:
-        assert aircraft.attitude == packet.main.aircraft_attitude
+    if packet.main.ins_valid:  # yaw as the simulator reads it (protocol-notes §15)
+        main = packet.main
+        assert aircraft.attitude == (main.aircraft_roll_raw / 100, main.aircraft_pitch_raw / 100,
+                                     aircraft_yaw(main.aircraft_yaw_raw))
     assert model.stats.other_versions == (wire[4] not in (1, 2))
 
 

@@ -6,7 +6,13 @@ exit status 2. Cannot bind / open: exit status 1.
 
 Switches while running (POSIX signals): SIGUSR1 kills the current TCP connection now;
 SIGUSR2 silences the GCU for ``--silence`` seconds (default 5); with ``--stall SECONDS``,
-SIGHUP stalls it for that long (without the option SIGHUP keeps its default: terminate).
+SIGHUP stalls it for that long (without the option SIGHUP keeps its default: terminate);
+SIGQUIT (Ctrl-\\ in a terminal) prints the host conformance report to stderr (and rewrites
+``--report`` / ``--report-json``).
+
+At exit it logs a summary and prints the host conformance report (every way the host's
+packets deviated from V2.0.6) to stderr, and writes it to ``--report`` (text) and
+``--report-json`` (JSON: the report and the simulator's counters) when given.
 """
 
 from __future__ import annotations
@@ -14,7 +20,9 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import json
 import logging
+import os
 import signal
 import sys
 from pathlib import Path
@@ -22,6 +30,7 @@ from typing import Any
 
 from gcu_async.capture import CaptureUnavailable, as_capture
 from gcu_async.cli._exit import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_USAGE
+from gcu_async.protocol.enums import opcode_name
 from gcu_async.protocol.links import HOST_UDP_PORT
 from gcu_async.sim.faults import FaultConfig, FaultPlan
 from gcu_async.sim.listen import ListenSpec, parse_hostport, parse_listen_url
@@ -107,7 +116,18 @@ def register(sub: Any) -> None:
     p.add_argument("--capture", type=Path, metavar="FILE",
                    help="write the packets the simulator receives and sends to FILE (pcapng; "
                    "open it in Wireshark with: gcu-async wireshark --install)")  # fmt: skip
-    p.add_argument("-q", "--quiet", action="store_true", help="do not log executed commands")
+    p.add_argument("--report", type=Path, metavar="FILE",
+                   help="write the host conformance report (text) to FILE at exit and on "
+                   "SIGQUIT")  # fmt: skip
+    p.add_argument("--report-json", type=Path, metavar="FILE",
+                   help="write the host conformance report and the simulator's counters "
+                   "(JSON) to FILE at exit and on SIGQUIT")  # fmt: skip
+    p.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="do not log executed commands (the report at exit is still printed)",
+    )
     p.set_defaults(run=run)
 
 
@@ -179,15 +199,61 @@ def _reply_to(text: str, listen_host: str) -> tuple[str, int]:
     return host, int(port) if port else HOST_UDP_PORT
 
 
+class Reports:
+    """Where the conformance report goes: stderr, and the ``--report`` / ``--report-json``
+    files (each rewritten whole, through a temporary file, so a reader never sees half)."""
+
+    def __init__(self, sim: GcuSimulator, text: Path | None, json_path: Path | None) -> None:
+        self.sim = sim
+        self.text_path = text
+        self.json_path = json_path
+
+    def document(self) -> dict[str, Any]:
+        model = self.sim.model
+        s = model.stats
+        return {
+            "conformance": model.conformance.report().as_dict(),
+            "simulator": {
+                "pod": model.profile.name,
+                "answered": s.answered, "anomalous": s.anomalous, "tolerated": s.tolerated,
+                "frame_anomalies": s.frame_anomalies,
+                "anomalies_by_field": dict(s.anomalies_by_field),
+                "repeated": s.repeated, "other_versions": s.other_versions,
+                "crc_errors": s.crc_errors, "malformed": s.malformed,
+                "bytes_discarded": s.bytes_discarded,
+                "executions": {opcode_name(k): v for k, v in sorted(model.executions.items())},
+            },
+        }  # fmt: skip
+
+    def emit(self) -> None:
+        """Print the text report to stderr and rewrite the files."""
+        text = self.sim.model.conformance.report().text()
+        print(text, file=sys.stderr, flush=True)
+        try:
+            if self.text_path is not None:
+                _write(self.text_path, text + "\n")
+            if self.json_path is not None:
+                _write(self.json_path, json.dumps(self.document(), indent=2) + "\n")
+        except OSError as exc:
+            print(f"{PROG}: cannot write the report: {exc}", file=sys.stderr)
+
+
+def _write(path: Path, content: str) -> None:
+    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    tmp.write_text(content, encoding="utf-8")
+    os.replace(tmp, path)
+
+
 def _install_switches(
     loop: asyncio.AbstractEventLoop,
     sim: GcuSimulator,
     server: SimServer,
     silence: float,
     stall: float | None,
+    reports: Reports | None = None,
 ) -> None:
     """SIGUSR1: kill the TCP connection now; SIGUSR2: silence the GCU for ``silence`` s;
-    SIGHUP (only when ``stall`` is given): stall it for ``stall`` s."""
+    SIGHUP (only when ``stall`` is given): stall it for ``stall`` s; SIGQUIT: the report."""
 
     def kill() -> None:
         if isinstance(server, TcpServer):
@@ -207,6 +273,8 @@ def _install_switches(
     switches = [("SIGUSR1", kill), ("SIGUSR2", mute)]
     if stall is not None:
         switches.append(("SIGHUP", freeze))
+    if reports is not None:
+        switches.append(("SIGQUIT", reports.emit))
     for name, action in switches:
         sig = getattr(signal, name, None)
         if sig is not None:
@@ -215,7 +283,11 @@ def _install_switches(
 
 
 async def _serve(
-    sim: GcuSimulator, spec: ListenSpec, silence: float, stall: float | None
+    sim: GcuSimulator,
+    spec: ListenSpec,
+    silence: float,
+    stall: float | None,
+    reports: Reports | None = None,
 ) -> int:
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
@@ -232,7 +304,7 @@ async def _serve(
         else:
             print(f"{PROG}: cannot listen on {args_url(spec)}: {exc}", file=sys.stderr)
         return EXIT_FAILED
-    _install_switches(loop, sim, server, silence, stall)
+    _install_switches(loop, sim, server, silence, stall, reports)
     try:
         where = server.url
         if isinstance(server, SerialServer) and spec.kind == "pty":
@@ -244,10 +316,14 @@ async def _serve(
     finally:
         await server.close()
     s = sim.model.stats
-    log.info("stopped: %d packets answered (%d anomalous, %d of other versions), %d repeated, "
+    fields = ", ".join(f"{k} {v}" for k, v in s.anomalies_by_field.items())
+    log.info("stopped: %d packets answered (%d with command anomalies, %d of them executed "
+             "anyway; %d with frame-field anomalies%s; %d of other versions), %d repeated, "
              "%d CRC errors, %d malformed, %d bytes discarded", s.answered, s.anomalous,
-             s.other_versions, s.repeated, s.crc_errors, s.malformed,
-             s.bytes_discarded)  # fmt: skip
+             s.tolerated, s.frame_anomalies, f": {fields}" if fields else "", s.other_versions,
+             s.repeated, s.crc_errors, s.malformed, s.bytes_discarded)  # fmt: skip
+    if reports is not None:
+        reports.emit()
     return EXIT_INTERRUPTED  # only a signal ends it
 
 
@@ -270,6 +346,7 @@ def run(args: argparse.Namespace) -> int:
             format="%(asctime)s %(name)s %(levelname)s %(message)s",
         )
     try:
-        return asyncio.run(_serve(sim, spec, args.silence, args.stall))
+        reports = Reports(sim, args.report, args.report_json)
+        return asyncio.run(_serve(sim, spec, args.silence, args.stall, reports))
     except KeyboardInterrupt:  # platforms without loop signal handlers
         return EXIT_INTERRUPTED

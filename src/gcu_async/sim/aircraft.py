@@ -4,11 +4,25 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from gcu_async.protocol.conformance import YAW_SIGNED_LOW
 from gcu_async.protocol.host_frames import HostMainFrame, HostSubFrame
 from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp
 
 DEFAULT_HEIGHT_M = 100.0
 """Simulator assumption: height above flat ground when the host sends no relative altitude."""
+
+
+def aircraft_yaw(raw: int) -> float:
+    """Host bytes 16–17 (U16, 0.01°, [0, 36000)) as the simulator uses them, in [0°, 360°).
+
+    Out-of-range values are flagged by the decoder and read as the host most likely meant
+    them (docs/protocol-notes.md §15 "Aircraft yaw outside [0, 36000)"): 47536 … 65535 as
+    a signed S16 (−180° … −0.01°, what a host writing a signed ±18000 value sends for
+    headings west of north), 36000 … 47535 as an angle past 360° (wrapped).
+    """
+    if raw >= YAW_SIGNED_LOW:
+        raw -= 0x10000
+    return (raw % 36000) / 100
 
 
 @dataclass
@@ -17,7 +31,8 @@ class ReceivedAircraft:
     frame 38–60), as the host packets report them."""
 
     attitude: Attitude = Attitude(0.0, 0.0, 0.0)
-    """Last attitude received with the INS-valid flag (B0 of byte 11) set."""
+    """Last attitude received with the INS-valid flag (B0 of byte 11) set (yaw read by
+    :func:`aircraft_yaw`)."""
     acceleration: NorthEastUp = NorthEastUp(0.0, 0.0, 0.0)
     """Last acceleration (N/E/U, gravity excluded) received with INS valid."""
     velocity: NorthEastUp = NorthEastUp(0.0, 0.0, 0.0)
@@ -51,7 +66,11 @@ class ReceivedAircraft:
         self.ins_valid = valid
         if valid:
             self.ins_valid_packets += 1
-            self.attitude = main.aircraft_attitude
+            self.attitude = Attitude(
+                main.aircraft_roll_raw / 100,
+                main.aircraft_pitch_raw / 100,
+                aircraft_yaw(main.aircraft_yaw_raw),
+            )
             self.acceleration = main.acceleration
             self.velocity = main.velocity
         self.has_sub_frame = isinstance(sub, HostSubFrame)

@@ -13,12 +13,14 @@ from __future__ import annotations
 import logging
 import random
 from collections import Counter
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
 from gcu_async._checks import check_bool
 from gcu_async.errors import ProtocolErrorReason, RemoteProtocolError
+from gcu_async.protocol.anomalies import Anomaly
 from gcu_async.protocol.commands import AnomalousCommand, Command, command_code
+from gcu_async.protocol.conformance import HostConformance, field_diagnosis, frame_anomalies
 from gcu_async.protocol.deframer import Deframer
 from gcu_async.protocol.enums import Mode, Opcode, PodModel, SubFrameRequest, opcode_name
 from gcu_async.protocol.feedback import Feedback
@@ -29,7 +31,7 @@ from gcu_async.protocol.packets import (
     HostPacket,
     decode_host_packet,
 )
-from gcu_async.sim.aircraft import ReceivedAircraft
+from gcu_async.sim.aircraft import ReceivedAircraft, aircraft_yaw
 from gcu_async.sim.camera import CameraState
 from gcu_async.sim.clock import Clock, MonotonicClock
 from gcu_async.sim.executor import Executor
@@ -38,6 +40,7 @@ from gcu_async.sim.profiles import PodProfile, profile_for
 from gcu_async.sim.rangefinder import Rangefinder
 from gcu_async.sim.report import main_frame, sub_frame
 from gcu_async.sim.state import SimState
+from gcu_async.sim.tolerance import tolerated
 
 log = logging.getLogger("gcu_async.sim")
 
@@ -61,7 +64,17 @@ class ModelStats:
     anomalous: int = 0
     """Answered packets whose command had parameters V2.0.6 does not allow (an
     :class:`~gcu_async.protocol.AnomalousCommand`): not executed, answered with its failure
-    status — except a null command with parameter bytes, still the separator (no status)."""
+    status — except a null command with parameter bytes, still the separator (no status),
+    and the ones counted in :attr:`tolerated`."""
+    tolerated: int = 0
+    """Anomalous commands executed anyway, as field-tested hosts need (photo, record and
+    focus with parameter byte 0x00: docs/protocol-notes.md §14 "Photo, record and focus
+    with parameter byte 0x00")."""
+    frame_anomalies: int = 0
+    """Packets with a main- or sub-frame field outside its V2.0.6 range (or reserved flag
+    bits set); each field's first one is logged as a warning with a diagnosis."""
+    anomalies_by_field: dict[str, int] = field(default_factory=dict)
+    """Frame field name → packets in which it was out of range."""
     other_versions: int = 0
     """Answered packets with a version byte other than 1 or 2 (decoded with the V2.0.6
     layout; the first one is logged as a warning)."""
@@ -140,6 +153,8 @@ class SimulatorModel:
         self._last_feedback = Feedback(Opcode.NULL)
         self._time = self.clock.now()
         self._deframer = Deframer.for_host_packets()
+        self.conformance = HostConformance()
+        """Every host packet handled, checked against V2.0.6 (:meth:`HostConformance.report`)."""
 
     # -- bytes in, bytes out ------------------------------------------------------------------
     def receive(self, data: bytes | bytearray | memoryview) -> list[bytes]:
@@ -189,15 +204,20 @@ class SimulatorModel:
             stats.bytes_discarded += len(packet)
             log.debug("ignored a malformed packet: %s", exc)
             return None
-        return self.handle(decoded).encode()
+        return self.handle(decoded, raw=packet).encode()
 
     # -- the GCU ------------------------------------------------------------------------------
-    def handle(self, packet: HostPacket) -> GcuPacket:
-        """Answer one host packet: advance time, run its command, take its control values."""
+    def handle(self, packet: HostPacket, *, raw: bytes = b"") -> GcuPacket:
+        """Answer one host packet: advance time, run its command, take its control values.
+        ``raw``: the packet's bytes, shown in the conformance report's examples."""
         now = self.clock.now()
         self.stats.received += 1
         if packet.version not in SUPPORTED_VERSIONS:
             self._other_version(packet.version)
+        found = frame_anomalies(packet)
+        self.conformance.add_packet(packet, now, raw=raw, frame=found)
+        if found:
+            self._frame_anomalies(found)
         main = packet.main
         self.state.aircraft.update(main, packet.sub)
         self.advance(now)
@@ -212,9 +232,16 @@ class SimulatorModel:
             if opcode == Opcode.CALIBRATION:
                 feedback = Feedback(opcode, self.executor.calibration_status(now))
         else:
-            if isinstance(packet.command, AnomalousCommand):
-                log.info("not executed: %s", packet.command.error())
-            status = self.executor.execute(packet.command, main, now)
+            run = packet.command
+            if isinstance(run, AnomalousCommand):
+                instead = tolerated(run)
+                if instead is None:
+                    log.info("not executed: %s", run.error())
+                else:
+                    self.stats.tolerated += 1
+                    log.info("executed as %s although %s", instead, run.error())
+                    run = instead
+            status = self.executor.execute(run, main, now)
             self.executions[opcode] += 1
             if self.record_executions:
                 self.execution_log.append(ExecutionRecord(now, packet.command, status))
@@ -237,6 +264,21 @@ class SimulatorModel:
             feedback,
             self.protocol_version,
         )
+
+    def _frame_anomalies(self, anomalies: tuple[Anomaly, ...]) -> None:
+        """Count out-of-range frame fields; warn about each field's first one only."""
+        self.stats.frame_anomalies += 1
+        counts = self.stats.anomalies_by_field
+        for a in anomalies:
+            seen = counts.get(a.field, 0)
+            counts[a.field] = seen + 1
+            if not seen:
+                diagnosis = field_diagnosis(a)
+                using = (f"; the simulator uses {aircraft_yaw(a.value):.2f}°"
+                         if a.field == "aircraft_yaw_raw" else "")  # fmt: skip
+                log.warning("host packet field out of range: %s%s%s; further ones are only "
+                            "counted (stats.anomalies_by_field)", a,
+                            f" — {diagnosis}" if diagnosis else "", using)  # fmt: skip
 
     def _other_version(self, version: int) -> None:
         """Count a packet of another version; warn about the first one only."""
