@@ -28,9 +28,8 @@ DEFAULT_BAUD = 115200
 """A serial device's rate when the string gives none (pymavlink's default)."""
 BAUD_RANGE = (50, 4_000_000)
 """Serial rates accepted, inclusive (what Linux's termios can be asked for)."""
-_HINTS = {"udp": "udpin: to listen or udpout: to send to a listener",
-          "udpbcast": "udpout: to a broadcast address is not supported; use udpout:HOST:PORT",
-          "serial": "a device path, e.g. /dev/ttyACM0,115200"}  # fmt: skip
+_HINTS = {"udp": "use udpin: to listen or udpout: to send to a listener",
+          "serial": "give the device path alone, e.g. /dev/ttyACM0,115200"}  # fmt: skip
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,297 @@
+"""The bridge's MAVLink links on real loopback sockets with pymavlink peers
+(docs/mavlink-bridge.md, "Links"): per-sender parsing and the destination rule on ``udpin``,
+floods from thousands of source ports, ``tcp:`` peers that vanish, black-hole and return —
+with the GCU's host rate counted at the simulator and both components' heartbeats counted
+at a ground station throughout."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import os
+import socket
+import subprocess
+import sys
+import time
+from typing import Any
+
+import pytest
+
+from _bridge_rig import CAMERA, GIMBAL, SYSTEM
+from _link_rig import free_port, link_rig, rss_mib, thread_count
+from gcu_async.bridge._mavlink import mavlink, mavutil
+
+REQUEST = mavlink.MAV_CMD_REQUEST_MESSAGE
+INFO = mavlink.MAVLINK_MSG_ID_CAMERA_INFORMATION
+FLOOD = os.path.join(os.path.dirname(__file__), "_udp_flood.py")
+
+
+class MavPeer:
+    """A pymavlink connection polled without blocking; keeps what it receives."""
+
+    def __init__(self, url: str, system: int = 254, component: int = 190) -> None:
+        self.conn = mavutil.mavlink_connection(url, source_system=system,
+                                               source_component=component)  # fmt: skip
+        self.messages: list[Any] = []
+
+    def poll(self) -> None:
+        while True:
+            try:
+                msg = self.conn.recv_match(blocking=False)
+            except (OSError, ConnectionError):
+                return
+            if msg is None:
+                return
+            if msg.get_type() != "BAD_DATA":
+                self.messages.append(msg)
+
+    def acks(self, command: int) -> list[Any]:
+        return [m for m in self.messages if m.get_type() == "COMMAND_ACK"
+                and m.command == command and m.result == mavlink.MAV_RESULT_ACCEPTED]
+
+    def heartbeats(self) -> int:
+        return sum(1 for m in self.messages if m.get_type() == "HEARTBEAT"
+                   and m.get_srcSystem() == SYSTEM)  # fmt: skip
+
+    def heartbeat(self) -> None:
+        self.conn.mav.heartbeat_send(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+
+    def request(self, confirmation: int = 0) -> None:
+        self.conn.mav.command_long_send(SYSTEM, CAMERA, REQUEST, confirmation, INFO,
+                                        0, 0, 0, 0, 0, 0)  # fmt: skip
+
+    def close(self) -> None:
+        self.conn.close()
+
+
+async def until(predicate: Any, peers: list[MavPeer], timeout: float, what: str) -> None:
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        for peer in peers:
+            peer.poll()
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"{what}: not within {timeout} s")
+        await asyncio.sleep(0.01)
+
+
+def udpin_port(rig: Any) -> int:
+    port: int = rig.bridge.links[0].local_address[1]
+    return port
+
+
+def junk_socket() -> socket.socket:
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    sock.bind(("127.0.0.1", 0))
+    sock.setblocking(False)
+    return sock
+
+
+def received_anything(sock: socket.socket) -> bool:
+    try:
+        return bool(sock.recv(4096))
+    except BlockingIOError:
+        return False
+
+
+async def test_one_senders_junk_costs_another_sender_nothing() -> None:
+    # issue 17: a 2-byte FD FF datagram from one sender lost 7 of the next 10 valid commands
+    # of another (one parser shared by every sender of a udpin link)
+    async with link_rig(["udpin:127.0.0.1:0"]) as rig:
+        port = udpin_port(rig)
+        station = MavPeer(f"udpout:127.0.0.1:{port}")
+        junk = junk_socket()
+        try:
+            station.heartbeat()
+            await until(lambda: station.heartbeats() > 0, [station], 5.0, "station heard")
+            for _ in range(10):
+                junk.sendto(b"\xfd\xff", ("127.0.0.1", port))
+                await asyncio.sleep(0.02)
+                station.request()
+                await asyncio.sleep(0.05)
+            await until(lambda: len(station.acks(REQUEST)) >= 10, [station], 5.0, "10 acks")
+            assert len(station.acks(REQUEST)) == 10
+        finally:
+            station.close()
+            junk.close()
+
+
+async def test_junk_senders_are_never_written_to() -> None:
+    # issue 17: any sender of one junk byte became a permanent destination of every message
+    async with link_rig(["udpin:127.0.0.1:0"]) as rig:
+        port = udpin_port(rig)
+        station = MavPeer(f"udpout:127.0.0.1:{port}")
+        socks = [junk_socket() for _ in range(200)]
+        try:
+            payloads = [b"\x00", b"\xfd\xff", b"\xfd\x09\x00\x00\x00\x01\x01\x00", b"\xfe"]
+            for i, sock in enumerate(socks):
+                sock.sendto(payloads[i % len(payloads)], ("127.0.0.1", port))
+            station.heartbeat()
+            await rig.pump(2.5)  # two heartbeats of each component at least
+            station.poll()
+            assert station.heartbeats() >= 2  # the valid sender is written to
+            assert not [s for s in socks if received_anything(s)]
+        finally:
+            station.close()
+            for sock in socks:
+                sock.close()
+
+
+async def test_destinations_are_capped_and_expire(monkeypatch: pytest.MonkeyPatch) -> None:
+    from gcu_async.bridge import udp_link
+
+    monkeypatch.setattr(udp_link, "DESTINATION_EXPIRY_SECONDS", 1.0)
+    async with link_rig(["udpin:127.0.0.1:0"]) as rig:
+        port = udpin_port(rig)
+        station = MavPeer(f"udpout:127.0.0.1:{port}")
+        station.heartbeat()
+        await until(lambda: station.heartbeats() > 0, [station], 5.0, "station heard")
+        others = [MavPeer(f"udpout:127.0.0.1:{port}", system=10 + i) for i in range(30)]
+        try:
+            station.heartbeat()
+            await asyncio.sleep(0.05)
+            for other in others:
+                other.heartbeat()
+            for _ in range(3):
+                station.heartbeat()  # the station goes on, as ground stations do (1 Hz)
+                await rig.pump(0.3)
+            for other in others:
+                other.poll()
+            written = [o for o in others if o.messages]
+            # the station was first: it stays; the others fill the free slots only
+            assert len(written) == udp_link.MAX_DESTINATIONS - 1
+            link = rig.bridge.links[0]
+            assert len(link.destination_addresses) == udp_link.MAX_DESTINATIONS
+            # all but the station fall silent: after the expiry they are no longer written to
+            for _ in range(4):
+                station.heartbeat()
+                await rig.pump(0.5)
+            assert [a[1] for a in link.destination_addresses] == [station.conn.port.getsockname()[1]]
+            for other in others:
+                other.messages.clear()
+                other.poll()
+                other.messages.clear()
+            for _ in range(4):
+                station.heartbeat()
+                await rig.pump(0.4)
+            for other in others:
+                other.poll()
+            assert not [o for o in others if o.messages]
+            station.poll()
+            assert station.heartbeats() > 0
+        finally:
+            station.close()
+            for other in others:
+                other.close()
+
+
+@pytest.mark.parametrize("mode", ["junk", "mixed"])
+async def test_flood_from_thousands_of_source_ports(mode: str, caplog: Any) -> None:
+    from gcu_async.bridge import links, udp_link
+
+    caplog.set_level(logging.WARNING, logger="gcu_async")
+    async with link_rig(["udpin:127.0.0.1:0"]) as rig:
+        port = udpin_port(rig)
+        station = MavPeer(f"udpout:127.0.0.1:{port}")
+        station.heartbeat()
+        await until(lambda: station.heartbeats() > 0, [station], 5.0, "station heard")
+        await rig.pump(1.0)
+        threads, rss = thread_count(), rss_mib()
+        flood = subprocess.Popen([sys.executable, FLOOD, "127.0.0.1", str(port), "6", "2000",
+                                  "4000", mode], stdout=subprocess.PIPE, text=True)  # fmt: skip
+        link = rig.bridge.links[0]
+        try:
+            start = time.monotonic()
+            sent_commands = 0
+            while flood.poll() is None and time.monotonic() - start < 30:
+                station.heartbeat()
+                station.request(confirmation=sent_commands % 256)
+                sent_commands += 1
+                await rig.pump(0.25)
+                station.poll()
+                assert len(link._senders) <= udp_link.MAX_SENDERS
+                assert len(link.destination_addresses) <= udp_link.MAX_DESTINATIONS
+                assert link._inbox_bytes <= links.INBOX_BYTES
+            end = time.monotonic()
+            out, _ = flood.communicate(timeout=10)
+        finally:
+            if flood.poll() is None:
+                flood.kill()
+                flood.communicate()
+        try:
+            await until(lambda: len(station.acks(REQUEST)) >= sent_commands, [station], 5.0,
+                        "every command of the station answered")  # fmt: skip
+        finally:
+            station.close()
+        rig.check_rates(start + 0.5, end)
+        grown = rss_mib() - rss
+        print(f"\nflood {mode}: {out.strip()} datagrams in {end - start:.1f} s; station "
+              f"commands {sent_commands}, all acked; bad_data {link.bad_data}, dropped_in "
+              f"{link.dropped_in}, senders dropped {link.senders_dropped}, destinations "
+              f"refused {link.destinations_refused}; RSS +{grown:.1f} MiB; threads "
+              f"{threads} -> {thread_count()}")  # fmt: skip
+        assert int(out) > 5000
+        assert thread_count() <= threads
+        assert grown < 20, grown
+        assert rig.bridge.stats["handler_errors"] == 0
+        assert not [r for r in caplog.records if r.levelno >= logging.ERROR]
+
+
+class BlackHole:
+    """A listener on ``port`` whose backlog is full: connects to it hang (SYN dropped)."""
+
+    def __init__(self, port: int) -> None:
+        self.listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self.listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        self.listener.bind(("127.0.0.1", port))
+        self.listener.listen(0)
+        self.fillers = []
+        for _ in range(3):
+            sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+            sock.setblocking(False)
+            try:
+                sock.connect(("127.0.0.1", port))
+            except BlockingIOError:
+                pass
+            self.fillers.append(sock)
+
+    def close(self) -> None:
+        for sock in self.fillers:
+            sock.close()
+        self.listener.close()
+
+
+async def test_tcp_peer_vanishes_black_holes_and_returns() -> None:
+    # issue 17: a tcp: peer going away froze the bridge (host rate 50/s -> 0.8/s, gimbal
+    # heartbeat stopped): pymavlink's autoreconnect slept on the event loop's thread
+    port = free_port(socket.SOCK_STREAM)
+    peer = MavPeer(f"tcpin:127.0.0.1:{port}", system=250)
+    async with link_rig([f"tcp:127.0.0.1:{port}"]) as rig:
+        try:
+            await until(lambda: peer.heartbeats() > 0, [peer], 5.0, "tcp peer fed")
+            start = time.monotonic()
+            peer.request()
+            await until(lambda: peer.acks(REQUEST), [peer], 3.0, "tcp peer answered")
+            peer.close()  # gone: connects are refused
+            await rig.pump(2.5)
+            hole = BlackHole(port)  # now connects hang
+            await rig.pump(3.0)
+            hole.close()
+            peer = MavPeer(f"tcpin:127.0.0.1:{port}", system=250)  # back
+            done = time.monotonic() + 6.0
+            while not peer.heartbeats() and time.monotonic() < done:
+                peer.poll()
+                await rig.pump(0.05)
+            assert peer.heartbeats(), "the bridge did not reconnect"
+            peer.messages.clear()
+            peer.request()
+            while not peer.acks(REQUEST) and time.monotonic() < done + 3:
+                peer.poll()
+                await rig.pump(0.05)
+            assert peer.acks(REQUEST)
+            end = time.monotonic()
+            rig.check_rates(start, end)
+            link = rig.bridge.links[0]
+            assert link.reopened >= 1
+            assert rig.bridge.stats["handler_errors"] == 0
+        finally:
+            peer.close()
