@@ -54,15 +54,21 @@ class LinkRig:
         if len(self.gcs.messages) > 5000:
             del self.gcs.messages[:-1000]
 
+    def rate_range(self, start: float, end: float) -> tuple[int, int]:
+        """The fewest and most host packets the GCU got in a 1-s window in [start, end]."""
+        times = [t for t in self.host_packets if start <= t <= end]
+        counts = []
+        t = start
+        while t + 1.0 <= end:
+            counts.append(sum(1 for x in times if t <= x < t + 1.0))
+            t += 0.1
+        return min(counts), max(counts)
+
     def check_rates(self, start: float, end: float) -> None:
         """Every 1-s window in [start, end] saw 45–51 host packets at the GCU, and each
         component's heartbeat reached the ground station at most 1.5 s apart."""
-        times = [t for t in self.host_packets if start <= t <= end]
-        t = start
-        while t + 1.0 <= end:
-            n = sum(1 for x in times if t <= x < t + 1.0)
-            assert RATE_LOW <= n <= RATE_HIGH, f"{n} host packets in [{t - start:.1f}, +1 s)"
-            t += 0.1
+        low, high = self.rate_range(start, end)
+        assert RATE_LOW <= low and high <= RATE_HIGH, (low, high)
         for component in (GIMBAL, CAMERA):
             beats = [start] + [b for b in self.heartbeats.get(component, []) if start <= b <= end]
             beats.append(end)
