@@ -75,8 +75,10 @@ async def until(predicate: Any, peers: list[MavPeer], timeout: float, what: str)
 
 
 def udpin_port(rig: Any) -> int:
-    port: int = rig.bridge.links[0].local_address[1]
-    return port
+    link = rig.bridge.links[0]
+    if not hasattr(link, "local_address"):  # the pymavlink-connection links before issue 17
+        return int(link._conn.port.getsockname()[1])
+    return int(link.local_address[1])
 
 
 def junk_socket() -> socket.socket:
@@ -184,10 +186,10 @@ async def test_destinations_are_capped_and_expire(monkeypatch: pytest.MonkeyPatc
                 other.close()
 
 
-@pytest.mark.parametrize("mode", ["junk", "mixed"])
-async def test_flood_from_thousands_of_source_ports(mode: str, caplog: Any) -> None:
-    from gcu_async.bridge import links, udp_link
-
+@pytest.mark.parametrize(("mode", "rate"), [("junk", 2000), ("mixed", 1000)])
+async def test_flood_from_thousands_of_source_ports(mode: str, rate: int, caplog: Any) -> None:
+    # issue 17: senders added by pymavlink's reader thread while the loop iterated over
+    # them: "RuntimeError: Set changed size during iteration"
     caplog.set_level(logging.WARNING, logger="gcu_async")
     async with link_rig(["udpin:127.0.0.1:0"]) as rig:
         port = udpin_port(rig)
@@ -196,7 +198,7 @@ async def test_flood_from_thousands_of_source_ports(mode: str, caplog: Any) -> N
         await until(lambda: station.heartbeats() > 0, [station], 5.0, "station heard")
         await rig.pump(1.0)
         threads, rss = thread_count(), rss_mib()
-        flood = subprocess.Popen([sys.executable, FLOOD, "127.0.0.1", str(port), "6", "2000",
+        flood = subprocess.Popen([sys.executable, FLOOD, "127.0.0.1", str(port), "6", str(rate),
                                   "4000", mode], stdout=subprocess.PIPE, text=True)  # fmt: skip
         link = rig.bridge.links[0]
         try:
@@ -208,9 +210,7 @@ async def test_flood_from_thousands_of_source_ports(mode: str, caplog: Any) -> N
                 sent_commands += 1
                 await rig.pump(0.25)
                 station.poll()
-                assert len(link._senders) <= udp_link.MAX_SENDERS
-                assert len(link.destination_addresses) <= udp_link.MAX_DESTINATIONS
-                assert link._inbox_bytes <= links.INBOX_BYTES
+                check_bounds(link)
             end = time.monotonic()
             out, _ = flood.communicate(timeout=10)
         finally:
@@ -226,15 +226,27 @@ async def test_flood_from_thousands_of_source_ports(mode: str, caplog: Any) -> N
         low, high = rig.rate_range(start + 0.5, end)
         print(f"\nflood {mode}: {out.strip()} datagrams in {end - start:.1f} s; station "
               f"commands {sent_commands}, all acked; bad_data {link.bad_data}, dropped_in "
-              f"{link.dropped_in}, senders dropped {link.senders_dropped}, destinations "
-              f"refused {link.destinations_refused}; RSS +{grown:.1f} MiB; threads "
+              f"{getattr(link, 'dropped_in', '?')}, senders dropped "
+              f"{getattr(link, 'senders_dropped', '?')}, destinations refused "
+              f"{getattr(link, 'destinations_refused', '?')}; RSS +{grown:.1f} MiB; threads "
               f"{threads} -> {thread_count()}; GCU host rate {low}-{high}/s")  # fmt: skip
         rig.check_rates(start + 0.5, end)
-        assert int(out) > 5000
+        assert int(out) >= 5 * rate  # 200 new source ports per 400 datagrams
         assert thread_count() <= threads
         assert grown < 20, grown
         assert rig.bridge.stats["handler_errors"] == 0
         assert not [r for r in caplog.records if r.levelno >= logging.ERROR]
+
+
+def check_bounds(link: Any) -> None:
+    """The udpin link's tables and inbox within their documented caps."""
+    try:
+        from gcu_async.bridge import links, udp_link
+    except ImportError:  # the pymavlink-connection links before issue 17 had none
+        return
+    assert len(link._senders) <= udp_link.MAX_SENDERS
+    assert len(link.destination_addresses) <= udp_link.MAX_DESTINATIONS
+    assert link._inbox_bytes <= links.INBOX_BYTES
 
 
 class BlackHole:
