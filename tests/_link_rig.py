@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import itertools
 import os
 import resource
 import socket
@@ -68,11 +69,11 @@ class LinkRig:
         """Every 1-s window in [start, end] saw 45–51 host packets at the GCU, and each
         component's heartbeat reached the ground station at most 1.5 s apart."""
         low, high = self.rate_range(start, end)
-        assert RATE_LOW <= low and high <= RATE_HIGH, (low, high)
+        assert low >= RATE_LOW and high <= RATE_HIGH, (low, high)
         for component in (GIMBAL, CAMERA):
             beats = [start] + [b for b in self.heartbeats.get(component, []) if start <= b <= end]
             beats.append(end)
-            gaps = [b - a for a, b in zip(beats, beats[1:])]
+            gaps = [b - a for a, b in itertools.pairwise(beats)]
             assert max(gaps) <= HEARTBEAT_GAP, (component, max(gaps))
 
 

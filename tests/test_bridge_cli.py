@@ -3,6 +3,7 @@ or SIGTERM ends it with exit status 0 (docs/mavlink-bridge.md, "Command line")."
 
 from __future__ import annotations
 
+import contextlib
 import signal
 import subprocess
 import time
@@ -168,10 +169,8 @@ class _GoneTcpPeer:
             for _ in range(3):  # fill the backlog: the bridge's SYNs are dropped
                 filler = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
                 filler.setblocking(False)
-                try:
+                with contextlib.suppress(BlockingIOError):
                     filler.connect(("127.0.0.1", self.port))
-                except BlockingIOError:
-                    pass
                 self.others.append(filler)
 
     def close(self) -> None:

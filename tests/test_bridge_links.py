@@ -7,17 +7,17 @@ at a ground station throughout."""
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 import os
 import socket
-import subprocess
 import sys
 import time
 from typing import Any
 
 import pytest
 
-from _bridge_rig import CAMERA, GIMBAL, SYSTEM
+from _bridge_rig import CAMERA, SYSTEM
 from _link_rig import free_port, link_rig, rss_mib, thread_count
 from gcu_async.bridge._mavlink import mavlink, mavutil
 
@@ -64,11 +64,15 @@ class MavPeer:
         self.conn.close()
 
 
-async def until(predicate: Any, peers: list[MavPeer], timeout: float, what: str) -> None:
+async def until(predicate: Any, peers: list[Any], timeout: float, what: str,
+                rig: Any = None) -> None:  # fmt: skip
+    """Wait for ``predicate``, polling ``peers`` (and the rig's ground station)."""
     deadline = time.monotonic() + timeout
     while not predicate():
         for peer in peers:
             peer.poll()
+        if rig is not None:
+            rig.poll_gcs()
         if time.monotonic() > deadline:
             raise TimeoutError(f"{what}: not within {timeout} s")
         await asyncio.sleep(0.01)
@@ -167,7 +171,8 @@ async def test_destinations_are_capped_and_expire(monkeypatch: pytest.MonkeyPatc
             for _ in range(4):
                 station.heartbeat()
                 await rig.pump(0.5)
-            assert [a[1] for a in link.destination_addresses] == [station.conn.port.getsockname()[1]]
+            station_port = station.conn.port.getsockname()[1]
+            assert [a[1] for a in link.destination_addresses] == [station_port]
             for other in others:
                 other.messages.clear()
                 other.poll()
@@ -198,13 +203,14 @@ async def test_flood_from_thousands_of_source_ports(mode: str, rate: int, caplog
         await until(lambda: station.heartbeats() > 0, [station], 5.0, "station heard")
         await rig.pump(1.0)
         threads, rss = thread_count(), rss_mib()
-        flood = subprocess.Popen([sys.executable, FLOOD, "127.0.0.1", str(port), "6", str(rate),
-                                  "4000", mode], stdout=subprocess.PIPE, text=True)  # fmt: skip
+        flood = await asyncio.create_subprocess_exec(
+            sys.executable, FLOOD, "127.0.0.1", str(port), "6", str(rate), "4000", mode,
+            stdout=asyncio.subprocess.PIPE)
         link = rig.bridge.links[0]
         try:
             start = time.monotonic()
             sent_commands = 0
-            while flood.poll() is None and time.monotonic() - start < 30:
+            while flood.returncode is None and time.monotonic() - start < 30:
                 station.heartbeat()
                 station.request(confirmation=sent_commands % 256)
                 sent_commands += 1
@@ -212,11 +218,12 @@ async def test_flood_from_thousands_of_source_ports(mode: str, rate: int, caplog
                 station.poll()
                 check_bounds(link)
             end = time.monotonic()
-            out, _ = flood.communicate(timeout=10)
+            raw, _ = await asyncio.wait_for(flood.communicate(), 10)
+            out = raw.decode()
         finally:
-            if flood.poll() is None:
+            if flood.returncode is None:
                 flood.kill()
-                flood.communicate()
+                await flood.communicate()
         try:
             await until(lambda: len(station.acks(REQUEST)) >= sent_commands, [station], 5.0,
                         "every command of the station answered")  # fmt: skip
@@ -261,10 +268,8 @@ class BlackHole:
         for _ in range(3):
             sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
             sock.setblocking(False)
-            try:
+            with contextlib.suppress(BlockingIOError):
                 sock.connect(("127.0.0.1", port))
-            except BlockingIOError:
-                pass
             self.fillers.append(sock)
 
     def close(self) -> None:
@@ -283,7 +288,7 @@ async def test_tcp_peer_vanishes_black_holes_and_returns() -> None:
             await until(lambda: peer.heartbeats() > 0, [peer], 5.0, "tcp peer fed")
             start = time.monotonic()
             peer.request()
-            await until(lambda: peer.acks(REQUEST), [peer], 3.0, "tcp peer answered")
+            await until(lambda: peer.acks(REQUEST), [peer], 3.0, "tcp peer answered", rig)
             peer.close()  # gone: connects are refused
             await rig.pump(2.5)
             hole = BlackHole(port)  # now connects hang
@@ -308,3 +313,69 @@ async def test_tcp_peer_vanishes_black_holes_and_returns() -> None:
             assert rig.bridge.stats["handler_errors"] == 0
         finally:
             peer.close()
+
+
+class PtyPeer:
+    """The far end of a serial link: a pseudo-terminal's master, with a pymavlink parser."""
+
+    def __init__(self, link_path: str) -> None:
+        self.master, slave = os.openpty()
+        os.set_blocking(self.master, False)
+        self.slave_name = os.ttyname(slave)
+        os.close(slave)  # the bridge opens the slave by its (symlinked) name
+        tmp = link_path + ".new"
+        os.symlink(self.slave_name, tmp)
+        os.replace(tmp, link_path)
+        self.parser = mavlink.MAVLink(None, srcSystem=253, srcComponent=190)
+        self.parser.robust_parsing = True
+        self.messages: list[Any] = []
+
+    def poll(self) -> None:
+        while True:
+            try:
+                data = os.read(self.master, 4096)
+            except (BlockingIOError, OSError):
+                return
+            if not data:
+                return
+            for msg in self.parser.parse_buffer(data) or []:
+                if msg.get_type() != "BAD_DATA":
+                    self.messages.append(msg)
+
+    def heartbeats(self) -> int:
+        return sum(1 for m in self.messages if m.get_type() == "HEARTBEAT")
+
+    def request(self) -> None:
+        msg = mavlink.MAVLink_command_long_message(SYSTEM, CAMERA, REQUEST, 0, INFO,
+                                                   0, 0, 0, 0, 0, 0)  # fmt: skip
+        os.write(self.master, msg.pack(self.parser))
+
+    def acked(self) -> bool:
+        return any(m.get_type() == "COMMAND_ACK" and m.command == REQUEST
+                   and m.result == mavlink.MAV_RESULT_ACCEPTED for m in self.messages)
+
+    def close(self) -> None:
+        os.close(self.master)
+
+
+async def test_serial_device_unplugged_and_back(tmp_path: Any) -> None:
+    path = str(tmp_path / "autopilot-tty")
+    peer = PtyPeer(path)
+    async with link_rig([f"{path},115200"]) as rig:
+        try:
+            await until(lambda: peer.heartbeats() > 0, [peer], 5.0, "serial peer fed")
+            start = time.monotonic()
+            peer.request()
+            await until(peer.acked, [peer], 3.0, "serial peer answered", rig)
+            peer.close()  # unplugged: the device node is gone
+            await rig.pump(2.5)
+            peer = PtyPeer(path)  # plugged in again (a new node behind the same name)
+            await until(lambda: peer.heartbeats() > 0, [peer], 6.0, "serial reopened", rig)
+            peer.request()
+            await until(peer.acked, [peer], 3.0, "answered after reopening", rig)
+            end = time.monotonic()
+            rig.check_rates(start, end)
+            assert rig.bridge.links[0].reopened >= 1
+        finally:
+            with contextlib.suppress(OSError):
+                peer.close()

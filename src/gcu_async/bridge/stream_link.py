@@ -58,7 +58,7 @@ class _OneStream(MavlinkLink):
     def _abort(self) -> None:
         stream, self._stream = self._stream, None
         if stream is not None and stream.peer is not None:
-            stream.peer.transport.abort()
+            _abort(stream.peer.transport)
 
 
 class TcpLink(_OneStream):
@@ -96,6 +96,13 @@ class SerialLink(_OneStream):
             _close_port(port)
             raise
         return self._install(protocol)
+
+
+def _abort(transport: Any) -> None:
+    """Abort a transport that is not already closing (pyserial-asyncio's cannot be aborted
+    twice: it forgets its loop once closed)."""
+    if not transport.is_closing():
+        transport.abort()
 
 
 def _close_port(port: Any) -> None:
@@ -158,7 +165,7 @@ class TcpInLink(MavlinkLink):
             server.close()
         for client in list(self._clients):
             if client.peer is not None:
-                client.peer.transport.abort()
+                _abort(client.peer.transport)
         self._clients.clear()
 
 
