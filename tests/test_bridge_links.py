@@ -17,7 +17,7 @@ from typing import Any
 
 import pytest
 
-from _bridge_rig import CAMERA, SYSTEM
+from _bridge_rig import CAMERA, GIMBAL, SYSTEM
 from _link_rig import free_port, link_rig, rss_mib, thread_count
 from gcu_async.bridge._mavlink import mavlink, mavutil
 
@@ -379,3 +379,49 @@ async def test_serial_device_unplugged_and_back(tmp_path: Any) -> None:
         finally:
             with contextlib.suppress(OSError):
                 peer.close()
+
+
+async def test_tcpin_caps_clients_and_never_waits_for_a_stalled_one() -> None:
+    from gcu_async.bridge import links, stream_link
+
+    async with link_rig(["tcpin:127.0.0.1:0"]) as rig:
+        link = rig.bridge.links[0]
+        port = link.local_address[1]
+        threads, rss = thread_count(), rss_mib()
+        start = time.monotonic()
+        clients = []
+        try:
+            for _ in range(stream_link.MAX_TCP_CLIENTS + 4):
+                sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)  # before the SYN
+                sock.settimeout(2)
+                sock.connect(("127.0.0.1", port))
+                sock.setblocking(False)
+                clients.append(sock)
+                await rig.pump(0.05)
+            # the clients never read: the bridge's unsent bytes for each stay bounded and
+            # what does not fit is dropped, never waited for
+            await rig.pump(1.0)
+            assert link.clients_refused == 4
+            for client in link._clients:  # small kernel buffers: user space fills in seconds
+                sock = client.peer.transport.get_extra_info("socket")
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, 4096)
+            for component, message in [
+                    (GIMBAL, mavlink.MAVLINK_MSG_ID_GIMBAL_DEVICE_ATTITUDE_STATUS),
+                    (GIMBAL, mavlink.MAVLINK_MSG_ID_GIMBAL_MANAGER_STATUS),
+                    (CAMERA, mavlink.MAVLINK_MSG_ID_CAMERA_SETTINGS),
+                    (CAMERA, mavlink.MAVLINK_MSG_ID_CAMERA_CAPTURE_STATUS),
+                    (CAMERA, mavlink.MAVLINK_MSG_ID_CAMERA_FOV_STATUS)]:  # fmt: skip
+                rig.gcs.command(component, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, message, 10_000)
+            await rig.pump(5.0)  # 500 messages/s to every client
+            end = time.monotonic()
+            rig.check_rates(start, end)
+            assert link.dropped_out > 0
+            for client in link._clients:
+                assert client.peer.transport.get_write_buffer_size() <= (
+                    links.SEND_BUFFER_BYTES + 1024)
+            assert thread_count() <= threads
+            assert rss_mib() - rss < 20
+        finally:
+            for sock in clients:
+                sock.close()
