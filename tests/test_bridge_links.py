@@ -295,11 +295,13 @@ async def test_tcp_peer_vanishes_black_holes_and_returns() -> None:
             await rig.pump(3.0)
             hole.close()
             peer = MavPeer(f"tcpin:127.0.0.1:{port}", system=250)  # back
-            done = time.monotonic() + 6.0
+            back = time.monotonic()
+            done = back + 6.0
             while not peer.heartbeats() and time.monotonic() < done:
                 peer.poll()
                 await rig.pump(0.05)
             assert peer.heartbeats(), "the bridge did not reconnect"
+            fed_again = time.monotonic() - back
             peer.messages.clear()
             peer.request()
             while not peer.acks(REQUEST) and time.monotonic() < done + 3:
@@ -307,6 +309,9 @@ async def test_tcp_peer_vanishes_black_holes_and_returns() -> None:
                 await rig.pump(0.05)
             assert peer.acks(REQUEST)
             end = time.monotonic()
+            low, high = rig.rate_range(start, end)
+            print(f"\ntcp peer gone/black-holed/back over {end - start:.1f} s: fed again "
+                  f"{fed_again:.2f} s after its return; GCU host rate {low}-{high}/s")
             rig.check_rates(start, end)
             link = rig.bridge.links[0]
             assert link.reopened >= 1
