@@ -430,3 +430,34 @@ async def test_tcpin_caps_clients_and_never_waits_for_a_stalled_one() -> None:
         finally:
             for sock in clients:
                 sock.close()
+
+
+async def test_a_hung_name_lookup_costs_one_thread_and_never_delays_close(
+        monkeypatch: pytest.MonkeyPatch) -> None:  # fmt: skip
+    import threading
+
+    from gcu_async.bridge import links
+
+    release = threading.Event()
+    calls: list[str] = []
+
+    def hung_lookup(host: str, *args: Any, **kwargs: Any) -> Any:
+        calls.append(host)
+        release.wait(30)  # a resolver that does not answer
+        raise OSError("no answer")
+
+    monkeypatch.setattr(links.socket, "getaddrinfo", hung_lookup)
+    monkeypatch.setattr(links, "OPEN_TIMEOUT", 0.2)
+    monkeypatch.setattr(links, "RETRY_SECONDS", 0.05)
+    link = links.make_link("tcp:gimbal-gcs.example:5760")
+    before = thread_count()
+    try:
+        await link.open(lambda link, msg: None)
+        await asyncio.sleep(1.5)  # several attempts time out meanwhile
+        assert len(calls) == 1  # the later attempts wait for the first lookup's thread
+        assert thread_count() == before + 1
+        started = time.monotonic()
+        await link.close()
+        assert time.monotonic() - started < 0.2
+    finally:
+        release.set()

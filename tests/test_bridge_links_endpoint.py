@@ -92,3 +92,23 @@ def test_each_kind_gets_its_link() -> None:
              "/dev/ttyS0": SerialLink}  # fmt: skip
     for text, cls in kinds.items():
         assert type(make_link(text)) is cls
+
+
+def test_the_docs_state_the_link_constants() -> None:
+    # docs/mavlink-bridge.md "Links" restates the module constants: they must agree
+    from pathlib import Path
+
+    from gcu_async.bridge import links, stream_link, udp_link
+
+    text = (Path(__file__).parent.parent / "docs" / "mavlink-bridge.md").read_text()
+    section = text[text.index("\n## Links\n"):]
+    stated = [
+        f"**{udp_link.DESTINATION_EXPIRY_SECONDS:g} s**", f"**{udp_link.MAX_DESTINATIONS}**",
+        f"**{udp_link.MAX_SENDERS}**", f"**{links.RETRY_SECONDS:g} s**",
+        f"**{links.OPEN_TIMEOUT:g} s**", f"**{links.INBOX_BYTES // 1024} KiB**",
+        f"**{links.DRAIN_SECONDS * 1000:g} ms**", f"**{links.SEND_BUFFER_BYTES // 1024} KiB**",
+        f"up to {stream_link.MAX_TCP_CLIENTS} TCP clients",
+        f"once per {links.LOG_INTERVAL:g} s",
+        f"BAUD {BAUD_RANGE[0]}–{BAUD_RANGE[1]:,}", f"default {DEFAULT_BAUD}",
+    ]  # fmt: skip
+    assert [s for s in stated if s not in section] == []

@@ -102,7 +102,7 @@ class MavlinkLink:
         self._inbox_bytes = 0
         self._paused: set[Any] = set()
         self._drain_handle: asyncio.Handle | None = None
-        self._pending: asyncio.Future[Any] | None = None
+        self._thread_done: asyncio.Future[None] | None = None
         self._logged: dict[str, float] = {}
         self._closing = False
 
@@ -292,13 +292,16 @@ class MavlinkLink:
         running from an earlier, timed-out attempt is awaited instead of starting another
         thread, so a link never has more than one."""
         loop = asyncio.get_running_loop()
-        pending = self._pending
-        if pending is not None and not pending.done():
-            await asyncio.shield(pending)
+        running = self._thread_done
+        if running is not None and not running.done():
+            await asyncio.shield(running)
         fut: asyncio.Future[T] = loop.create_future()
-        self._pending = fut
+        done: asyncio.Future[None] = loop.create_future()
+        self._thread_done = done
 
         def settle(ok: bool, value: Any) -> None:
+            if not done.done():
+                done.set_result(None)
             if fut.cancelled():
                 if ok:
                     discard(value)
