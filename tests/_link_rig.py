@@ -35,6 +35,27 @@ class LinkRig:
     gcs: Peer
     host_packets: list[float] = field(default_factory=list)
     heartbeats: dict[int, list[float]] = field(default_factory=dict)
+    wakeups: list[tuple[float, float]] = field(default_factory=list)
+    """(monotonic, process CPU time) at each wake-up of a 5 ms sleeper on the loop."""
+
+    async def watch_loop(self) -> None:
+        """Record the loop's wake-ups: a failure report then tells the loop being held
+        (CPU used) from the process not being scheduled (no CPU used)."""
+        while True:
+            self.wakeups.append((time.monotonic(), time.process_time()))
+            if len(self.wakeups) > 20000:
+                del self.wakeups[:10000]
+            await asyncio.sleep(0.005)
+
+    def loop_report(self, start: float, end: float) -> str:
+        """The longest gap between the loop's wake-ups in [start, end] and the CPU time the
+        process used during it."""
+        marks = [w for w in self.wakeups if start <= w[0] <= end]
+        if len(marks) < 2:
+            return "no loop wake-ups recorded"
+        gap, a, b = max((b[0] - a[0], a, b) for a, b in itertools.pairwise(marks))
+        return (f"longest loop gap {gap * 1000:.0f} ms, the process used "
+                f"{(b[1] - a[1]) * 1000:.0f} ms CPU in it")
 
     async def pump(self, seconds: float) -> None:
         """Let everything run ``seconds``, recording the ground station's heartbeats."""
@@ -69,7 +90,7 @@ class LinkRig:
         """Every 1-s window in [start, end] saw 45–51 host packets at the GCU, and each
         component's heartbeat reached the ground station at most 1.5 s apart."""
         low, high = self.rate_range(start, end)
-        assert low >= RATE_LOW and high <= RATE_HIGH, (low, high)
+        assert low >= RATE_LOW and high <= RATE_HIGH, (low, high, self.loop_report(start, end))
         for component in (GIMBAL, CAMERA):
             beats = [start] + [b for b in self.heartbeats.get(component, []) if start <= b <= end]
             beats.append(end)
@@ -110,7 +131,14 @@ async def link_rig(connections: Sequence[str], **options: Any) -> AsyncIterator[
             async with bridge:
                 await gcs.wait("HEARTBEAT", lambda m: m.get_srcComponent() == GIMBAL
                                and m.system_status == mavlink.MAV_STATE_ACTIVE, timeout=8.0)
-                yield LinkRig(sim, bridge, gcs, rig_times)
+                rig = LinkRig(sim, bridge, gcs, rig_times)
+                watcher = asyncio.ensure_future(rig.watch_loop())
+                try:
+                    yield rig
+                finally:
+                    watcher.cancel()
+                    with contextlib.suppress(asyncio.CancelledError):
+                        await watcher
     finally:
         gcs.close()
 

@@ -92,7 +92,7 @@ class MavlinkLink:
         self.dropped_out = 0
         """Messages not written to a peer whose transport held :data:`SEND_BUFFER_BYTES`."""
         self.reopened = 0
-        """Connections (re)established by the owner task after the first."""
+        """Connections the owner task made after a loss or a failed attempt."""
         self.last_message: float | None = None
         self.up = False
         self._on_message: OnMessage | None = None
@@ -118,6 +118,7 @@ class MavlinkLink:
         log.info("mavlink %s: open", self.url)
 
     async def _first_open(self) -> asyncio.Future[str] | None:
+        """The first connection (None: the owner task makes it in the background)."""
         return await asyncio.wait_for(self._connect(), OPEN_TIMEOUT)
 
     async def _connect(self) -> asyncio.Future[str]:
@@ -126,7 +127,8 @@ class MavlinkLink:
         raise NotImplementedError
 
     async def _own(self, lost: asyncio.Future[str] | None) -> None:
-        outage = lost is None
+        first = lost is None  # never connected yet: try at once
+        outage = False
         while True:
             if lost is not None:
                 reason = await lost
@@ -135,17 +137,22 @@ class MavlinkLink:
                 log.warning("mavlink %s: %s; reopening every %g s", self.url, reason,
                             RETRY_SECONDS)  # fmt: skip
                 outage = True
-            await asyncio.sleep(RETRY_SECONDS)
+            if not first:
+                await asyncio.sleep(RETRY_SECONDS)
             try:
                 lost = await asyncio.wait_for(self._connect(), OPEN_TIMEOUT)
             except (OSError, TimeoutError) as exc:
                 lost = None
-                self.log_every("reopen", logging.DEBUG, "reopen failed: %s", exc or "timeout")
+                self.log_every("reopen", logging.WARNING, "cannot connect (%s); retrying "
+                               "every %g s", exc or "timeout", RETRY_SECONDS)  # fmt: skip
+                outage = outage or first
             else:
-                self.reopened += 1
+                if not first:
+                    self.reopened += 1
                 if outage:
-                    log.warning("mavlink %s: reconnected", self.url)
+                    log.warning("mavlink %s: connected", self.url)
                 outage = False
+            first = False
 
     async def close(self) -> None:
         """Stop the owner task, abort every transport and drop what is queued (no waiting

@@ -12,7 +12,7 @@ from typing import Any
 import serial  # type: ignore[import-untyped]
 import serial_asyncio  # type: ignore[import-untyped]
 
-from gcu_async.bridge.links import OPEN_TIMEOUT, RETRY_SECONDS, MavlinkLink, Peer
+from gcu_async.bridge.links import MavlinkLink, Peer
 
 log = logging.getLogger("gcu_async.bridge")
 
@@ -66,12 +66,7 @@ class TcpLink(_OneStream):
     :data:`~gcu_async.bridge.links.RETRY_SECONDS`."""
 
     async def _first_open(self) -> asyncio.Future[str] | None:
-        try:
-            return await asyncio.wait_for(self._connect(), OPEN_TIMEOUT)
-        except (OSError, TimeoutError) as exc:
-            log.warning("mavlink %s: cannot connect (%s); retrying every %g s", self.url,
-                        exc or "timeout", RETRY_SECONDS)  # fmt: skip
-            return None
+        return None  # connecting may take OPEN_TIMEOUT: the owner task does it
 
     async def _connect(self) -> asyncio.Future[str]:
         loop = asyncio.get_running_loop()
