@@ -286,6 +286,7 @@ async def test_tcp_peer_vanishes_black_holes_and_returns() -> None:
     async with link_rig([f"tcp:127.0.0.1:{port}"]) as rig:
         try:
             await until(lambda: peer.heartbeats() > 0, [peer], 5.0, "tcp peer fed")
+            threads, rss = thread_count(), rss_mib()
             start = time.monotonic()
             peer.request()
             await until(lambda: peer.acks(REQUEST), [peer], 3.0, "tcp peer answered", rig)
@@ -316,6 +317,8 @@ async def test_tcp_peer_vanishes_black_holes_and_returns() -> None:
             link = rig.bridge.links[0]
             assert link.reopened >= 1
             assert rig.bridge.stats["handler_errors"] == 0
+            assert thread_count() <= threads
+            assert rss_mib() - rss < 20
         finally:
             peer.close()
 
