@@ -464,3 +464,91 @@ async def test_a_hung_name_lookup_costs_one_thread_and_never_delays_close(
         assert time.monotonic() - started < 0.2
     finally:
         release.set()
+
+
+async def asked_and_answered(station: MavPeer, rig: Any, steps: list[str]) -> None:
+    """The station asks, retransmitting every 0.5 s as ground stations do (a burst may have
+    filled the socket's receive buffer: the kernel drops datagrams of every sender alike),
+    and is answered within 3 s."""
+    answered = len(station.acks(REQUEST))
+    deadline = time.monotonic() + 3.0
+    while len(station.acks(REQUEST)) <= answered:
+        assert time.monotonic() < deadline, f"station not answered after {steps}"
+        station.heartbeat()
+        station.request()
+        resend = time.monotonic() + 0.5
+        while time.monotonic() < resend and len(station.acks(REQUEST)) <= answered:
+            station.poll()
+            rig.poll_gcs()
+            await asyncio.sleep(0.01)
+
+
+def _burst(port: int, sources: int, per_source: int, payloads: list[bytes]) -> None:
+    """Datagrams from ``sources`` fresh source ports (run in a thread: sockets release the
+    GIL, the loop keeps running)."""
+    for i in range(sources):
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+            for j in range(per_source):
+                sock.sendto(payloads[(i + j) % len(payloads)], ("127.0.0.1", port))
+
+
+@pytest.mark.parametrize("seed", [17, 2026])
+async def test_generated_schedule_of_link_faults(seed: int) -> None:
+    """A seeded schedule of steps — junk and valid bursts from new source ports on udpin, the
+    tcp: peer closing, black-holing and returning, the ground station's commands — checked
+    after every step: every command of the station answered, the link's tables within their
+    caps, no handler error; over the whole run the GCU host rate, both heartbeats, threads
+    and memory."""
+    import random
+
+    rng = random.Random(seed)
+    tcp_port = free_port(socket.SOCK_STREAM)
+    tcp_peer: MavPeer | None = MavPeer(f"tcpin:127.0.0.1:{tcp_port}", system=250)
+    hole: BlackHole | None = None
+    valid = [mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3).pack(
+        mavlink.MAVLink(None, srcSystem=100 + i, srcComponent=190)) for i in range(50)]
+    junk = [b"\xfd\xff", b"\x00", b"\xfe\x09", bytes(range(256))[: rng.randrange(1, 200)]]
+    async with link_rig(["udpin:127.0.0.1:0", f"tcp:127.0.0.1:{tcp_port}"]) as rig:
+        port = udpin_port(rig)
+        station = MavPeer(f"udpout:127.0.0.1:{port}")
+        steps: list[str] = []
+        try:
+            station.heartbeat()
+            await until(lambda: bool(station.messages), [station], 5.0, "station heard", rig)
+            threads, rss = thread_count(), rss_mib()
+            start = time.monotonic()
+            for _ in range(10):
+                step = rng.choice(["junk", "valid", "tcp-close", "tcp-hole", "tcp-back",
+                                   "command"])  # fmt: skip
+                steps.append(step)
+                if step == "junk":
+                    await asyncio.to_thread(_burst, port, 300, 2, junk)
+                elif step == "valid":
+                    await asyncio.to_thread(_burst, port, 50, 1, valid)
+                elif step == "tcp-close" and tcp_peer is not None:
+                    tcp_peer.close()
+                    tcp_peer = None
+                elif step == "tcp-hole" and tcp_peer is None and hole is None:
+                    hole = BlackHole(tcp_port)
+                elif step == "tcp-back" and tcp_peer is None:
+                    if hole is not None:
+                        hole.close()
+                        hole = None
+                    tcp_peer = MavPeer(f"tcpin:127.0.0.1:{tcp_port}", system=250)
+                await rig.pump(0.3 + 0.7 * rng.random())
+                await asked_and_answered(station, rig, steps)
+                if tcp_peer is not None:  # connected (again): fed within 1 retry + 2 s
+                    peer = tcp_peer
+                    await until(peer.heartbeats, [peer], 3.5, f"tcp peer fed after {steps}", rig)
+                check_bounds(rig.bridge.links[0])
+                assert rig.bridge.stats["handler_errors"] == 0
+            end = time.monotonic()
+            rig.check_rates(start, end)
+            assert thread_count() <= threads
+            assert rss_mib() - rss < 20
+        finally:
+            station.close()
+            if tcp_peer is not None:
+                tcp_peer.close()
+            if hole is not None:
+                hole.close()
