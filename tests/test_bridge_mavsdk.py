@@ -66,7 +66,7 @@ async def mavsdk_rig() -> AsyncIterator[tuple[Rig, Any]]:
                                    camera=CameraConfig(max_zoom=30.0))  # fmt: skip
             async with bridge:
                 await autopilot.wait("HEARTBEAT", timeout=5.0)  # it knows where to send
-                port = bridge.links[0]._conn.port.getsockname()[1]
+                port = bridge.links[0].local_address[1]  # type: ignore[attr-defined]
                 try:
                     config = Configuration.create_with_component_type(
                         ComponentType.GROUND_STATION)

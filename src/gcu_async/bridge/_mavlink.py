@@ -11,6 +11,7 @@ and camera protocols among it), so the bridge talks to ArduPilot and PX4 alike.
 from __future__ import annotations
 
 import os
+from typing import Any
 
 os.environ.setdefault("MAVLINK20", "1")
 
@@ -24,4 +25,13 @@ if getattr(mavutil.mavlink, "WIRE_PROTOCOL_VERSION", "2.0") != "2.0":  # pragma:
     os.environ["MAVLINK20"] = "1"
     mavutil.set_dialect(mavutil.current_dialect)
 
-__all__ = ["mavlink", "mavutil"]
+
+def new_parser() -> Any:
+    """A parser for one peer's bytes: invalid input comes out as ``BAD_DATA`` messages
+    (pymavlink's robust parsing) instead of exceptions."""
+    parser = mavlink.MAVLink(None)
+    parser.robust_parsing = True
+    return parser
+
+
+__all__ = ["mavlink", "mavutil", "new_parser"]

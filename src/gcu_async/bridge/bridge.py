@@ -36,7 +36,7 @@ from gcu_async.bridge.commands import (
     Plan,
     result_for,
 )
-from gcu_async.bridge.links import MavlinkLink
+from gcu_async.bridge.links import MavlinkLink, make_link
 from gcu_async.bridge.lograte import LogLimiter
 from gcu_async.bridge.view import Control, GcuView
 from gcu_async.client.client import ClientState, GcuClient
@@ -57,8 +57,9 @@ class MavlinkBridge:
     Args:
         client: a :class:`GcuClient` (opened by the bridge if it is not open; best built
             with ``check_support=True`` so that Appendix 8 refusals are UNSUPPORTED).
-        connections: pymavlink connection strings (``udpout:HOST:PORT``,
-            ``udpin:HOST:PORT``, ``tcp:HOST:PORT``, ``/dev/ttyACM0,115200``).
+        connections: MAVLink connection strings (``udpout:HOST:PORT``,
+            ``udpin:HOST:PORT``, ``tcp:HOST:PORT``, ``tcpin:HOST:PORT``,
+            ``/dev/ttyACM0,115200``; :mod:`~gcu_async.bridge.endpoint`), checked here.
         system_id: the vehicle's MAVLink system id (the autopilot's); the components use it.
         camera: what the GCU does not report about the camera (:class:`CameraConfig`).
         autopilot_component: the autopilot's component id (its messages feed the GCU).
@@ -86,9 +87,7 @@ class MavlinkBridge:
         self.system_id = system_id
         self.camera = camera if camera is not None else CameraConfig()
         self.in_progress_after = in_progress_after
-        self.links = [MavlinkLink(url, source_system=system_id,
-                                  source_component=gimbal.COMPONENT)
-                      for url in connections]  # fmt: skip
+        self.links = [make_link(url) for url in connections]
         self.autopilot = AutopilotFeed(system_id, autopilot_component)
         self._packers = {c: mavlink.MAVLink(None, srcSystem=system_id, srcComponent=c)
                          for c in dispatch.COMPONENTS}  # fmt: skip
@@ -156,8 +155,8 @@ class MavlinkBridge:
         self._spawn(self._executor())
 
     async def close(self) -> None:
-        """Stop streaming, cancel running commands, close the links and the client (each
-        link's reader stops within about 0.1 s; :mod:`~gcu_async.bridge.links`)."""
+        """Stop streaming, cancel running commands, close the links (at once, whatever
+        they are doing; :mod:`~gcu_async.bridge.links`) and the client."""
         if self._control_timer is not None:
             self._control_timer.cancel()
             self._control_timer = None

@@ -27,8 +27,9 @@ def register(sub: Any) -> None:
     p.add_argument("gcu_url", metavar="GCU_URL",
                    help="udp://HOST[:PORT], tcp://HOST[:PORT] or serial:///dev/…")
     p.add_argument("--mavlink", action="append", required=True, metavar="CONNECTION",
-                   help="a pymavlink connection string: udpout:HOST:PORT, udpin:HOST:PORT, "
-                   "tcp:HOST:PORT, /dev/ttyACM0,115200 (repeat for several links)")
+                   help="a MAVLink connection: udpout:HOST:PORT, udpin:HOST:PORT, tcp:HOST:PORT, "
+                   "tcpin:HOST:PORT or DEVICE[,BAUD] such as /dev/ttyACM0,115200; IPv6 in "
+                   "brackets, udpin:[::1]:14550 (repeat for several links)")
     p.add_argument("--system-id", type=int, default=1, metavar="N",
                    help="the vehicle's MAVLink system id (the autopilot's; default 1)")
     p.add_argument("--video-url", metavar="URL",
@@ -53,11 +54,14 @@ def default_video_url(gcu_url: str) -> str | None:
 def run(args: argparse.Namespace) -> int:
     try:
         from gcu_async.bridge import CameraConfig, MavlinkBridge
+        from gcu_async.bridge.endpoint import parse_endpoint
         from gcu_async.client.connect import connect
     except ImportError as exc:
         print(f"gcu-async mavlink-bridge: {exc}", file=sys.stderr)
         return EXIT_FAILED
     try:
+        for connection in args.mavlink:  # every one checked before anything opens
+            parse_endpoint(connection)
         video = args.video_url if args.video_url is not None else default_video_url(args.gcu_url)
         camera = CameraConfig(video_url=video, max_zoom=args.max_zoom)
         client = connect(args.gcu_url, check_support=True)
