@@ -162,9 +162,9 @@ async def bridge_rig(pod: str = "D-90Pro(TA)", *, max_zoom: float | None = 30.0,
     packet_times: list[float] = []
     handle = sim.model.handle
 
-    def timed_handle(packet: Any) -> Any:
+    def timed_handle(packet: Any, **kwargs: Any) -> Any:
         packet_times.append(time.monotonic())
-        return handle(packet)
+        return handle(packet, **kwargs)
 
     sim.model.handle = timed_handle  # type: ignore[method-assign]
     gcs = Peer(*GCS)

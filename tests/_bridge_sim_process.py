@@ -23,9 +23,9 @@ async def main(pod: str) -> None:
     times: list[float] = []
     handle = model.handle
 
-    def timed(packet: Any) -> Any:
+    def timed(packet: Any, **kwargs: Any) -> Any:
         times.append(time.monotonic())
-        return handle(packet)
+        return handle(packet, **kwargs)
 
     model.handle = timed  # type: ignore[method-assign]
     loop = asyncio.get_running_loop()

@@ -138,9 +138,9 @@ class Recorder:
         model = sim.model
         original = model.handle
 
-        def handle(packet: HostPacket) -> Any:
+        def handle(packet: HostPacket, **kwargs: Any) -> Any:
             self.packets.append((time.monotonic(), packet, model.state.mode))
-            return original(packet)
+            return original(packet, **kwargs)
 
         model.handle = handle  # type: ignore[method-assign]
 
