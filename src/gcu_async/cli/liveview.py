@@ -49,7 +49,8 @@ def relative_attitude(status: GcuMainFrame) -> Attitude:
 def format_status(sample: TelemetrySample | None, link: LinkHealth) -> str:
     """One compact status line: mode (GCU main frame byte 5), camera attitude (18–23),
     attitude relative to the aircraft (12–17, :func:`relative_attitude`), pod status flags
-    (6–7), camera-1 zoom (sub frame 59–60), camera flags (64–65), laser distance (43–46) and link health."""
+    (6–7), camera-1 zoom (sub frame 59–60), camera flags (64–65), laser distance (43–46)
+    and link health."""
     parts: list[str] = []
     if sample is None:
         parts.append("waiting for telemetry")
