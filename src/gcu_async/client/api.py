@@ -18,8 +18,9 @@ tests/test_catalogue.py checks every method against its entry.
 from __future__ import annotations
 
 import abc
+from typing import Any, TypeVar
 
-from gcu_async._checks import check_bool, check_int, check_positive, check_real
+from gcu_async._checks import check_bool, check_int, check_positive, check_real, type_error
 from gcu_async.protocol import commands as c
 from gcu_async.protocol.catalogue import ALTITUDE_RANGE, RATE_LIMIT, TEMPERATURE_RANGE
 from gcu_async.protocol.enums import CameraMask, NightVisionMode, OsdCoordinateSource
@@ -28,6 +29,8 @@ from gcu_async.protocol.gcu_frames import GcuSubFrame
 from gcu_async.protocol.host_frames import ControlValues
 from gcu_async.protocol.units import Attitude, check_member, check_tuple
 from gcu_async.session import ControlKind
+
+_NT = TypeVar("_NT", bound=tuple[Any, ...])
 
 CAM1 = CameraMask.CAMERA_1
 CAM2 = CameraMask.CAMERA_2
@@ -46,16 +49,24 @@ def _point(x: object, y: object) -> c.ImagePoint:
                         check_real("y", y, 0.0, 1.0, "image fraction"))  # fmt: skip
 
 
-def as_tuple(value: object) -> object:
-    """A ``list`` as a tuple (JSON gives lists), anything else as it is: tuple parameters take
-    a NamedTuple, a plain tuple or a list of the right length and nothing else."""
-    return tuple(value) if type(value) is list else value
+def check_sequence(field: str, value: object, cls: type[_NT]) -> _NT:
+    """``value`` as a ``cls`` (a NamedTuple of units): an instance, a plain tuple or a list
+    (JSON gives lists) of the right length, and nothing else (a ``TypeError`` naming what
+    is accepted). The elements are the caller's to check."""
+    try:
+        return check_tuple(field, tuple(value) if type(value) is list else value, cls)
+    except TypeError:
+        name = cls.__name__
+        article = "an" if name[0] in "AEIOU" else "a"
+        fields = ", ".join(cls._fields)  # type: ignore[attr-defined]
+        raise type_error(field, f"{article} {name} or a tuple or list ({fields})",
+                         value) from None  # fmt: skip
 
 
 def _box(value: object) -> c.ImageBox:
     """An ImageBox, a plain 4-tuple or a list of 4, each edge a fraction checked under
     ``box.<edge>``."""
-    box = check_tuple("box", as_tuple(value), c.ImageBox)
+    box = check_sequence("box", value, c.ImageBox)
     return c.ImageBox(*(check_real(f"box.{f}", v, 0.0, 1.0, "image fraction")
                         for f, v in zip(c.ImageBox._fields, box, strict=True)))  # fmt: skip
 

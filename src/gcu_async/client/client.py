@@ -34,7 +34,7 @@ from gcu_async._checks import (
 )
 from gcu_async._lifecycle import OpenClose
 from gcu_async.capture.writer import PacketCapture
-from gcu_async.client.api import CommandMethods, as_tuple
+from gcu_async.client.api import CommandMethods, check_sequence
 from gcu_async.client.telemetry import TelemetrySubscription
 from gcu_async.client.waiting import WaitingMethods
 from gcu_async.client.wirelog import WIRE_LOG, log_packet
@@ -61,7 +61,6 @@ from gcu_async.protocol.units import (
     Attitude,
     GeoPosition,
     NorthEastUp,
-    check_tuple,
     wrap_degrees_360,
 )
 from gcu_async.session import (
@@ -840,7 +839,7 @@ def _triple(name: str, value: object) -> Any:
     checked element by element under the caller's names (``attitude.pitch``); the
     attitude's yaw goes out as its [0, 360) equivalent."""
     kind, unit, ranges = AIRCRAFT_TUPLES[name]
-    elements: tuple[Any, ...] = check_tuple(name, as_tuple(value), kind)
+    elements: tuple[Any, ...] = check_sequence(name, value, kind)
     units = unit.split(", ") if ", " in unit else [unit] * 3
     fields: tuple[str, ...] = kind._fields
     checked = [check_real(f"{name}.{field}", v, low, high, u, high_open=open_)

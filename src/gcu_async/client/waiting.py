@@ -190,7 +190,8 @@ class WaitingMethods(abc.ABC):
                          timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
         """:meth:`zoom_to` ``ratio`` (camera 1), then wait until the reported zoom is within
         ``tolerance`` of it. A ratio above :attr:`max_zoom` (when given) is refused before
-        anything is sent; a timeout with the zoom stopped short names the ratio reached."""
+        anything is sent; a timeout with the zoom short of the ratio names the ratio last
+        reported."""
         check_positive("timeout", timeout)
         check_positive("tolerance", tolerance, unit="x")
         await self.zoom_to(ratio)
@@ -200,7 +201,7 @@ class WaitingMethods(abc.ABC):
             info = getattr(exc.last, "info", None)
             if info is None or info.camera1_zoom >= ratio:
                 raise
-            hint = (f"zoom {ratio:g}x (±{tolerance:g}; camera 1 stopped at "
+            hint = (f"zoom {ratio:g}x (±{tolerance:g}; camera 1 last reported "
                     f"{info.camera1_zoom:g}x: its maximum may be lower than {ratio:g}x; "
                     "GcuClient(max_zoom=...) refuses such ratios before sending)")  # fmt: skip
             raise WaitTimeout(hint, exc.timeout, exc.last) from None
