@@ -12,12 +12,14 @@ import subprocess
 import sys
 import textwrap
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 
 from gcu_async.protocol.catalogue import CATALOGUE
 
 CLI = [sys.executable, "-m", "gcu_async.cli"]
+ROOT = Path(__file__).resolve().parents[1]
 NEEDS_MARK = "[--aircraft]"
 
 
@@ -190,3 +192,20 @@ def test_monitor_labels_the_attitude_relative_to_the_aircraft(sim_url: str) -> N
     result = run("monitor", sim_url, "--count", "1")
     assert result.returncode == 0, result.stderr
     assert "vs aircraft r" in result.stdout and "rel x" not in result.stdout
+
+
+# -- the docs' sample output -------------------------------------------------------------------
+DOCS = [ROOT / "README.md", ROOT / "docs" / "cli.md", ROOT / "docs" / "getting-started.md"]
+
+
+def test_the_docs_sample_send_output_has_the_real_fields(sim_url: str) -> None:
+    samples = [json.loads(m) for path in DOCS
+               for m in re.findall(r'(\{"ok": true, "command".*?\})(?:`|$)',
+                                   path.read_text(encoding="utf-8"), re.M)]  # fmt: skip
+    assert len(samples) >= 2
+    result = run("send", sim_url, "enter-euler-control", "0", "-30", "45")
+    assert result.returncode == 0, result.stderr
+    real = json.loads(result.stdout)
+    for sample in samples:
+        assert set(sample) == set(real), sample
+        assert set(sample["attitude_deg"]) == set(real["attitude_deg"])
