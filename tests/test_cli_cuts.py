@@ -1,4 +1,4 @@
-"""The CLI's smaller cuts (issue 9, item 8), through the real entry point against a
+"""The CLI's smaller behaviours, through the real entry point against a
 ``gcu-async sim`` process: each ``send`` command's own ``--help``, ``--timeout`` for every
 command (calibrate included), ``--cameras``, the demo against a GCU left zoomed in, the
 vendor's pod names in ``monitor --json``."""
@@ -177,7 +177,7 @@ def test_demo_runs_against_a_gcu_zoomed_to_10x(sim: SimProcess) -> None:
     url = f"{sim.url}?local_port=0"
     done = cli("send", url, "zoom-to", "10", "--hold", "2.5")  # the zoom travels ~1.2 s
     assert done.returncode == 0, done.stderr
-    assert zoom_of(url) == pytest.approx(10.0)  # the state the demo used to abort in
+    assert zoom_of(url) == pytest.approx(10.0)  # the demo starts from a zoomed-in camera
     done = cli("demo", "--url", url, "--quick", "--no-live", timeout=90)
     assert done.returncode == 0, done.stdout + done.stderr
     assert "[prep] camera 1 is at 10.0x: back to 1x first" in done.stdout

@@ -968,7 +968,7 @@ async def test_issue_regressions(rig: Rig, name: str, call: Callable[[GcuClient]
     await _keeps_running(rig)
     assert (await rig.probe()).main.control == ControlValues.angles(pitch=-30.0)
     assert rig.model.stats.malformed == 0
-    # every later update still works (set_aircraft(None) used to poison them)
+    # every later update still works after set_aircraft(None) was refused
     rig.gcu.update_aircraft(attitude=(1.0, 2.0, 3.0), acceleration=_ZERO3, velocity=_ZERO3)
     assert (await rig.probe()).main.aircraft_attitude == Attitude(1.0, 2.0, 3.0)
 
@@ -1164,6 +1164,6 @@ def test_catalogue_covers_the_constructor_and_connect() -> None:
     ("enter_euler_control", "yaw", 1e30), ("set_control", "control", ControlValues(99999, 0, 0)),
     ("set_aircraft", "state", None), ("connect", "version", True),
 ])  # fmt: skip
-def test_catalogue_holds_the_issue_cases(owner: str, param: str, value: Any) -> None:
+def test_catalogue_holds_the_reported_cases(owner: str, param: str, value: Any) -> None:
     assert any(c.p.owner == owner and c.p.param == param and type(c.value) is type(value)
                and c.value == value for c in CATALOGUE)  # fmt: skip

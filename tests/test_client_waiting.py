@@ -32,7 +32,7 @@ async def test_reach_attitude_returns_there_and_omitted_angles_keep_the_current_
     assert sample.status.mode == Mode.EULER_CONTROL
     assert abs(sample.status.attitude.pitch + 20.0) <= 0.5
     assert angle_error(sample.status.attitude.yaw, 40.0) <= 0.5
-    # only the pitch given: the yaw stays at 40 (it used to swing to north, 0)
+    # only the pitch given: the yaw stays at 40 (not north, 0)
     await gcu_client.enter_euler_control(pitch=-45.0)
     there = await gcu_client.wait_attitude(pitch=-45.0, yaw=40.0, timeout=15.0)
     assert angle_error(there.status.attitude.yaw, 40.0) <= 0.5
