@@ -187,9 +187,6 @@ def resolve(args: argparse.Namespace) -> Invocation:
         raise ValueError(f"{args.name}: give all of {' '.join(spec.together)}, or none")
     if args.timeout is not None:
         check_seconds("--timeout", args.timeout)
-    if spec.needs_ins and args.aircraft is None:
-        raise ValueError(f"{args.name}: the GCU runs it only with valid INS data: give the "
-                         "aircraft's state with --aircraft LAT,LON,ALT[,YAW]")  # fmt: skip
     extra: dict[str, Any] = {}
     if args.cameras is not None:
         if not spec.takes_cameras:
@@ -199,6 +196,9 @@ def resolve(args: argparse.Namespace) -> Invocation:
     if args.timeout is not None and spec.takes_timeout:
         extra["timeout"] = args.timeout
     spec.check(values, **extra)  # the method's own checks, before anything is opened
+    if spec.needs_ins and args.aircraft is None:
+        raise ValueError(f"{args.name}: the GCU runs it only with valid INS data: give the "
+                         "aircraft's state with --aircraft LAT,LON,ALT[,YAW]")  # fmt: skip
     unopened = connect(args.url)  # validates the URL and its options; opens nothing
     if args.aircraft is not None:
         try:
