@@ -209,3 +209,9 @@ def test_the_docs_sample_send_output_has_the_real_fields(sim_url: str) -> None:
     for sample in samples:
         assert set(sample) == set(real), sample
         assert set(sample["attitude_deg"]) == set(real["attitude_deg"])
+
+
+@pytest.mark.parametrize("value", ["500", "nan", "1"])
+def test_send_rate_is_checked_before_anything_opens(value: str) -> None:
+    one_line_usage_error(run("send", "udp://127.0.0.1:9", "take-photo", "--rate", value),
+                         f"--rate: {float(value)!r} is outside the allowed range [2, 200] Hz")

@@ -17,6 +17,7 @@ import json
 import sys
 import textwrap
 import time
+import warnings
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -42,7 +43,7 @@ from gcu_async.cli.send_commands import (
 )
 from gcu_async.client.client import GcuClient
 from gcu_async.client.connect import connect
-from gcu_async.errors import CommandFailed, GcuError, LinkLost
+from gcu_async.errors import CommandFailed, FieldRangeError, GcuError, LinkLost
 from gcu_async.protocol.feedback import Feedback
 
 PROG = "gcu-async send"
@@ -199,7 +200,14 @@ def resolve(args: argparse.Namespace) -> Invocation:
     if spec.needs_ins and args.aircraft is None:
         raise ValueError(f"{args.name}: the GCU runs it only with valid INS data: give the "
                          "aircraft's state with --aircraft LAT,LON,ALT[,YAW]")  # fmt: skip
-    unopened = connect(args.url)  # validates the URL and its options; opens nothing
+    with warnings.catch_warnings():  # the advice outside 30-50 Hz comes once, when it runs
+        warnings.simplefilter("ignore")
+        try:  # the URL, its options and --rate, checked by the client itself; opens nothing
+            unopened = connect(args.url, rate_hz=args.rate)
+        except FieldRangeError as exc:
+            if exc.field != "rate_hz":
+                raise
+            raise ValueError(f"--rate: {str(exc).removeprefix('rate_hz: ')}") from None
     if args.aircraft is not None:
         try:
             unopened.update_aircraft(**args.aircraft.state())
