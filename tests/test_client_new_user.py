@@ -26,6 +26,8 @@ AT_REST = {"acceleration": (0.0, 0.0, 0.0), "velocity": (0.0, 0.0, 0.0)}
 # -- likely causes ----------------------------------------------------------------------------
 def test_the_catalogue_names_the_commands_that_need_ins() -> None:
     assert {Opcode.GAZE_AT_COORDINATES, Opcode.GAZE_LOCK} == NEEDS_INS
+    for entry in BY_METHOD.values():  # the one-line docs say it exactly where the flag is
+        assert ("needs valid aircraft INS data" in entry.doc) is entry.needs_ins, entry.method
 
 
 async def test_a_gaze_without_ins_says_ins_invalid(gcu_client: GcuClient) -> None:
