@@ -215,3 +215,12 @@ def test_the_docs_sample_send_output_has_the_real_fields(sim_url: str) -> None:
 def test_send_rate_is_checked_before_anything_opens(value: str) -> None:
     one_line_usage_error(run("send", "udp://127.0.0.1:9", "take-photo", "--rate", value),
                          f"--rate: {float(value)!r} is outside the allowed range [2, 200] Hz")
+
+
+def test_a_failure_prints_its_likely_cause(sim_url: str) -> None:
+    result = run("send", sim_url, "set-fill-light", "100")  # the D-90AI has no fill light
+    assert result.returncode == 1, result.stderr
+    out = json.loads(result.stdout)
+    assert out["ok"] is False and out["likely_cause"] == "NOT_SUPPORTED"
+    assert "Appendix 8: the D-90AI does not support FILL_LIGHT" in out["cause_detail"]
+    assert out["error"].endswith(f"(likely cause: {out['cause_detail']})")
