@@ -137,9 +137,10 @@ async def rig() -> AsyncIterator[Rig]:
 
 
 async def attempt(rig: Rig, call: Callable[[Rig, Any], Any], value: Any) -> Any:
-    """Call; await the result if it is awaitable (bounded)."""
+    """Call; await the result if it is awaitable (bounded) and not a client (``await
+    connect(url)`` would open it: the constructor's cases only build one)."""
     result = call(rig, value)
-    if inspect.isawaitable(result):
+    if inspect.isawaitable(result) and not isinstance(result, GcuClient):
         result = await asyncio.wait_for(result, WAIT)
     return result
 
@@ -253,11 +254,12 @@ class Quad(NamedTuple):
 
 
 def tuple_wrong(base: tuple[float, ...], other: tuple[Any, ...]) -> tuple[Any, ...]:
-    """Wrong types for a tuple parameter: a list, wrong lengths, text, scalars, another
-    NamedTuple of the right length, other sequences."""
+    """Wrong types for a tuple parameter (which takes its NamedTuple, a tuple or a list of
+    the right length): wrong lengths (lists too), text, scalars, another NamedTuple of the
+    right length, other sequences."""
     n = len(base)
-    return (list(base), base[:-1], (*base, 0.0), "abc"[:n] + "d" * (n - 3), 1.0, b"",
-            object(), other, dict.fromkeys(range(n), 0.0), bytearray(n), range(n),
+    return (list(base[:-1]), [*base, 0.0], base[:-1], (*base, 0.0), "abc"[:n] + "d" * (n - 3),
+            1.0, b"", object(), other, dict.fromkeys(range(n), 0.0), bytearray(n), range(n),
             memoryview(bytes(n)), True)  # fmt: skip
 
 
@@ -307,8 +309,10 @@ for _name in _CAMERA_METHODS:
 _BOX = (0.0, 0.0, 1.0, 1.0)
 _BOX_BAD = ((0.6, 0.4, 0.5, 0.6), (0.1, 0.7, 0.5, 0.6))  # right < left, bottom < top
 for _name, _base in (("track", {}), ("set_area_temperature", {"enabled": True})):
-    method(_name, "box", "tuple", base=_base, valid=(_BOX, ImageBox(0.25, 0.5, 0.25, 0.75)),
-           wrong=tuple_wrong(_BOX, Quad(0, 0, 1, 1)), bad=_BOX_BAD, read=cmd("box"))  # fmt: skip
+    method(_name, "box", "tuple", base=_base,
+           valid=(_BOX, ImageBox(0.25, 0.5, 0.25, 0.75), [0.4, 0.4, 0.5, 0.5]),
+           wrong=tuple_wrong(_BOX, Quad(0, 0, 1, 1)), bad=_BOX_BAD, read=cmd("box"),
+           expected=tuple)  # fmt: skip
     for _e in ImageBox._fields:
         add(P(_name, f"box.{_e}", f"box.{_e}",
               lambda rig, v, n=_name, b=_base, e=_e: getattr(rig.gcu, n)(
@@ -382,7 +386,7 @@ method("wait_for", "timeout", "real", low=0.0, low_open=True, base={"predicate":
        valid=(1e-3, 1.0, 1e300))  # fmt: skip
 method("wait_for", "what", "text", base={"predicate": lambda s: True},
        valid=("", "the camera looking down"), wrong=(None, 5, b"x", ["x"], True))  # fmt: skip
-_ATTITUDE_RANGES = {"roll": (-180.0, 180.0, False), "pitch": (-90.0, 90.0, False),
+_ATTITUDE_RANGES = {"roll": (-180.0, 180.0, False), "pitch": (-180.0, 180.0, False),
                     "yaw": (-180.0, 360.0, True)}  # fmt: skip
 for _name in ("wait_attitude", "reach_attitude"):
     for _axis, (_low, _high, _open) in _ATTITUDE_RANGES.items():
@@ -424,7 +428,7 @@ def sent_aircraft(attr: str, index: int | None = None) -> Callable[[Rig, Any], A
 _AIRCRAFT_TUPLES: dict[str, tuple[type[Any], Any, dict[str, tuple[float, float, bool]]]] = {
     "attitude": (Attitude, AxisAngles(0, 0, 0), {"roll": (-180.0, 180.0, True),
                                                  "pitch": (-90.0, 90.0, False),
-                                                 "yaw": (0.0, 360.0, True)}),
+                                                 "yaw": (-180.0, 360.0, True)}),
     "acceleration": (NorthEastUp, Attitude(0, 0, 0),
                      dict.fromkeys(NorthEastUp._fields, (-327.68, 327.67, False))),
     "velocity": (NorthEastUp, Attitude(0, 0, 0),
@@ -457,7 +461,8 @@ for _param, (_cls, _other, _ranges) in _AIRCRAFT_TUPLES.items():
     _base = (22.5, 113.9, 50.0) if _param == "position" else _ZERO3
     add(P("update_aircraft", _param, _param,
           lambda rig, v, p=_param: rig.gcu.update_aircraft(**{p: v}), "tuple", optional=True,
-          valid=(None, _base, _cls(*_base)), wrong=tuple_wrong(_base, _other),
+          valid=(None, _base, _cls(*_base), list(_base)), wrong=tuple_wrong(_base, _other),
+          expected=lambda v: None if v is None else tuple(v),
           read=lambda rig, r, p=_param: getattr(rig.gcu.aircraft, p)))  # fmt: skip
     for _i, (_e, (_lo, _hi, _open)) in enumerate(_ranges.items()):
         _step = _POSITION_STEPS[_e] if _param == "position" else _STEPS[_param]
@@ -466,7 +471,9 @@ for _param, (_cls, _other, _ranges) in _AIRCRAFT_TUPLES.items():
               lambda rig, v, p=_param, e=_e, c=_cls, b=_base: rig.gcu.update_aircraft(
                   **{p: with_element(b, c._fields, e, v)}, **_with_ins(p)),
               "real", _lo, _hi, _open, step=_step, valid=(_lo, _top),
-              read=_aircraft_read(_param, _i)))  # fmt: skip
+              read=_aircraft_read(_param, _i),
+              # a yaw goes out as its [0, 360) equivalent
+              expected=(lambda v: v % 360.0) if _e == "yaw" else None))  # fmt: skip
 add(P("update_aircraft", "relative_altitude", "relative_altitude",
       lambda rig, v: rig.gcu.update_aircraft(relative_altitude=v), "real", -2147483.648,
       2147483.647, step=1e-3, valid=(-2147483.648, 2147483.647), setup=ins_valid,
@@ -610,6 +617,8 @@ def _client_options(owner: str, build: Callable[[dict[str, Any]], GcuClient],
         read=lambda rig, c: c.reorder_guard,
         expected=lambda v: default_guard if v is None else v)  # fmt: skip
     opt("check_support", "bool", valid=(True, False), read=lambda rig, c: c.check_support)
+    opt("max_zoom", "real", low=1.0, high=3276.8, optional=True,
+        valid=(None, 1.0, 30.0, 3276.8), read=lambda rig, c: c.max_zoom)
     opt("version", "int", low=1, high=2, valid=(1, 2), read=_read_version,
         expected=lambda v: {v})
     opt("clock", "callable", valid=(time.monotonic, time.perf_counter),
@@ -959,7 +968,7 @@ async def test_issue_regressions(rig: Rig, name: str, call: Callable[[GcuClient]
     await _keeps_running(rig)
     assert (await rig.probe()).main.control == ControlValues.angles(pitch=-30.0)
     assert rig.model.stats.malformed == 0
-    # every later update still works (set_aircraft(None) used to poison them)
+    # every later update still works after set_aircraft(None) was refused
     rig.gcu.update_aircraft(attitude=(1.0, 2.0, 3.0), acceleration=_ZERO3, velocity=_ZERO3)
     assert (await rig.probe()).main.aircraft_attitude == Attitude(1.0, 2.0, 3.0)
 
@@ -1155,6 +1164,6 @@ def test_catalogue_covers_the_constructor_and_connect() -> None:
     ("enter_euler_control", "yaw", 1e30), ("set_control", "control", ControlValues(99999, 0, 0)),
     ("set_aircraft", "state", None), ("connect", "version", True),
 ])  # fmt: skip
-def test_catalogue_holds_the_issue_cases(owner: str, param: str, value: Any) -> None:
+def test_catalogue_holds_the_reported_cases(owner: str, param: str, value: Any) -> None:
     assert any(c.p.owner == owner and c.p.param == param and type(c.value) is type(value)
                and c.value == value for c in CATALOGUE)  # fmt: skip

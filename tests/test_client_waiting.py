@@ -32,7 +32,7 @@ async def test_reach_attitude_returns_there_and_omitted_angles_keep_the_current_
     assert sample.status.mode == Mode.EULER_CONTROL
     assert abs(sample.status.attitude.pitch + 20.0) <= 0.5
     assert angle_error(sample.status.attitude.yaw, 40.0) <= 0.5
-    # only the pitch given: the yaw stays at 40 (it used to swing to north, 0)
+    # only the pitch given: the yaw stays at 40 (not north, 0)
     await gcu_client.enter_euler_control(pitch=-45.0)
     there = await gcu_client.wait_attitude(pitch=-45.0, yaw=40.0, timeout=15.0)
     assert angle_error(there.status.attitude.yaw, 40.0) <= 0.5
@@ -162,7 +162,7 @@ async def test_wait_link_times_out(gcu_client: GcuClient) -> None:
         (lambda g: g.wait_for(lambda s: True, timeout=True), TypeError, "timeout"),
         (lambda g: g.wait_for(lambda s: True, what=3), TypeError, "what"),
         (lambda g: g.wait_attitude(), ValueError, "at least one of roll, pitch, yaw"),
-        (lambda g: g.wait_attitude(pitch=91.0), ValueError, r"pitch: 91\.0 .*\[-90, 90\]"),
+        (lambda g: g.wait_attitude(pitch=181.0), ValueError, r"pitch: 181\.0 .*\[-180, 180\]"),
         (lambda g: g.wait_attitude(yaw="north"), TypeError, "yaw"),
         (lambda g: g.wait_attitude(yaw=10.0, tolerance=0.0), ValueError, "tolerance: 0"),
         (lambda g: g.wait_attitude(yaw=10.0, tolerance=-1.0), ValueError, "tolerance"),
@@ -170,7 +170,7 @@ async def test_wait_link_times_out(gcu_client: GcuClient) -> None:
         (lambda g: g.wait_zoom(2.0, tolerance=float("nan")), ValueError, "tolerance"),
         (lambda g: g.wait_link(up=1), TypeError, "up"),
         (lambda g: g.wait_link(timeout=-1.0), ValueError, "timeout"),
-        (lambda g: g.reach_attitude(pitch=-100.0), ValueError, "pitch"),
+        (lambda g: g.reach_attitude(pitch=-180.5), ValueError, "pitch"),
         (lambda g: g.reach_attitude(pitch=-10.0, timeout=0.0), ValueError, "timeout"),
         (lambda g: g.reach_zoom(2.0, tolerance=0), ValueError, "tolerance"),
         (lambda g: g.enter_euler_control(yaw=1e30), ValueError, "yaw"),

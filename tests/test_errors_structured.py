@@ -1,4 +1,4 @@
-"""Structured errors (issue 10 item 2): a remote protocol error carries its reason as data,
+"""Structured errors: a remote protocol error carries its reason as data,
 nobody tells errors apart by their message, errors.py imports nothing of the package, and the
 transports convert OS errors into LinkLost in one place."""
 

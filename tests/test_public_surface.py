@@ -24,7 +24,8 @@ PINNED = [
     "GcuClient", "connect", "TelemetrySample", "LinkHealth", "LinkEvent", "LinkEventKind",
     # the exceptions
     "GcuError", "CommandError", "CommandFailed", "CommandLinkLost", "CommandTimeout",
-    "FieldRangeError", "LinkLost", "LocalProtocolError", "Outcome",
+    "FieldRangeError", "LinkLost", "LocalProtocolError", "Outcome", "LikelyCause",
+    "ClientStateError",
     "ProtocolErrorReason", "RemoteProtocolError", "UnsupportedCommandError", "WaitTimeout",
     # the values the client takes and returns
     "AircraftState", "Attitude", "CameraMask", "Feedback", "GcuMainFrame", "GcuSubFrame",

@@ -126,12 +126,30 @@ class CommandError(GcuError):
         return self.outcome is not Outcome.NOT_SENT
 
 
+class LikelyCause(enum.Enum):
+    """Why a command probably failed, as far as the client knows locally
+    (:attr:`CommandFailed.likely_cause`). The GCU's status byte says only *that* a command
+    failed; these are the protocol's own reasons the client can see from its side."""
+
+    INS_INVALID = "INS invalid"
+    """The command needs valid INS data (gaze commands) and host packets sent while it was
+    pending carried the INS-valid bit (host byte 11 B0) cleared: no aircraft attitude,
+    acceleration and velocity given, or older than ``aircraft_timeout``."""
+    NOT_SUPPORTED = "not supported by the pod model"
+    """The connected pod model does not support the command (protocol Appendix 8)."""
+    ZOOM_LIMIT = "beyond the zoom limit"
+    """The zoom ratio asked lies above camera 1's maximum (``GcuClient(max_zoom=…)``)."""
+
+
 class CommandFailed(CommandError):
     """The GCU answered a command with a failure execution status (outcome ``FAILED``).
 
     ``opcode`` is the command's opcode, ``status`` the raw execution-status byte and
     ``failed_cameras`` the camera mask of the cameras that failed (zoom commands only;
     an empty mask otherwise), ``name`` the command's protocol name for the message.
+    ``likely_cause`` (a :class:`LikelyCause`, or ``None``) and ``cause_detail`` (its text,
+    also at the end of the message) say what the client knows locally that explains the
+    failure (docs/client.md, "Why a command failed").
     """
 
     def __init__(
@@ -140,16 +158,43 @@ class CommandFailed(CommandError):
     ) -> None:  # fmt: skip
         self.status = status
         self.failed_cameras = failed_cameras
+        self.likely_cause: LikelyCause | None = None
+        self.cause_detail = ""
         cams = f", failed cameras 0x{failed_cameras:02X}" if failed_cameras else ""
         status_txt = "none" if status is None else f"0x{status:02X}"
         label = f"opcode 0x{opcode:02X}" if name is None else f"{name} (0x{opcode:02X})"
         super().__init__(f"{label} failed: status {status_txt}{cams}",
                          outcome=Outcome.FAILED, opcode=opcode, command=command)  # fmt: skip
 
+    def explain(self, cause: LikelyCause, detail: str) -> None:
+        """Record the likely cause (the client calls it before raising): sets
+        ``likely_cause`` and ``cause_detail`` and appends the detail to the message."""
+        if not isinstance(cause, LikelyCause):
+            raise TypeError(f"cause: expected a LikelyCause, got {cause!r}")
+        self.likely_cause = cause
+        self.cause_detail = detail
+        self.args = (f"{self.args[0]} (likely cause: {detail})",)
+
 
 class CommandTimeout(CommandError, TimeoutError):
     """A command ran out of time: on the wire without feedback (outcome ``UNKNOWN``), or in
     the queue before it was ever sent (outcome ``NOT_SENT``)."""
+
+
+class ClientStateError(GcuError, RuntimeError):
+    """The client is in the wrong lifecycle state for the call: ``state`` names the state it
+    is in (``"closed"``, ``"opening"``, ``"open"``, ``"closing"``)."""
+
+    def __init__(self, message: str, *, state: str) -> None:
+        self.state = state
+        super().__init__(message)
+
+    def __reduce__(self) -> tuple[object, ...]:
+        return (_client_state_error, (str(self), self.state))
+
+
+def _client_state_error(message: str, state: str) -> ClientStateError:
+    return ClientStateError(message, state=state)
 
 
 class LinkLost(GcuError, ConnectionError):
@@ -177,8 +222,11 @@ def _describe(sample: object) -> str:
     status = getattr(sample, "status", None)
     if status is not None:
         a = status.attitude
-        parts.append(f"mode {status.mode_raw:#04x}, roll {a.roll:g}, pitch {a.pitch:g}, "
-                     f"yaw {a.yaw:g} deg")  # fmt: skip
+        mode = str(getattr(status.mode, "name", "UNKNOWN")).lower().replace("_", " ")
+        if mode == "unknown":
+            mode = f"unknown (code {status.mode_raw})"
+        parts.append(f"mode {mode}, roll {a.roll:g}, "
+                     f"pitch {a.pitch:g}, yaw {a.yaw:g} deg")  # fmt: skip
     info = getattr(sample, "info", None)
     if info is not None:
         parts.append(f"zoom {info.camera1_zoom:g}x")

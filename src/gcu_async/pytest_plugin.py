@@ -19,6 +19,7 @@ without it they skip.
 
 from __future__ import annotations
 
+import inspect
 import os
 import sys
 from collections.abc import AsyncIterator
@@ -136,13 +137,18 @@ except ImportError:  # pragma: no cover - exercised only without pytest-asyncio
 
 
 def _async_fixture(func: Any) -> Any:
-    """``pytest_asyncio.fixture``, or a fixture that skips when pytest-asyncio is missing."""
+    """``pytest_asyncio.fixture``, or a fixture that skips when pytest-asyncio is missing.
+    The skipping fixture takes the same fixtures as ``func``, so a test that overrides or
+    parametrizes one of them (``gcu_sim_pod``) still collects, and skips."""
     if _pytest_asyncio is not None:
         return _pytest_asyncio.fixture(func)
 
-    def skip() -> None:  # pragma: no cover
-        pytest.skip(f"{func.__name__} needs pytest-asyncio (pip install pytest-asyncio)")
+    def skip(**fixtures: Any) -> None:
+        pytest.skip(f"{func.__name__} needs pytest-asyncio (pip install 'gcu-async[pytest]')")
 
+    params = [p.replace(annotation=inspect.Parameter.empty)
+              for p in inspect.signature(func).parameters.values()]  # fmt: skip
+    skip.__signature__ = inspect.Signature(params)  # type: ignore[attr-defined]
     return pytest.fixture(name=func.__name__)(skip)
 
 

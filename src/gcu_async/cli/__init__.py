@@ -6,16 +6,26 @@ import argparse
 import logging
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 from gcu_async import __version__
 from gcu_async.cli import decode, demo, mavlink_bridge, monitor, send, sim, wireshark
+from gcu_async.cli._exit import EXIT_USAGE
 
 VERBOSE_HELP = ("log the library's lifecycle to stderr (INFO); -vv: every packet in and out "
                 "too (DEBUG, the gcu_async.wire logger)")  # fmt: skip
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """A parser whose usage errors are one line on stderr, exit status 2 (docs/cli.md, "Exit
+    status"); its sub-command parsers are of the same class."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_USAGE, f"{self.prog}: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="gcu-async",
         description="Drive, simulate and decode XF Robot gimbal GCUs (protocol V2.0.6).",
     )

@@ -1,11 +1,14 @@
-"""Exit statuses shared by every sub-command (docs/cli.md, "Exit status"), and running a
-coroutine so that Ctrl-C and SIGTERM end it cleanly."""
+"""Exit statuses shared by every sub-command (docs/cli.md, "Exit status"), the checks of
+the usage rule they share (a missing extra, a number of seconds), and running a coroutine so
+that Ctrl-C and SIGTERM end it cleanly."""
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import math
 import signal
+import sys
 from collections.abc import Coroutine
 from typing import Any, TypeVar
 
@@ -19,6 +22,38 @@ EXIT_USAGE = 2
 """A usage error (bad option, URL or argument), reported before anything is opened."""
 EXIT_INTERRUPTED = 130
 """Interrupted by Ctrl-C (SIGINT) or SIGTERM, after a clean shutdown."""
+
+
+EXIT_MISSING_EXTRA = EXIT_USAGE
+"""A sub-command (or an option of one) needs an extra that is not installed: like a usage
+error, it is reported on one line before anything is opened, with the quoted install hint;
+the same command line cannot work until the extra is installed."""
+SECONDS_MAX = 3600.0
+"""The longest wait an option of seconds may ask for (``--timeout``, ``--hold``): one hour."""
+
+
+def install_hint(extra: str) -> str:
+    """The command that installs ``extra``, quoted for every shell (zsh expands ``[…]``)."""
+    return f"pip install 'gcu-async[{extra}]'"
+
+
+def missing_extra(prog: str, extra: str, exc: ImportError) -> int:
+    """Report a missing extra on one line of stderr; returns :data:`EXIT_MISSING_EXTRA`."""
+    cause = exc.__cause__ if isinstance(exc.__cause__, ImportError) else exc
+    module = f" ({cause.name} is not installed)" if cause.name else ""
+    print(f"{prog}: needs the '{extra}' extra{module}: {install_hint(extra)}", file=sys.stderr)
+    return EXIT_MISSING_EXTRA
+
+
+def check_seconds(option: str, value: float, *, zero: bool = False,
+                  high: float = SECONDS_MAX) -> float:  # fmt: skip
+    """``value`` if it is a finite number of seconds in (0, ``high``] (``zero``: [0, high]);
+    else ``ValueError`` naming the option, the range and the value (a usage error)."""
+    low_ok = value >= 0 if zero else value > 0
+    if not (math.isfinite(value) and low_ok and value <= high):
+        low = "[0" if zero else "(0"
+        raise ValueError(f"{option}: {value!r} is outside {low}, {high:g}] seconds")
+    return value
 
 
 class Interrupted(Exception):
@@ -52,5 +87,6 @@ async def interruptible(work: Coroutine[Any, Any, T]) -> T:
             loop.remove_signal_handler(sig)
 
 
-__all__ = ["EXIT_FAILED", "EXIT_INTERRUPTED", "EXIT_OK", "EXIT_USAGE", "Interrupted",
-           "interruptible"]
+__all__ = ["EXIT_FAILED", "EXIT_INTERRUPTED", "EXIT_MISSING_EXTRA", "EXIT_OK", "EXIT_USAGE",
+           "SECONDS_MAX", "Interrupted", "check_seconds", "install_hint", "interruptible",
+           "missing_extra"]

@@ -17,6 +17,8 @@ from typing import TextIO
 from gcu_async.client.client import GcuClient
 from gcu_async.client.telemetry import TelemetrySample
 from gcu_async.protocol.enums import CameraFlags, PodStatus
+from gcu_async.protocol.gcu_frames import GcuMainFrame
+from gcu_async.protocol.units import Attitude
 from gcu_async.session import LinkHealth
 
 CLEAR_LINE = "\r\x1b[2K"
@@ -36,19 +38,28 @@ _CAMERA_FLAGS = (
 )
 
 
+def relative_attitude(status: GcuMainFrame) -> Attitude:
+    """The camera's roll, pitch and yaw relative to the aircraft, degrees, from the main
+    frame's relative axis angles (bytes 12–17): roll = Y, pitch = −X, yaw = Z, as the
+    protocol's example packet shows (relative X −8.03° with a camera pitch of 9.33°)."""
+    rel = status.relative_angles
+    return Attitude(rel.y, -rel.x if rel.x else 0.0, rel.z)
+
+
 def format_status(sample: TelemetrySample | None, link: LinkHealth) -> str:
     """One compact status line: mode (GCU main frame byte 5), camera attitude (18–23),
-    relative X/Y/Z angles (12–17), pod status flags (6–7), camera-1 zoom (sub frame 59–60),
-    camera flags (64–65), laser distance (43–46) and link health."""
+    attitude relative to the aircraft (12–17, :func:`relative_attitude`), pod status flags
+    (6–7), camera-1 zoom (sub frame 59–60), camera flags (64–65), laser distance (43–46)
+    and link health."""
     parts: list[str] = []
     if sample is None:
         parts.append("waiting for telemetry")
     else:
         st, info = sample.status, sample.info
-        att, rel = st.attitude, st.relative_angles
+        att, rel = st.attitude, relative_attitude(st)
         parts.append(f"{st.mode.name.lower():<15}")
         parts.append(f"cam r{att.roll:+6.1f} p{att.pitch:+6.1f} y{att.yaw:5.1f}")
-        parts.append(f"rel x{rel.x:+6.1f} y{rel.y:+6.1f} z{rel.z:+6.1f}")
+        parts.append(f"vs aircraft r{rel.roll:+6.1f} p{rel.pitch:+6.1f} y{rel.yaw:+6.1f}")
         flags = [name for bit, name in _POD_FLAGS if bit & st.pod_status]
         if info is not None:
             parts.append(f"zoom {info.camera1_zoom:4.1f}x")

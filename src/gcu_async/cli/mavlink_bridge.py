@@ -11,7 +11,14 @@ import sys
 from typing import Any
 from urllib.parse import urlsplit
 
-from gcu_async.cli._exit import EXIT_FAILED, EXIT_OK, EXIT_USAGE, Interrupted, interruptible
+from gcu_async.cli._exit import (
+    EXIT_FAILED,
+    EXIT_OK,
+    EXIT_USAGE,
+    Interrupted,
+    interruptible,
+    missing_extra,
+)
 
 
 def register(sub: Any) -> None:
@@ -57,8 +64,7 @@ def run(args: argparse.Namespace) -> int:
         from gcu_async.bridge.endpoint import parse_endpoint
         from gcu_async.client.connect import connect
     except ImportError as exc:
-        print(f"gcu-async mavlink-bridge: {exc}", file=sys.stderr)
-        return EXIT_FAILED
+        return missing_extra("gcu-async mavlink-bridge", "mavlink", exc)
     try:
         for connection in args.mavlink:  # every one checked before anything opens
             parse_endpoint(connection)

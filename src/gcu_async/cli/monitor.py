@@ -18,9 +18,12 @@ from gcu_async.cli._exit import (
     EXIT_INTERRUPTED,
     EXIT_OK,
     EXIT_USAGE,
+    SECONDS_MAX,
     Interrupted,
+    check_seconds,
     interruptible,
 )
+from gcu_async.cli.liveview import relative_attitude
 from gcu_async.client.client import GcuClient
 from gcu_async.client.connect import connect
 from gcu_async.client.telemetry import TelemetrySample
@@ -36,14 +39,19 @@ def register(sub: Any) -> None:
         "line saying how long no reply came. Ctrl-C or SIGTERM ends it (exit status 130).",
     )
     p.add_argument("url", help="udp://HOST[:PORT], tcp://HOST[:PORT] or serial:///dev/…")
-    p.add_argument("--interval", type=float, default=0.5, help="seconds between lines")
-    p.add_argument("--count", type=int, default=0, help="stop after this many lines (0: never)")
-    p.add_argument("--timeout", type=float, default=3.0, help="seconds to wait for the GCU")
+    p.add_argument("--interval", type=float, default=0.5, metavar="SECONDS",
+                   help=f"seconds between lines, at most {SECONDS_MAX:g} (default 0.5)")
+    p.add_argument("--count", type=int, default=0,
+                   help="stop after this many lines (default 0: never)")
+    p.add_argument("--timeout", type=float, default=3.0, metavar="SECONDS",
+                   help=f"seconds to wait for the GCU's first reply, at most {SECONDS_MAX:g} "
+                   "(default 3)")
     p.add_argument("--json", action="store_true",
-                   help="one JSON object per line (the frames as `decode` shows them)")
+                   help="one JSON object per line (the frames as `decode` shows them; default: "
+                   "text lines)")
     p.add_argument("--capture", type=Path, metavar="FILE",
                    help="write the packets exchanged to FILE (pcapng; open it in Wireshark "
-                   "with the dissector: gcu-async wireshark --install)")  # fmt: skip
+                   "with the dissector: gcu-async wireshark --install; default: none)")
     p.set_defaults(run=run)
 
 
@@ -52,14 +60,15 @@ def _names(flags: Any) -> list[str]:
 
 
 def format_line(gcu: GcuClient, sample: TelemetrySample) -> str:
-    """One human-readable status line."""
+    """One human-readable status line: the camera's absolute attitude ("att") and its
+    attitude relative to the aircraft ("vs aircraft"), degrees."""
     st = sample.status
     att = st.attitude
-    rel = st.relative_angles
+    rel = relative_attitude(st)
     parts = [
         f"{st.mode.name:<15}",
         f"att r{att.roll:+7.2f} p{att.pitch:+7.2f} y{att.yaw:6.2f}",
-        f"rel x{rel.x:+7.2f} y{rel.y:+7.2f} z{rel.z:+7.2f}",
+        f"vs aircraft r{rel.roll:+7.2f} p{rel.pitch:+7.2f} y{rel.yaw:+7.2f}",
     ]
     info = sample.info
     if info is not None:
@@ -133,8 +142,8 @@ async def _monitor(url: str, interval: float, count: int, timeout: float, as_jso
 
 def run(args: argparse.Namespace) -> int:
     try:
-        if not args.interval > 0:
-            raise ValueError(f"--interval: {args.interval!r} must be > 0")
+        check_seconds("--interval", args.interval)
+        check_seconds("--timeout", args.timeout)
         if args.count < 0:
             raise ValueError(f"--count: {args.count!r} must be >= 0")
         connect(args.url)

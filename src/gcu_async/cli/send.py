@@ -11,10 +11,13 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
+import difflib
 import json
 import sys
 import textwrap
 import time
+import warnings
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -26,16 +29,26 @@ from gcu_async.cli._exit import (
     EXIT_INTERRUPTED,
     EXIT_OK,
     EXIT_USAGE,
+    SECONDS_MAX,
     Interrupted,
+    check_seconds,
     interruptible,
 )
-from gcu_async.cli.send_commands import COMMANDS, CliCommand, parse_cameras
+from gcu_async.cli.send_commands import (
+    COMMANDS,
+    AircraftFix,
+    CliCommand,
+    parse_aircraft,
+    parse_cameras,
+)
 from gcu_async.client.client import GcuClient
 from gcu_async.client.connect import connect
-from gcu_async.errors import CommandFailed, GcuError, LinkLost
+from gcu_async.errors import CommandFailed, FieldRangeError, GcuError, LinkLost
 from gcu_async.protocol.feedback import Feedback
 
 PROG = "gcu-async send"
+NEEDS_MARK = "[--aircraft]"
+"""Marks the commands that need ``--aircraft`` in ``send --help``."""
 DEFAULT_TIMEOUT = 5.0
 """Seconds: how long the link and a command's feedback may take when ``--timeout`` is not
 given (a method with a ``timeout`` parameter, e.g. ``calibrate``, keeps its own default)."""
@@ -46,8 +59,16 @@ def _shared_options(parser: argparse.ArgumentParser, *, cameras: bool = True) ->
     command takes no cameras, ``--cameras`` is accepted but hidden and refused later)."""
     parser.add_argument(
         "--timeout", type=float, default=None, metavar="SECONDS",
-        help=f"seconds to wait for the link and for the command's feedback, for every command "
-        f"(default {DEFAULT_TIMEOUT:g}; calibrate: 15, its method's default)",
+        help=f"seconds to wait for the link and for the command's feedback, for every command, "
+        f"at most {SECONDS_MAX:g} (default {DEFAULT_TIMEOUT:g}; calibrate: 15, its method's "
+        "default)",
+    )
+    parser.add_argument(
+        "--aircraft", type=parse_aircraft, default=None, metavar="LAT,LON,ALT[,YAW]",
+        help="send the aircraft's state while the command runs: standing still and level at "
+        "latitude, longitude (degrees), altitude (metres MSL), heading YAW (degrees, default "
+        "0 = north); INS valid goes out while it is given. Required by the commands marked "
+        f"{NEEDS_MARK!r} below",
     )
     parser.add_argument("--rate", type=float, default=50.0, metavar="HZ",
                         help="heartbeat rate in Hz (default 50)")
@@ -70,11 +91,13 @@ def _shared_options(parser: argparse.ArgumentParser, *, cameras: bool = True) ->
 
 def _command_list() -> str:
     """The commands for ``gcu-async send --help``."""
-    lines = ["commands (gcu-async send URL COMMAND --help: its arguments, units, ranges):"]
+    lines = ["commands (gcu-async send URL COMMAND --help: its arguments, units, ranges;",
+             f"{NEEDS_MARK}: needs --aircraft, the GCU runs it only with valid INS data):"]
     width = max(map(len, COMMANDS))
     for name, spec in COMMANDS.items():
         args = [f"[{p.name}]" if p.optional else p.name for p in spec.params]
-        lines.append(f"  {name:<{width}} {' '.join([*args, f'-> {spec.method}()'])}")
+        mark = [NEEDS_MARK] if spec.needs_ins else []
+        lines.append(f"  {name:<{width}} {' '.join([*args, f'-> {spec.method}()', *mark])}")
         lines.append(f"  {'':<{width}} {spec.summary}")
     return "\n".join(lines)
 
@@ -145,6 +168,8 @@ class Invocation:
     hold: float
     capture: PacketCapture | None = None
     """Where the client records its packets (``--capture``)."""
+    aircraft: AircraftFix | None = None
+    """The aircraft state sent while the command runs (``--aircraft``)."""
 
 
 def resolve(args: argparse.Namespace) -> Invocation:
@@ -154,15 +179,15 @@ def resolve(args: argparse.Namespace) -> Invocation:
     argument, 0 after printing its ``--help``."""
     spec = COMMANDS.get(args.name)
     if spec is None:
-        raise ValueError(f"unknown command {args.name!r}; one of: {', '.join(COMMANDS)}")
+        raise ValueError(_unknown(args.name))
     command_parser(args.name).parse_args(args.args, namespace=args)
     given = [getattr(args, f"arg_{p.name}") for p in spec.params]
     values = [v for v in given if v is not None]
     group = [name for name in spec.together if getattr(args, f"arg_{name}") is not None]
     if group and len(group) != len(spec.together):
         raise ValueError(f"{args.name}: give all of {' '.join(spec.together)}, or none")
-    if args.timeout is not None and not 0 < args.timeout < float("inf"):
-        raise ValueError(f"--timeout: {args.timeout!r} must be a number of seconds > 0")
+    if args.timeout is not None:
+        check_seconds("--timeout", args.timeout)
     extra: dict[str, Any] = {}
     if args.cameras is not None:
         if not spec.takes_cameras:
@@ -172,22 +197,65 @@ def resolve(args: argparse.Namespace) -> Invocation:
     if args.timeout is not None and spec.takes_timeout:
         extra["timeout"] = args.timeout
     spec.check(values, **extra)  # the method's own checks, before anything is opened
-    connect(args.url)  # validates the URL and its options; opens nothing
+    if spec.needs_ins and args.aircraft is None:
+        raise ValueError(f"{args.name}: the GCU runs it only with valid INS data: give the "
+                         "aircraft's state with --aircraft LAT,LON,ALT[,YAW]")  # fmt: skip
+    with warnings.catch_warnings():  # the advice outside 30-50 Hz comes once, when it runs
+        warnings.simplefilter("ignore")
+        try:  # the URL, its options and --rate, checked by the client itself; opens nothing
+            unopened = connect(args.url, rate_hz=args.rate)
+        except FieldRangeError as exc:
+            if exc.field != "rate_hz":
+                raise
+            raise ValueError(f"--rate: {str(exc).removeprefix('rate_hz: ')}") from None
+    if args.aircraft is not None:
+        try:
+            unopened.update_aircraft(**args.aircraft.state())
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"--aircraft: {exc}") from None
     hold = args.hold if args.hold is not None else (3.0 if spec.holds else 0.0)
-    if not 0 <= hold <= 3600:
-        raise ValueError(f"--hold: {hold!r} is outside [0, 3600] s")
+    check_seconds("--hold", hold, zero=True)
     try:
         capture = as_capture(args.capture)
     except (TypeError, CaptureUnavailable) as exc:
         raise ValueError(f"--capture: {exc}") from None
     timeout = args.timeout if args.timeout is not None else DEFAULT_TIMEOUT
     return Invocation(args.url, args.name, spec, values, extra, timeout, args.rate, hold,
-                      capture)
+                      capture, args.aircraft)
+
+
+def _unknown(name: str) -> str:
+    """The message for an unknown command: a did-you-mean (``zoom_to`` → ``zoom-to``)."""
+    close = difflib.get_close_matches(name.replace("_", "-").lower(), COMMANDS, n=1)
+    hint = f"did you mean {close[0]!r}? " if close else ""
+    return f"unknown command {name!r}; {hint}one of: {', '.join(COMMANDS)}"
+
+
+async def _feed_aircraft(gcu: GcuClient, fix: AircraftFix) -> None:
+    """Claim the aircraft state again well within ``aircraft_timeout``, until cancelled."""
+    while True:
+        gcu.update_aircraft(**fix.state())
+        await asyncio.sleep(gcu.aircraft_timeout / 4)
 
 
 async def _send(inv: Invocation) -> tuple[Any, dict[str, Any]]:
-    async with connect(inv.url, command_timeout=inv.timeout, connect_timeout=inv.timeout,
-                       rate_hz=inv.rate, capture=inv.capture) as gcu:  # fmt: skip
+    client = connect(inv.url, command_timeout=inv.timeout, connect_timeout=inv.timeout,
+                     rate_hz=inv.rate, capture=inv.capture)  # fmt: skip
+    feeding = None
+    if inv.aircraft is not None:
+        feeding = asyncio.create_task(_feed_aircraft(client, inv.aircraft))
+        await asyncio.sleep(0)  # the first packet already carries it
+    try:
+        return await _run_command(client, inv)
+    finally:
+        if feeding is not None:
+            feeding.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await feeding
+
+
+async def _run_command(client: GcuClient, inv: Invocation) -> tuple[Any, dict[str, Any]]:
+    async with client as gcu:
         feedback = await inv.spec.call(gcu, inv.values, **inv.extra)
         # Control values only act while packets carry them: hold them for a while (angle
         # modes stop early once the camera's attitude matches the target).
@@ -228,8 +296,11 @@ def run(args: argparse.Namespace) -> int:
         print(f"{PROG}: {exc}", file=sys.stderr)
         return EXIT_USAGE
     except CommandFailed as exc:
+        cause = exc.likely_cause
         out = {"ok": False, "error": str(exc), "opcode": exc.opcode, "status_raw": exc.status,
-               "failed_cameras": int(exc.failed_cameras)}  # fmt: skip
+               "failed_cameras": int(exc.failed_cameras),
+               "likely_cause": None if cause is None else cause.name,
+               "cause_detail": exc.cause_detail}  # fmt: skip
         print(json.dumps(out))
         return EXIT_FAILED
     except (TimeoutError, LinkLost, GcuError, OSError) as exc:

@@ -58,6 +58,37 @@ CAMERA_NAMES: dict[str, CameraMask] = {
 """Names ``--cameras`` takes besides the camera numbers 1–8 (:class:`CameraMask`)."""
 
 
+class AircraftFix(NamedTuple):
+    """``send --aircraft``: an aircraft standing still, level, at a position and heading."""
+
+    latitude: float
+    longitude: float
+    altitude: float
+    """Metres above mean sea level."""
+    yaw: float = 0.0
+    """Heading, degrees (north = 0; ±180 or 0-360)."""
+
+    def state(self) -> dict[str, Any]:
+        """The keyword arguments of :meth:`GcuClient.update_aircraft` that claim it."""
+        return {"attitude": (0.0, 0.0, self.yaw), "acceleration": (0.0, 0.0, 0.0),
+                "velocity": (0.0, 0.0, 0.0),
+                "position": (self.latitude, self.longitude, self.altitude)}  # fmt: skip
+
+
+def parse_aircraft(text: str) -> AircraftFix:
+    """``LAT,LON,ALT[,YAW]`` (degrees, degrees, metres MSL, degrees) as an
+    :class:`AircraftFix`; the ranges are checked by ``update_aircraft`` itself."""
+    items = text.split(",")
+    try:
+        if len(items) not in (3, 4):
+            raise ValueError
+        return AircraftFix(*(float(item) for item in items))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected LAT,LON,ALT[,YAW] (degrees, degrees, metres MSL, degrees), got {text!r}"
+        ) from None
+
+
 def parse_cameras(text: str) -> CameraMask:
     """The camera mask (``cameras=`` of the client's methods) from a comma-separated list
     of camera numbers 1–8 or names: ``1``, ``2``, ``1,2``, ``visible,thermal``,
@@ -108,6 +139,9 @@ class CliCommand:
     """The parameters are roll/pitch/yaw targets of an angle mode."""
     holds: bool = False
     """A mode command whose control values need packets to act (default ``--hold`` 3 s)."""
+    needs_ins: bool = False
+    """The GCU executes it only with valid INS data: ``send`` needs ``--aircraft``
+    (the catalogue's :attr:`~gcu_async.protocol.catalogue.CatalogueEntry.needs_ins`)."""
 
     def parameter(self, name: str) -> inspect.Parameter | None:
         """The method's parameter ``name``, if it has one."""
@@ -254,7 +288,7 @@ def _command(entry: CatalogueEntry) -> CliCommand:
     params, together = _arguments(entry)
     return CliCommand(entry.method, f"0x{entry.opcode:02X}: {entry.doc}", params,
                       _builder(params), together, angle_target=entry.method in ANGLE_TARGET,
-                      holds=entry.method in HOLDS)  # fmt: skip
+                      holds=entry.method in HOLDS, needs_ins=entry.needs_ins)  # fmt: skip
 
 
 COMMANDS: dict[str, CliCommand] = {entry.cli_name: _command(entry) for entry in CATALOGUE}

@@ -20,7 +20,7 @@ def register(sub: Any) -> None:
         description="The package ships a Wireshark dissector (xfgcu.lua) for the GCU protocol "
         "over UDP, TCP and the serial captures gcu_async writes. --install copies it to your "
         "personal Lua plugin folder (the one `tshark -G folders` reports, else "
-        "~/.local/lib/wireshark/plugins, or %%APPDATA%%\\Wireshark\\plugins on Windows); "
+        "~/.local/lib/wireshark/plugins, or %APPDATA%\\Wireshark\\plugins on Windows); "
         "Wireshark loads it at its next start (or Analyze > Reload Lua Plugins). For one run: "
         "tshark -X lua_script:$(gcu-async wireshark --print-path) -r capture.pcapng",
     )

@@ -18,8 +18,9 @@ tests/test_catalogue.py checks every method against its entry.
 from __future__ import annotations
 
 import abc
+from typing import Any, TypeVar
 
-from gcu_async._checks import check_bool, check_int, check_positive, check_real
+from gcu_async._checks import check_bool, check_int, check_positive, check_real, type_error
 from gcu_async.protocol import commands as c
 from gcu_async.protocol.catalogue import ALTITUDE_RANGE, RATE_LIMIT, TEMPERATURE_RANGE
 from gcu_async.protocol.enums import CameraMask, NightVisionMode, OsdCoordinateSource
@@ -28,6 +29,8 @@ from gcu_async.protocol.gcu_frames import GcuSubFrame
 from gcu_async.protocol.host_frames import ControlValues
 from gcu_async.protocol.units import Attitude, check_member, check_tuple
 from gcu_async.session import ControlKind
+
+_NT = TypeVar("_NT", bound=tuple[Any, ...])
 
 CAM1 = CameraMask.CAMERA_1
 CAM2 = CameraMask.CAMERA_2
@@ -46,10 +49,24 @@ def _point(x: object, y: object) -> c.ImagePoint:
                         check_real("y", y, 0.0, 1.0, "image fraction"))  # fmt: skip
 
 
+def check_sequence(field: str, value: object, cls: type[_NT]) -> _NT:
+    """``value`` as a ``cls`` (a NamedTuple of units): an instance, a plain tuple or a list
+    (JSON gives lists) of the right length, and nothing else (a ``TypeError`` naming what
+    is accepted). The elements are the caller's to check."""
+    try:
+        return check_tuple(field, tuple(value) if type(value) is list else value, cls)
+    except TypeError:
+        name = cls.__name__
+        article = "an" if name[0] in "AEIOU" else "a"
+        fields = ", ".join(cls._fields)  # type: ignore[attr-defined]
+        raise type_error(field, f"{article} {name} or a tuple or list ({fields})",
+                         value) from None  # fmt: skip
+
+
 def _box(value: object) -> c.ImageBox:
-    """An ImageBox or a plain 4-tuple (as the protocol takes it: no list, no other
-    sequence), each edge a fraction checked under ``box.<edge>``."""
-    box = check_tuple("box", value, c.ImageBox)
+    """An ImageBox, a plain 4-tuple or a list of 4, each edge a fraction checked under
+    ``box.<edge>``."""
+    box = check_sequence("box", value, c.ImageBox)
     return c.ImageBox(*(check_real(f"box.{f}", v, 0.0, 1.0, "image fraction")
                         for f, v in zip(c.ImageBox._fields, box, strict=True)))  # fmt: skip
 
@@ -87,6 +104,12 @@ class CommandMethods(abc.ABC):
         result = await self._submit(command, timeout=timeout, control=control)
         assert result is not None  # only state-checked record commands are ever skipped
         return result
+
+    @property
+    def max_zoom(self) -> float | None:
+        """Camera 1's largest zoom ratio, as given to the client (``None``: not known; the
+        protocol reports no limit)."""
+        return None
 
     def _main_zoom(self) -> float:
         info = self._info
@@ -203,10 +226,12 @@ class CommandMethods(abc.ABC):
         return await self._run(c.Centre())
 
     async def track(
-        self, box: c.ImageBox | tuple[float, float, float, float], *, cameras: int = CAM1
-    ) -> Feedback:
-        """Track the target in ``box`` (left, top, right, bottom as image fractions). The
-        pod steers itself while tracking: control values go out invalid."""
+        self, box: c.ImageBox | tuple[float, float, float, float] | list[float], *,
+        cameras: int = CAM1,
+    ) -> Feedback:  # fmt: skip
+        """Track the target in ``box`` (left, top, right, bottom as image fractions; an
+        ImageBox, a tuple or a list of four). The pod steers itself while tracking: control
+        values go out invalid."""
         return await self._run(c.Track(True, _box(box), _cameras(cameras)))
 
     async def stop_tracking(self, *, cameras: int = CAM1) -> Feedback:
@@ -251,8 +276,10 @@ class CommandMethods(abc.ABC):
         return await self._run(c.ZoomStop(_cameras(cameras)))
 
     async def zoom_to(self, ratio: float, *, cameras: int = CAM1) -> Feedback:
-        """Zoom to a ratio (0x25), e.g. ``10.0`` for 10×, 0.1× resolution, 1 … 3276.8."""
-        r = check_real("ratio", ratio, 1.0, c.ZOOM_RATIO_MAX, "x")
+        """Zoom to a ratio (0x25), e.g. ``10.0`` for 10×, 0.1× resolution, 1 … 3276.8, and
+        at most :attr:`max_zoom` when the client was given it (the GCU itself answers
+        success and stops at its limit)."""
+        r = check_zoom_ratio(ratio, self.max_zoom)
         return await self._run(c.ZoomTo(ratio=r, cameras=_cameras(cameras)))
 
     async def zoom_to_fraction(self, fraction: float, *, cameras: int = CAM1) -> Feedback:
@@ -279,7 +306,7 @@ class CommandMethods(abc.ABC):
     async def set_area_temperature(
         self,
         enabled: bool = True,
-        box: c.ImageBox | tuple[float, float, float, float] = (0.0, 0.0, 1.0, 1.0),
+        box: c.ImageBox | tuple[float, float, float, float] | list[float] = (0.0, 0.0, 1.0, 1.0),
         *,
         cameras: int = CAM2,
     ) -> Feedback:
@@ -349,6 +376,14 @@ class CommandMethods(abc.ABC):
     async def set_ranging(self, enabled: bool = True) -> Feedback:
         """Continuous laser ranging on/off (0x81)."""
         return await self._run(c.Ranging(check_bool("enabled", enabled)))
+
+
+def check_zoom_ratio(ratio: object, max_zoom: float | None) -> float:
+    """``ratio`` checked against what the field carries and the pod's limit if known."""
+    if max_zoom is None:
+        return check_real("ratio", ratio, 1.0, c.ZOOM_RATIO_MAX, "x")
+    return check_real("ratio", ratio, 1.0, max_zoom, "x",
+                      detail=f"camera 1's maximum zoom is {max_zoom:g}x (max_zoom)")  # fmt: skip
 
 
 def _temp(name: str, value: object) -> float:

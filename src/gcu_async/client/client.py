@@ -20,7 +20,7 @@ import random
 import sys
 import time
 import warnings
-from collections.abc import AsyncGenerator, Callable
+from collections.abc import AsyncGenerator, Callable, Generator
 from datetime import datetime
 from typing import Any, Final
 
@@ -34,26 +34,35 @@ from gcu_async._checks import (
 )
 from gcu_async._lifecycle import OpenClose
 from gcu_async.capture.writer import PacketCapture
-from gcu_async.client.api import CommandMethods
+from gcu_async.client.api import CommandMethods, check_sequence
 from gcu_async.client.telemetry import TelemetrySubscription
 from gcu_async.client.waiting import WaitingMethods
 from gcu_async.client.wirelog import WIRE_LOG, log_packet
 from gcu_async.errors import (
+    ClientStateError,
+    CommandFailed,
     CommandLinkLost,
     GcuError,
+    LikelyCause,
     LinkLost,
     Outcome,
     UnsupportedCommandError,
 )
 from gcu_async.protocol.aircraft import AircraftState
-from gcu_async.protocol.commands import Command, command_code
+from gcu_async.protocol.catalogue import NEEDS_INS, YAW_INPUT_RANGE
+from gcu_async.protocol.commands import ZOOM_RATIO_MAX, Command, ZoomTo, command_code
 from gcu_async.protocol.enums import PodModel, opcode_name
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
 from gcu_async.protocol.host_frames import MS_PER_WEEK, ControlValues
 from gcu_async.protocol.packets import DEFAULT_VERSION
 from gcu_async.protocol.pods import POD_NAMES, pod_name, supports
-from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp, check_tuple
+from gcu_async.protocol.units import (
+    Attitude,
+    GeoPosition,
+    NorthEastUp,
+    wrap_degrees_360,
+)
 from gcu_async.session import (
     ControlKind,
     LinkDown,
@@ -116,7 +125,9 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
     ``async with GcuClient(transport) as gcu:`` opens the transport, starts the heartbeat,
     waits up to ``connect_timeout`` for the first reply and, on exit, ends pending commands,
     stops the heartbeat and closes the transport. A closed client can be opened again;
-    opening one that is open (or opening) raises ``RuntimeError``.
+    opening one that is open (or opening) raises :class:`ClientStateError` (a
+    ``RuntimeError``) naming its state. ``gcu = await connect(url)`` opens it too (then close
+    it yourself: ``await gcu.close()``).
 
     Args:
         transport: any :class:`~gcu_async.transport.Transport` (not yet opened).
@@ -145,6 +156,9 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
         clock: monotonic time source (seconds).
         capture: write every packet exchanged to this pcapng file (a path or a
             :class:`~gcu_async.capture.PacketCapture`; needs the ``capture`` extra).
+        max_zoom: camera 1's largest zoom ratio (the pod's datasheet: the protocol reports
+            no limit). Given, :meth:`zoom_to` and :meth:`reach_zoom` refuse a larger ratio
+            before sending; ``None`` (default): only the field's range, 1–3276.8.
     """
 
     def __init__(
@@ -163,6 +177,7 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
         version: int = DEFAULT_VERSION,
         clock: Callable[[], float] = time.monotonic,
         capture: PacketCapture | str | os.PathLike[str] | None = None,
+        max_zoom: float | None = None,
     ) -> None:
         if not isinstance(transport, Transport):
             raise type_error("transport", "a Transport", transport)
@@ -192,14 +207,19 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
         self._between_attempts = False
         self._rng = random.Random()
         self.check_support = check_bool("check_support", check_support)
+        self._max_zoom = (None if max_zoom is None
+                          else check_real("max_zoom", max_zoom, 1.0, ZOOM_RATIO_MAX, "x"))
         if not RATE_ADVISED[0] <= rate <= RATE_ADVISED[1]:
             warnings.warn(f"rate_hz={rate:g}: the protocol advises 30-50 Hz host packets",
-                          stacklevel=2)  # fmt: skip
+                          stacklevel=_caller_stacklevel())  # fmt: skip
         self._clock = clock
         self._state = ClientState.CLOSED
         self._timer: asyncio.TimerHandle | None = None
         self._timer_at = math.inf
         self._futures: dict[Ticket, asyncio.Future[Feedback | None]] = {}
+        self._needs_ins: dict[Ticket, bool] = {}
+        """Pending commands that need INS data: True once a packet went out while one was
+        pending with INS invalid."""
         self._subscriptions: set[TelemetrySubscription] = set()
         self._telemetry_callbacks: list[TelemetryCallback] = []
         self._link_callbacks: list[LinkCallback] = []
@@ -241,6 +261,17 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
     def state(self) -> ClientState:
         return self._state
 
+    @property
+    def max_zoom(self) -> float | None:
+        """Camera 1's largest zoom ratio as given (``max_zoom=``), ``None`` if not known."""
+        return self._max_zoom
+
+    def __await__(self) -> Generator[Any, None, GcuClient]:
+        """``gcu = await connect(url)``: open the client and return it (close it yourself;
+        ``async with connect(url) as gcu:`` does both)."""
+        yield from self.open().__await__()
+        return self
+
     # -- lifecycle -------------------------------------------------------------------------
     async def open(self) -> None:
         """Open the transport, start the heartbeat, wait for the first reply.
@@ -251,9 +282,10 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
         that many seconds have passed (docs/client.md, "Lifecycle"); :meth:`close` stops
         the retries (``LinkLost``)."""
         if self._state is not ClientState.CLOSED:
-            raise RuntimeError(
+            raise ClientStateError(
                 f"GcuClient is {self._state.value}: a client is reusable but not reentrant "
-                "(close it before opening it again)"
+                "(close it before opening it again; `async with` does both)",
+                state=self._state.value,
             )
         if self.open_timeout is None:
             await self._open_once()
@@ -383,8 +415,10 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
         gnss_ms: int | Keep = KEEP,
     ) -> AircraftState:
         """Update the aircraft state carried by the heartbeat; fields not given (default
-        :data:`KEEP`) keep their value, ``None`` clears one. Units: degrees (attitude, yaw in
-        [0, 360)), m/s² north/east/up without gravity, m/s north/east/up, (latitude °,
+        :data:`KEEP`) keep their value, ``None`` clears one. A triple is a NamedTuple, a
+        tuple or a list of three. Units: degrees (attitude; yaw in [-180, 360), MAVLink's
+        ±180° or compass 0–360°, sent as its 0–360° equivalent), m/s² north/east/up without
+        gravity, m/s north/east/up, (latitude °,
         longitude °, altitude m MSL), metres. ``gnss_time`` (aware UTC) sets week + ms with
         leap seconds applied.
 
@@ -564,10 +598,12 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
         check_instance("command", command, Command, "a Command")
         if self._state is not ClientState.OPEN:
             opcode = command_code(command)
-            raise CommandLinkLost(
-                f"{opcode_name(opcode)}: client is {self._state.value}; not sent",
-                outcome=Outcome.NOT_SENT, opcode=opcode, command=command,
-            )  # fmt: skip
+            hint = ("not opened: use `async with connect(url) as gcu:` (or `await "
+                    "gcu.open()`) first" if self._closed_event is None
+                    else f"client is {self._state.value}")  # fmt: skip
+            raise CommandLinkLost(f"{opcode_name(opcode)}: {hint}; not sent",
+                                  outcome=Outcome.NOT_SENT, opcode=opcode,
+                                  command=command)  # fmt: skip
         self._check_support(command)
         loop = asyncio.get_running_loop()
         ticket = self.session.submit(
@@ -576,11 +612,14 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
         )  # fmt: skip
         future: asyncio.Future[Feedback | None] = loop.create_future()
         self._futures[ticket] = future
+        if ticket.opcode in NEEDS_INS:
+            self._needs_ins[ticket] = False
         self._pump()  # goes out now if the rate allows: the heartbeat's phase moves
         try:
             return await future
         except asyncio.CancelledError:
             self._futures.pop(ticket, None)
+            self._needs_ins.pop(ticket, None)
             if not ticket.done:
                 self.session.cancel(ticket, self._clock())
                 self._dispatch()
@@ -638,7 +677,11 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
                     self._rx_bound = now
             wire = WIRE_LOG.isEnabledFor(logging.DEBUG)  # the level may change at run time
             session.trace = self._trace if wire else None
-            data = session.poll(self._clock())
+            now = self._clock()
+            data = session.poll(now)
+            if data is not None and self._needs_ins and not session.ins_valid(now):
+                for ticket in self._needs_ins:  # they went out with INS invalid
+                    self._needs_ins[ticket] = True
             if data is not None:
                 if wire:
                     log_packet(self.transport.url, True, data)
@@ -717,6 +760,7 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
 
     def _resolve(self, ticket: Ticket) -> None:
         future = self._futures.pop(ticket, None)
+        ins_invalid = self._needs_ins.pop(ticket, False)
         if future is None or future.done():
             return
         if ticket.state is TicketState.SUCCEEDED:
@@ -725,7 +769,31 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
             future.set_result(None)
         else:
             assert ticket.error is not None
+            if isinstance(ticket.error, CommandFailed):
+                self._explain(ticket.error, ticket.command, ins_invalid)
             future.set_exception(ticket.error)
+
+    def _explain(self, error: CommandFailed, command: Command, ins_invalid: bool) -> None:
+        """Add what the client knows that explains a failure (docs/client.md, "Why a
+        command failed"): the pod model's Appendix 8 row, INS sent invalid, the zoom limit."""
+        opcode = command_code(command)
+        name = opcode_name(opcode)
+        model = self.pod_model
+        if model is not None and model in POD_NAMES and not supports(model, opcode):
+            error.explain(LikelyCause.NOT_SUPPORTED,
+                          f"protocol Appendix 8: the {pod_name(model)} does not support "
+                          f"{name}")  # fmt: skip
+        elif ins_invalid:
+            error.explain(LikelyCause.INS_INVALID,
+                          f"{name} needs valid INS data and the host packets carried INS "
+                          "invalid: give the aircraft's attitude, acceleration and velocity "
+                          "with update_aircraft(), at most aircraft_timeout "
+                          f"({self.aircraft_timeout:g} s) apart")  # fmt: skip
+        elif (isinstance(command, ZoomTo) and command.ratio is not None
+              and self._max_zoom is not None and command.ratio > self._max_zoom):  # fmt: skip
+            error.explain(LikelyCause.ZOOM_LIMIT,
+                          f"{command.ratio:g}x is beyond camera 1's maximum zoom "
+                          f"{self._max_zoom:g}x")  # fmt: skip
 
     def _telemetry(self, sample: TelemetrySample) -> None:
         if not self._subscriptions and not self._telemetry_callbacks:
@@ -755,7 +823,7 @@ S32_MM = (-2147483.648, 2147483.647)
 GNSS_WEEK_MAX = 32767
 AIRCRAFT_TUPLES: dict[str, tuple[type[Any], str, tuple[tuple[float, float, bool], ...]]] = {
     "attitude": (Attitude, "deg", ((-180.0, 180.0, True), (-90.0, 90.0, False),
-                                   (0.0, 360.0, True))),
+                                   (*YAW_INPUT_RANGE, True))),
     "acceleration": (NorthEastUp, "m/s^2", ((*S16_CENTI, False),) * 3),
     "velocity": (NorthEastUp, "m/s", ((*S16_CENTI, False),) * 3),
     "position": (GeoPosition, "deg, deg, m", ((-90.0, 90.0, False), (-180.0, 180.0, False),
@@ -767,15 +835,30 @@ acceleration excludes gravity")."""
 
 
 def _triple(name: str, value: object) -> Any:
-    """``value`` (a NamedTuple of the field's type or a plain 3-tuple) checked element by
-    element under the caller's names (``attitude.pitch``)."""
+    """``value`` (a NamedTuple of the field's type, a plain 3-tuple or a list of three)
+    checked element by element under the caller's names (``attitude.pitch``); the
+    attitude's yaw goes out as its [0, 360) equivalent."""
     kind, unit, ranges = AIRCRAFT_TUPLES[name]
-    elements: tuple[Any, ...] = check_tuple(name, value, kind)
+    elements: tuple[Any, ...] = check_sequence(name, value, kind)
     units = unit.split(", ") if ", " in unit else [unit] * 3
     fields: tuple[str, ...] = kind._fields
-    return kind(*(check_real(f"{name}.{field}", v, low, high, u, high_open=open_)
-                  for field, v, (low, high, open_), u in
-                  zip(fields, elements, ranges, units, strict=True)))  # fmt: skip
+    checked = [check_real(f"{name}.{field}", v, low, high, u, high_open=open_)
+               for field, v, (low, high, open_), u in
+               zip(fields, elements, ranges, units, strict=True)]  # fmt: skip
+    if kind is Attitude:
+        checked[2] = wrap_degrees_360(checked[2])
+    return kind(*checked)
+
+
+def _caller_stacklevel() -> int:
+    """The ``stacklevel`` of a warning that names the first caller outside gcu_async.client
+    (the user's ``connect(…)`` or ``GcuClient(…)`` line)."""
+    frame = sys._getframe(1)
+    level = 1
+    while frame is not None and frame.f_globals.get("__name__", "").startswith(
+            "gcu_async.client"):  # fmt: skip
+        frame, level = frame.f_back, level + 1  # type: ignore[assignment]
+    return level
 
 
 def _check_callback(callback: object) -> None:

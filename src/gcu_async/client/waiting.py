@@ -18,6 +18,7 @@ from collections.abc import AsyncGenerator, Callable
 
 from gcu_async._checks import check_bool, check_positive, check_real, type_error
 from gcu_async.errors import LinkLost, WaitTimeout
+from gcu_async.protocol.catalogue import BY_METHOD
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
 from gcu_async.protocol.units import wrap_degrees_180
@@ -43,13 +44,19 @@ def angle_error(a: float, b: float) -> float:
 
 def _attitude_targets(roll: float | None, pitch: float | None,
                       yaw: float | None) -> dict[str, float]:  # fmt: skip
-    """The angles given, checked: roll ±180, pitch ±90, yaw [-180, 360) degrees."""
-    ranges = {"roll": (-180.0, 180.0, False), "pitch": (-90.0, 90.0, False),
-              "yaw": (-180.0, 360.0, True)}  # fmt: skip
+    """The angles given, checked against the ranges :meth:`enter_euler_control` takes (the
+    command catalogue's): roll and pitch ±180, yaw [-180, 360) degrees."""
+    euler = BY_METHOD["enter_euler_control"]
     given = {"roll": roll, "pitch": pitch, "yaw": yaw}
-    return {name: check_real(name, value, low, high, "deg", high_open=open_)
-            for name, value in given.items() if value is not None
-            for low, high, open_ in [ranges[name]]}  # fmt: skip
+    out = {}
+    for name, value in given.items():
+        if value is None:
+            continue
+        p = euler.parameter(name)
+        assert p.low is not None
+        assert p.high is not None
+        out[name] = check_real(name, value, p.low, p.high, p.unit, high_open=p.high_open)
+    return out
 
 
 class WaitingMethods(abc.ABC):
@@ -88,6 +95,10 @@ class WaitingMethods(abc.ABC):
 
     @abc.abstractmethod
     async def zoom_to(self, ratio: float, *, cameras: int = ...) -> Feedback: ...
+
+    @property
+    @abc.abstractmethod
+    def max_zoom(self) -> float | None: ...
 
     # -- telemetry -------------------------------------------------------------------------
     async def wait_for(self, predicate: Predicate, *, timeout: float = WAIT_TIMEOUT,
@@ -178,11 +189,22 @@ class WaitingMethods(abc.ABC):
     async def reach_zoom(self, ratio: float, *, tolerance: float = ZOOM_TOLERANCE,
                          timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
         """:meth:`zoom_to` ``ratio`` (camera 1), then wait until the reported zoom is within
-        ``tolerance`` of it."""
+        ``tolerance`` of it. A ratio above :attr:`max_zoom` (when given) is refused before
+        anything is sent; a timeout with the zoom short of the ratio names the ratio last
+        reported."""
         check_positive("timeout", timeout)
         check_positive("tolerance", tolerance, unit="x")
         await self.zoom_to(ratio)
-        return await self.wait_zoom(ratio, tolerance=tolerance, timeout=timeout)
+        try:
+            return await self.wait_zoom(ratio, tolerance=tolerance, timeout=timeout)
+        except WaitTimeout as exc:
+            info = getattr(exc.last, "info", None)
+            if info is None or info.camera1_zoom >= ratio:
+                raise
+            hint = (f"zoom {ratio:g}x (±{tolerance:g}; camera 1 last reported "
+                    f"{info.camera1_zoom:g}x: its maximum may be lower than {ratio:g}x; "
+                    "GcuClient(max_zoom=...) refuses such ratios before sending)")  # fmt: skip
+            raise WaitTimeout(hint, exc.timeout, exc.last) from None
 
     # -- the link --------------------------------------------------------------------------
     async def wait_link(self, up: bool = True, *, timeout: float = WAIT_TIMEOUT) -> None:

@@ -129,6 +129,11 @@ class CatalogueEntry:
     doc: str
     """One line."""
     parameters: tuple[Parameter, ...] = ()
+    needs_ins: bool = False
+    """The GCU executes it only while the host packets carry valid INS data: the aircraft's
+    attitude, acceleration and velocity with the INS-valid bit set (host byte 11 B0); without
+    them it answers a failure status. The one place this is written: the CLI's ``send
+    --aircraft`` help and :attr:`~gcu_async.errors.CommandFailed.likely_cause` derive from it."""
 
     @property
     def opcode(self) -> Opcode:
@@ -158,6 +163,10 @@ ALTITUDE_RANGE = (S32[0] / 1000, S32[1] / 1000)
 """Metres: what the gaze-at altitude field (S32, 1 mm) carries."""
 TEMPERATURE_RANGE = (c.TEMPERATURE_RAW[0] / 10, c.TEMPERATURE_RAW[1] / 10)
 """°C: what a threshold field (S16, 0.1 °C) carries."""
+YAW_INPUT_RANGE = (-180.0, 360.0)
+"""Degrees, half-open: how every absolute yaw or heading may be given (the Euler yaw of
+``enter_euler_control``, the aircraft's yaw of ``update_aircraft``, the waits): MAVLink's
+±180° headings and compass 0–360° alike; each is sent in the range its wire field takes."""
 
 
 def _cameras(default: CameraMask) -> Parameter:
@@ -197,7 +206,7 @@ def _temperature(name: str) -> Parameter:
 
 _EULER = (_angle("roll", "Euler roll", None), _angle("pitch", "Euler pitch", None),
           Parameter("yaw", Kind.REAL, "Euler yaw (north = 0); 180-360 is sent as -180-0",
-                    "deg", -180.0, 360.0, high_open=True, default=None))  # fmt: skip
+                    "deg", *YAW_INPUT_RANGE, high_open=True, default=None))  # fmt: skip
 _ANGLES = (_angle("roll", "Euler roll"), _angle("pitch", "Euler pitch"),
            _angle("yaw", "relative to the aircraft"))  # fmt: skip
 _RELATIVE = tuple(_angle(n, "relative to the aircraft") for n in ("roll", "pitch", "yaw"))
@@ -221,14 +230,14 @@ CATALOGUE: tuple[CatalogueEntry, ...] = (
                    (_rate("yaw_rate", "yaw rate"),)),
     CatalogueEntry("enter_gaze_lock", c.GazeLock,
                    "Geographic lock on the image centre; needs valid aircraft INS data.",
-                   _PITCH_YAW_RATES),
+                   _PITCH_YAW_RATES, needs_ins=True),
     CatalogueEntry("gaze_at", c.GazeAtCoordinates,
                    "Gaze at a coordinate; needs valid aircraft INS data.",
                    (Parameter("latitude", Kind.REAL, "WGS84, 1e-7 deg steps", "deg", -90.0, 90.0),
                     Parameter("longitude", Kind.REAL, "WGS84, 1e-7 deg steps", "deg", -180.0,
                               180.0),
                     Parameter("altitude", Kind.REAL, "above mean sea level, 1 mm steps", "m",
-                              *ALTITUDE_RANGE))),
+                              *ALTITUDE_RANGE)), needs_ins=True),
     # -- pod: other ---------------------------------------------------------------------------
     CatalogueEntry("calibrate", c.Calibration,
                    "Calibrate the pod; waits while the GCU answers \"in progress\".",
@@ -308,3 +317,5 @@ CATALOGUE: tuple[CatalogueEntry, ...] = (
 
 BY_METHOD: Mapping[str, CatalogueEntry] = MappingProxyType({e.method: e for e in CATALOGUE})
 """The catalogue by method name."""
+NEEDS_INS: frozenset[Opcode] = frozenset(e.opcode for e in CATALOGUE if e.needs_ins)
+"""The opcodes the GCU executes only with valid INS data (:attr:`CatalogueEntry.needs_ins`)."""

@@ -193,6 +193,15 @@ class GcuMainFrame(NamedTuple):
         angles), kept raw and flagged (docs/client.md, "Liberal receive, strict send")."""
         return range_anomalies(self, GCU_MAIN_RANGES)
 
+    def __str__(self) -> str:
+        """Engineering units (``print(gcu.status)``); ``repr()`` keeps the raw fields."""
+        a, r, w = self.attitude, self.relative_angles, self.angular_rates
+        flags = ",".join(_flag_names(self.pod_status)) or "none"
+        return (f"GcuMainFrame(mode {self.mode.name} (0x{self.mode_raw:02X}), attitude roll "
+                f"{a.roll:g} pitch {a.pitch:g} yaw {a.yaw:g} deg, relative axes x {r.x:g} "
+                f"y {r.y:g} z {r.z:g} deg, rates x {w.x:g} y {w.y:g} z {w.z:g} deg/s, miss "
+                f"{self.miss_x} {self.miss_y}, pod status {flags})")  # fmt: skip
+
     def as_dict(self) -> dict[str, Any]:
         return {
             "mode": self.mode.name,
@@ -362,6 +371,15 @@ class GcuSubFrame(NamedTuple):
         ):  # fmt: skip
             return
         check_ranges(self, GCU_SUB_RANGES)
+
+    def __str__(self) -> str:
+        """Engineering units (``print(gcu.info)``); ``repr()`` keeps the raw fields."""
+        dist = "none" if self.target_distance is None else f"{self.target_distance:g} m"
+        flags = ",".join(_flag_names(self.camera_flags)) or "none"
+        return (f"GcuSubFrame({pod_name(self.pod_code)}, hardware {self.hardware_version:g}, "
+                f"firmware {self.firmware_version:g}, zoom {self.camera1_zoom:g}x / "
+                f"{self.camera2_zoom:g}x, target distance {dist}, camera flags {flags}, "
+                f"UTC{self.time_zone:+d})")  # fmt: skip
 
     def as_dict(self) -> dict[str, Any]:
         return {

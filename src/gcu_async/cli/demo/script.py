@@ -6,6 +6,7 @@ from __future__ import annotations
 import time
 
 from gcu_async.cli.demo.engine import Step, StepEngine, StepFailed, angle_between, zoom_of
+from gcu_async.cli.liveview import relative_attitude
 from gcu_async.client.telemetry import TelemetrySample
 from gcu_async.protocol.catalogue import RATE_LIMIT
 from gcu_async.protocol.enums import Mode, Opcode
@@ -44,12 +45,13 @@ class Demo(StepEngine):
         await self.cmd("enter_euler_control(pitch=-45)", lambda: self.gcu.enter_euler_control(
             pitch=-45.0, yaw=yaw))  # fmt: skip
         await self.expect_pose(Mode.EULER_CONTROL, pitch=-45.0, yaw=yaw)
-        z0, h0 = self.gcu.status.relative_angles.z, self.heading()
+        z0, h0 = relative_attitude(self.gcu.status).yaw, self.heading()
         await self.hold(3.0, "holding the Euler angles while the aircraft turns")
         s = self.gcu.status
         self.say(
             f"aircraft turned {wrap_degrees_180(self.heading() - h0):+.1f} deg, camera yaw "
-            f"{s.attitude.yaw:.1f}, relative z {z0:+.1f} -> {s.relative_angles.z:+.1f}"
+            f"{s.attitude.yaw:.1f}, yaw relative to the aircraft {z0:+.1f} -> "
+            f"{relative_attitude(s).yaw:+.1f}"
         )
 
     async def step_pan(self) -> None:
