@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import re
 import signal
+import struct
 import subprocess
 import sys
 import textwrap
@@ -155,6 +156,19 @@ def test_a_missing_extra_exits_2_with_the_quoted_hint(blocked: set[str], args: l
     result = subprocess.run([sys.executable, "-c", BLOCKED.format(blocked=blocked), *args],
                             capture_output=True, text=True, timeout=30, check=False)
     one_line_usage_error(result, f"pip install 'gcu-async[{extra}]'")
+
+
+def test_decode_of_a_capture_without_the_extra_follows_the_same_rule(tmp_path: Path) -> None:
+    """The capture extra is needed only once the input turns out to be a capture file."""
+    capture = tmp_path / "one.pcap"
+    header = struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, 1)  # Ethernet
+    frame = bytes(12) + b"\x08\x00" + bytes(28)
+    capture.write_bytes(header + struct.pack("<IIII", 0, 0, len(frame), len(frame)) + frame)
+    blocked = {"dpkt", "pcapng"}
+    result = subprocess.run([sys.executable, "-c", BLOCKED.format(blocked=blocked), "decode",
+                             "--file", str(capture)],
+                            capture_output=True, text=True, timeout=30, check=False)  # fmt: skip
+    one_line_usage_error(result, "pip install 'gcu-async[capture]'")
 
 
 # -- help texts ----------------------------------------------------------------------------------

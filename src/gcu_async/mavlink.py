@@ -43,7 +43,9 @@ from typing import Any, Protocol
 try:
     import pymavlink  # noqa: F401  (the mapper reads fields only; this checks the extra)
 except ImportError as exc:
-    raise ImportError("gcu_async.mavlink needs pymavlink: pip install gcu-async[mavlink]") from exc
+    raise ImportError(
+        "gcu_async.mavlink needs pymavlink: pip install 'gcu-async[mavlink]'"
+    ) from exc
 
 from gcu_async.protocol.aircraft import AircraftState
 from gcu_async.protocol.units import (

@@ -19,7 +19,9 @@ try:
     from pymavlink import mavutil
     from pymavlink.dialects.v20 import ardupilotmega as mavlink
 except ImportError as exc:  # pragma: no cover - the extra is installed in every test venv
-    raise ImportError("gcu_async.bridge needs pymavlink: pip install gcu-async[mavlink]") from exc
+    raise ImportError(
+        "gcu_async.bridge needs pymavlink: pip install 'gcu-async[mavlink]'"
+    ) from exc
 
 if getattr(mavutil.mavlink, "WIRE_PROTOCOL_VERSION", "2.0") != "2.0":  # pragma: no cover
     os.environ["MAVLINK20"] = "1"

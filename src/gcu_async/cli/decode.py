@@ -20,7 +20,13 @@ from typing import Any, BinaryIO, TextIO
 from gcu_async.capture.blocks import CaptureError, Source
 from gcu_async.capture.reader import is_capture
 from gcu_async.capture.scan import PacketScanner, Rejection
-from gcu_async.cli._exit import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
+from gcu_async.cli._exit import (
+    EXIT_FAILED,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    EXIT_USAGE,
+    missing_extra,
+)
 
 _HEX_TOKEN = re.compile(r"0x|[\s,;:]+", re.IGNORECASE)
 CHUNK = 1 << 16
@@ -255,7 +261,7 @@ def run(args: argparse.Namespace) -> int:
     except _Failure as exc:
         return _fail(str(exc), exc.status)
     except ImportError as exc:  # a capture file without the capture extra
-        return _fail(str(exc), EXIT_FAILED)
+        return missing_extra("gcu-async decode", "capture", exc)
     except ValueError as exc:  # not hex: a usage error
         return _fail(str(exc), EXIT_USAGE)
     except OSError as exc:  # a read error (a device that went away)
