@@ -98,3 +98,10 @@ def test_not_a_capture_and_a_wrong_version_name_offset_0() -> None:
     for data, message in ((bytes(64), "offset 0: 00 00 00 00"), (pcap_header(3), "version 3.4")):
         got, error = read(data)
         assert not got and error is not None and error.offset == 0 and message in str(error)
+
+
+def test_a_damaged_capture_is_a_gcu_error_and_a_value_error() -> None:
+    """Applications catch the library's errors at one root (docs: the error tree)."""
+    from gcu_async.errors import GcuError
+
+    assert issubclass(CaptureError, GcuError) and issubclass(CaptureError, ValueError)

@@ -26,6 +26,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import BinaryIO, NamedTuple
 
+from gcu_async.errors import GcuError
+
 PCAP_MAGICS = {
     b"\xd4\xc3\xb2\xa1": ("<", 1e-6), b"\xa1\xb2\xc3\xd4": (">", 1e-6),
     b"\x4d\x3c\xb2\xa1": ("<", 1e-9), b"\xa1\xb2\x3c\x4d": (">", 1e-9),
@@ -47,7 +49,7 @@ _SHB_LENGTH = 28
 _FLAGS_OPTION, _TSRESOL_OPTION, _TSOFFSET_OPTION = 2, 9, 14
 
 
-class CaptureError(ValueError):
+class CaptureError(GcuError, ValueError):
     """A pcap or pcapng file is damaged (or is not one); the message names where."""
 
     def __init__(self, message: str, *, offset: int, block: int | None = None) -> None:
