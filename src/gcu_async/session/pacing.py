@@ -76,7 +76,11 @@ class Pacer:
         self.last_opcode = opcode
         if early:
             self.last_early = now
-        if early or now >= self.next_slot + self.period:
-            self.next_slot = now + self.period  # new phase: an early command, or far behind
-        else:
-            self.next_slot += self.period
+        period = self.period
+        if early or self.next_slot == -math.inf:
+            self.next_slot = now + period  # a new phase: an early command, or the first packet
+            return
+        slot = self.next_slot + period
+        if slot <= now:  # behind: owe the current slot only (the one at or before now)
+            slot += period * math.floor((now - slot) / period)
+        self.next_slot = slot

@@ -97,8 +97,8 @@ RATE_MIN_HZ = 2.0
 """Slowest heartbeat accepted (the protocol advises 30–50 Hz and must never stop)."""
 RATE_MAX_HZ = 200.0
 MIN_WAKE = 1e-4
-"""Seconds; the smallest step :meth:`Session.next_wakeup` asks for (a floor against float
-round-off, never a busy loop)."""
+"""Seconds; the smallest step :meth:`Session.next_wakeup` asks for while no packet may go
+(a floor against float round-off, never a busy loop)."""
 
 
 class SessionState(enum.Enum):
@@ -214,6 +214,9 @@ class Session:
         self._seq = itertools.count()
         self._in_flight: Ticket | None = None
         self._kick = False
+        self._sent_last_poll = False
+        """The last :meth:`poll` sent a packet (a late driver gets its next turn asked for:
+        :meth:`next_wakeup`)."""
         self._events: list[Event] = []
         self._status: GcuMainFrame | None = None
         self._info: GcuSubFrame | None = None
@@ -415,6 +418,7 @@ class Session:
         """Run due timers; return the host packet to send now, if one is due."""
         if self._state is SessionState.CLOSED:
             return None
+        self._sent_last_poll = False
         self._timers(now)
         pacer = self._pacer
         slot_due = now >= pacer.next_slot
@@ -446,6 +450,7 @@ class Session:
         if not slot_due:
             self.stats.early_packets += 1
         pacer.record(now, opcode, early=not slot_due)
+        self._sent_last_poll = True
         self._health.packets_sent += 1
         if self._feed.check(now):
             self.stats.aircraft_stale += 1
@@ -453,7 +458,13 @@ class Session:
         return self._encode(main, sub, command)
 
     def next_wakeup(self, now: float) -> float:
-        """When :meth:`poll` must be called next (``inf`` when closed)."""
+        """When :meth:`poll` must be called next (``inf`` when closed).
+
+        ``now`` itself when a packet may go now, or when the last poll sent one and the
+        next slot is already due (a late driver owes it) but G4's window or the edge guard
+        holds it: the driver then polls at its next turn, which on a busy event loop is the
+        next iteration and often late enough for the gate (a poll that finds it still
+        closed gets None, and the gate's time from here)."""
         state = self._state
         if state is SessionState.CLOSED:
             return math.inf
@@ -467,6 +478,8 @@ class Session:
                 gate = pacer.last_time + pacer.guard
                 if gate > when:
                     when = gate
+            if when <= now or (self._sent_last_poll and pacer.next_slot <= now):
+                return now  # poll(now) sends the null (the same gates), or a late turn may
             last = self._health.last_reply
             if state is SessionState.UP and last is not None:
                 silence = last + self.silence_timeout
@@ -478,6 +491,8 @@ class Session:
         when = max(pacer.next_slot, gate)
         if self._kick and start is not None:  # a command may start before its slot
             when = min(when, max(now, gate, pacer.early_open_at()))
+        if when <= now or (self._sent_last_poll and pacer.next_slot <= now):
+            return now  # poll(now) sends (the same gates, after its timers), or a late turn may
         t = self._in_flight
         if t is not None and t.first_sent is not None:
             when = min(when, t.first_sent + t.timeout)
