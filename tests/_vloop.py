@@ -44,6 +44,8 @@ class Iteration:
     """The slot the packet went out for (the pacer's ``next_slot`` before the poll)."""
     at: float = math.nan
     """When the poll ran."""
+    window_full: bool = False
+    """G4's window held packets back when the iteration began or when its poll ran."""
 
 
 class LoopRig(Rig):
@@ -56,7 +58,14 @@ class LoopRig(Rig):
         super().__init__(session, **kwargs)
         self._busy: Iterator[float] = iter(busy)
         self._next_start = 0.0
+        self._armed = False
         self.iterations: list[Iteration] = []
+        self.slots: list[float] = []
+        self.poll_times: list[float] = []
+        """When the session was polled (timer-driven or not)."""
+        self.sent_poll: list[int] = []
+        """For each packet in ``sent``, the index of its poll in ``poll_times``."""
+        """The slot each packet in ``sent`` went out for (its own time if early)."""
 
     def run_until(self, end: float) -> None:
         heap = self._heap
@@ -78,9 +87,10 @@ class LoopRig(Rig):
                 heap.remove(item)
                 heapq.heapify(heap)
                 ready.append(item)
-            timer_due = self.wakeup <= start
+            self._armed = self.wakeup <= start  # the timer's handle joins this iteration
             wakeup = self.wakeup
             it = Iteration(start, busy)
+            it.window_full = self.session._pacer.window_open_at() > start
             self.iterations.append(it)
             self._gcu_until(start + busy)  # the GCU works while the host loop is busy
             self.clock.advance(max(0.0, start + busy - self.now))
@@ -90,9 +100,10 @@ class LoopRig(Rig):
                 else:
                     payload()
                     self._reschedule()
-            if timer_due:
+            if self._armed:  # unless a poll from a call in this iteration cancelled it
                 self._rx_bound = wakeup  # GcuClient: a later reply arrived after it was due
                 it.polled, it.at = True, self.now
+                it.window_full |= self.session._pacer.window_open_at() > self.now
                 it.slot = self.session._pacer.next_slot
                 before = len(self.sent)
                 self._poll()
@@ -102,8 +113,18 @@ class LoopRig(Rig):
         self.clock.advance(max(0.0, end - self.now))
 
     def _poll(self) -> None:
-        self.wakeup = math.inf  # GcuClient._pump: this poll replaces the pending timer
+        self.wakeup = math.inf  # GcuClient._pump: this poll replaces the pending timer,
+        self._armed = False  # even one already due in this iteration (a cancelled handle)
+        pacer, now = self.session._pacer, self.now
+        promised = self.session.next_wakeup(now) <= now and not pacer.late
+        before = len(self.sent)
+        self.poll_times.append(now)
         super()._poll()
+        if len(self.sent) > before:
+            self.slots.append(pacer.last_slot)
+            self.sent_poll.append(len(self.poll_times) - 1)
+        elif promised:
+            self.violations.append(f"t={now:.6f}: next_wakeup said now, poll sent nothing")
 
     def _reschedule(self) -> None:
         # GcuClient._schedule: a timer only ever moves earlier until it runs

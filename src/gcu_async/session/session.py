@@ -214,9 +214,6 @@ class Session:
         self._seq = itertools.count()
         self._in_flight: Ticket | None = None
         self._kick = False
-        self._sent_last_poll = False
-        """The last :meth:`poll` sent a packet (a late driver gets its next turn asked for:
-        :meth:`next_wakeup`)."""
         self._events: list[Event] = []
         self._status: GcuMainFrame | None = None
         self._info: GcuSubFrame | None = None
@@ -418,9 +415,9 @@ class Session:
         """Run due timers; return the host packet to send now, if one is due."""
         if self._state is SessionState.CLOSED:
             return None
-        self._sent_last_poll = False
         self._timers(now)
         pacer = self._pacer
+        pacer.settle(now)
         slot_due = now >= pacer.next_slot
         if not slot_due and not self._kick:
             return None
@@ -450,7 +447,6 @@ class Session:
         if not slot_due:
             self.stats.early_packets += 1
         pacer.record(now, opcode, early=not slot_due)
-        self._sent_last_poll = True
         self._health.packets_sent += 1
         if self._feed.check(now):
             self.stats.aircraft_stale += 1
@@ -460,11 +456,10 @@ class Session:
     def next_wakeup(self, now: float) -> float:
         """When :meth:`poll` must be called next (``inf`` when closed).
 
-        ``now`` itself when a packet may go now, or when the last poll sent one and the
-        next slot is already due (a late driver owes it) but G4's window or the edge guard
-        holds it: the driver then polls at its next turn, which on a busy event loop is the
-        next iteration and often late enough for the gate (a poll that finds it still
-        closed gets None, and the gate's time from here)."""
+        ``now`` itself when a packet may go now, or when the last packet went out late
+        (:attr:`Pacer.late <gcu_async.session.pacing.Pacer.late>`): the driver then polls
+        at its next turn, which on a busy event loop is the next iteration, late enough for
+        the next slot."""
         state = self._state
         if state is SessionState.CLOSED:
             return math.inf
@@ -478,8 +473,8 @@ class Session:
                 gate = pacer.last_time + pacer.guard
                 if gate > when:
                     when = gate
-            if when <= now or (self._sent_last_poll and pacer.next_slot <= now):
-                return now  # poll(now) sends the null (the same gates), or a late turn may
+            if when <= now or pacer.late:
+                return now  # poll(now) sends the null (the same gates), or settles the owed slot
             last = self._health.last_reply
             if state is SessionState.UP and last is not None:
                 silence = last + self.silence_timeout
@@ -491,8 +486,8 @@ class Session:
         when = max(pacer.next_slot, gate)
         if self._kick and start is not None:  # a command may start before its slot
             when = min(when, max(now, gate, pacer.early_open_at()))
-        if when <= now or (self._sent_last_poll and pacer.next_slot <= now):
-            return now  # poll(now) sends (the same gates, after its timers), or a late turn may
+        if when <= now or pacer.late:
+            return now  # poll(now) sends (the same gates, after its timers), or settles
         t = self._in_flight
         if t is not None and t.first_sent is not None:
             when = min(when, t.first_sent + t.timeout)
