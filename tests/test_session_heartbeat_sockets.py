@@ -14,6 +14,7 @@ skips that one figure (never a widened bound).
 from __future__ import annotations
 
 import asyncio
+import itertools
 import json
 import selectors
 import signal
@@ -134,7 +135,7 @@ async def busy_run() -> dict[str, Any]:
         received = receiver.stop()
     span = b - a
     iterations = sum(1 for t in ticks if a <= t < b)
-    lengths = [v - u for u, v in zip(ticks, ticks[1:], strict=False) if a <= u < b]
+    lengths = [v - u for u, v in itertools.pairwise(ticks) if a <= u < b]
     return {
         "sent": sum(1 for t in sends if a <= t < b),
         "received": sum(1 for t in received if a <= t < b),

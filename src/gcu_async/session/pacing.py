@@ -38,8 +38,8 @@ the session decided to send it."""
 class Pacer:
     """Slot schedule, sliding-window rate bound and edge guard for one session."""
 
-    __slots__ = ("_sent", "guard", "last_early", "last_opcode", "last_time", "limit",
-                 "last_slot", "late", "next_slot", "period")  # fmt: skip
+    __slots__ = ("_sent", "guard", "last_early", "last_opcode", "last_slot", "last_time",
+                 "late", "limit", "next_slot", "period")  # fmt: skip
 
     def __init__(self, rate_hz: float, guard: float) -> None:
         self.period = 1.0 / rate_hz
