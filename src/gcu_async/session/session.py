@@ -457,7 +457,7 @@ class Session:
         """When :meth:`poll` must be called next (``inf`` when closed).
 
         ``now`` itself when a packet may go now, or when the last packet went out late
-        (:attr:`Pacer.late <gcu_async.session.pacing.Pacer.late>`): the driver then polls
+        (:attr:`~gcu_async.session.pacing.Pacer.late`): the driver then polls
         at its next turn, which on a busy event loop is the next iteration, late enough for
         the next slot."""
         state = self._state
