@@ -4,14 +4,16 @@ Sans-I/O; times are seconds on the caller's monotonic clock (docs/client.md, "Th
 contract", G4 and G6). Three rules, each checked by :class:`Pacer` alone:
 
 - **Heartbeat slots.** Packets go out on slots ``period = 1 / rate_hz`` apart, on a fixed
-  phase: a late packet does not move the next slot. A packet sent a period or more after
-  its slot (the driver's event loop ran late) skips the slots it missed but leaves the
-  current one *owed*, due at once: a loop that runs each due poll an iteration late then
-  still sends one packet per iteration. The next poll settles it (:meth:`Pacer.settle`):
-  a driver back within half a period was merely stalled once, and the owed slot is
-  dropped, since sending both it and the late packet puts ``floor(rate_hz) + 2`` packets
-  into the second that follows on phase. Only a command that goes out early restarts
-  the phase, at that packet.
+  phase: a late packet does not move the next slot. A packet sent half a period or more
+  after its slot marks the driver late (:attr:`Pacer.late`): the session then asks for the
+  driver's next turn, which on a busy event loop is the next iteration, late enough for
+  the next slot. A packet a period or more late skips the slots it missed but leaves the
+  current one *owed*, due at once, so a loop that runs each due poll an iteration late
+  still sends a packet every iteration. The first poll after a late packet settles it
+  (:meth:`Pacer.settle`): a driver back within half a period was stalled once, not running
+  late, and the owed slot is dropped (sending it as well would put ``floor(rate_hz) + 2``
+  packets into the second that follows on phase). Only a command that goes out early
+  restarts the phase, at that packet.
 - **Rate bound.** No packet is sent if it would make more than ``floor(rate_hz) + 1``
   packets within any one-second window (a sliding window over the last sends, with
   :data:`MARGIN` to spare for the time a packet takes from this decision to the wire).
