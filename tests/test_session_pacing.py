@@ -40,10 +40,12 @@ def check_floor(rig: LoopRig, period: float) -> int:
     sent at t for slot s, the next slot is due by s + period if t < s + period; else at
     once (the current slot, owed), unless the poll after it came within half a period of
     t (then the current slot is dropped: the one after it). Every loop iteration that begins
-    after that packet and once the next slot is due sends a packet, unless G4's window is
+    after that packet, once the next slot is due and at least MIN_WAKE after a poll that
+    sent nothing (``next_wakeup``'s smallest step), sends a packet, unless G4's window is
     full then. Returns how many iterations G4's window held."""
     held = 0
     sends, slots, polls = rig.sent, rig.slots, rig.poll_times
+    sent_by = set(rig.sent_poll)
     k = 0  # packets that went out before the iteration began
     for i, it in enumerate(rig.iterations):
         while k < len(sends) and sends[k][0] < it.start:
@@ -57,9 +59,9 @@ def check_floor(rig: LoopRig, period: float) -> int:
             j = rig.sent_poll[k - 1] + 1  # the poll after the one that sent it
             prompt = j < len(polls) and polls[j] - t < period / 2
             due = current + period if prompt else current
-        q = polls[bisect.bisect_left(polls, it.start) - 1]  # the last poll before it began
-        if q < due:  # it asked for the slot: at least MIN_WAKE ahead
-            due = max(due, q + MIN_WAKE)
+        last = bisect.bisect_left(polls, it.start) - 1  # the last poll before it began
+        if last not in sent_by:  # it sent nothing: it asked for MIN_WAKE ahead at least
+            due = max(due, polls[last] + MIN_WAKE)
         end = rig.iterations[i + 1].start if i + 1 < len(rig.iterations) else math.inf
         if it.start < due or (k < len(sends) and sends[k][0] < end):
             continue
