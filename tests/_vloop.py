@@ -38,12 +38,6 @@ class Iteration:
     busy: float
     polled: bool = False
     """A timer-driven poll ran in this iteration (its wake-up was due at ``start``)."""
-    sent: bool = False
-    """That poll sent a packet."""
-    slot: float = -math.inf
-    """The slot the packet went out for (the pacer's ``next_slot`` before the poll)."""
-    at: float = math.nan
-    """When the poll ran."""
     window_full: bool = False
     """G4's window held packets back when the iteration began or when its poll ran."""
 
@@ -102,12 +96,9 @@ class LoopRig(Rig):
                     self._reschedule()
             if self._armed:  # unless a poll from a call in this iteration cancelled it
                 self._rx_bound = wakeup  # GcuClient: a later reply arrived after it was due
-                it.polled, it.at = True, self.now
+                it.polled = True
                 it.window_full |= self.session._pacer.window_open_at() > self.now
-                it.slot = self.session._pacer.next_slot
-                before = len(self.sent)
                 self._poll()
-                it.sent = len(self.sent) > before
             self._next_start = self.now + OVERHEAD
         self._gcu_until(end)
         self.clock.advance(max(0.0, end - self.now))

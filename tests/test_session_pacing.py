@@ -59,15 +59,15 @@ def check_floor(rig: LoopRig, period: float) -> int:
             j = rig.sent_poll[k - 1] + 1  # the poll after the one that sent it
             prompt = j < len(polls) and polls[j] - t < period / 2
             due = current + period if prompt else current
-        last = bisect.bisect_left(polls, it.start) - 1  # the last poll before it began
-        if last not in sent_by:  # it sent nothing: it asked for MIN_WAKE ahead at least
-            due = max(due, polls[last] + MIN_WAKE)
         end = rig.iterations[i + 1].start if i + 1 < len(rig.iterations) else math.inf
         if it.start < due or (k < len(sends) and sends[k][0] < end):
             continue
         if it.window_full:
             held += 1
             continue
+        last = bisect.bisect_left(polls, it.start) - 1  # the last poll before it began
+        if last not in sent_by and it.start < polls[last] + MIN_WAKE:
+            continue  # that poll sent nothing: it asked for MIN_WAKE ahead at least
         raise AssertionError(f"iteration at {it.start:.5f} (busy {it.busy * 1000:.3g} ms) sent "
                              f"nothing; last packet at {t:.5f} for slot {s:.5f}, next due "
                              f"{due:.5f}")  # fmt: skip
