@@ -221,11 +221,13 @@ def test_g4_and_the_heartbeat_floor_hold_on_any_loop_latency(sc: Schedule) -> No
 def check_every_long_iteration(rig: LoopRig, period: float) -> None:
     """G6's first consequence, for the heartbeat alone: where iterations last a period or
     more, each sends a packet. Not checked: the first of such a stretch (it may begin
-    before its slot), one that G4's window holds, and one after an iteration in which a
-    command was submitted (its poll may start it early, moving the phase, or be the poll
-    that settles a late packet within half a period of it)."""
+    before its slot), one that G4's window holds or that begins within MIN_WAKE of a poll
+    G4 held, and one after an iteration in which a command was submitted (its poll may
+    start it early, moving the phase, or be the poll that settles a late packet within
+    half a period of it)."""
     its, polls = rig.iterations, rig.poll_times
     sends = [t for t, _, _ in rig.sent]
+    sent_by = set(rig.sent_poll)
     for i in range(2, len(its) - 1):
         if any(it.busy < period for it in its[i - 2 : i + 1]) or its[i].window_full:
             continue
@@ -233,5 +235,8 @@ def check_every_long_iteration(rig: LoopRig, period: float) -> None:
         polled = bisect.bisect_left(polls, its[i].start) - bisect.bisect_left(polls, before.start)
         if polled > int(before.polled):
             continue  # polls other than the timer's: submitted commands
+        last = bisect.bisect_left(polls, its[i].start) - 1
+        if last not in sent_by and its[i].start < polls[last] + MIN_WAKE:
+            continue  # the poll before sent nothing (G4 held it): MIN_WAKE ahead at least
         sent = bisect.bisect_left(sends, its[i + 1].start) - bisect.bisect_left(sends, its[i].start)
         assert sent, f"iteration at {its[i].start:.5f} ({its[i].busy * 1000:.3g} ms) sent nothing"
