@@ -97,8 +97,8 @@ RATE_MIN_HZ = 2.0
 """Slowest heartbeat accepted (the protocol advises 30–50 Hz and must never stop)."""
 RATE_MAX_HZ = 200.0
 MIN_WAKE = 1e-4
-"""Seconds; the smallest step :meth:`Session.next_wakeup` asks for (a floor against float
-round-off, never a busy loop)."""
+"""Seconds; the smallest step :meth:`Session.next_wakeup` asks for while no packet may go
+(a floor against float round-off, never a busy loop)."""
 
 
 class SessionState(enum.Enum):
@@ -417,6 +417,7 @@ class Session:
             return None
         self._timers(now)
         pacer = self._pacer
+        pacer.settle(now)
         slot_due = now >= pacer.next_slot
         if not slot_due and not self._kick:
             return None
@@ -453,7 +454,12 @@ class Session:
         return self._encode(main, sub, command)
 
     def next_wakeup(self, now: float) -> float:
-        """When :meth:`poll` must be called next (``inf`` when closed)."""
+        """When :meth:`poll` must be called next (``inf`` when closed).
+
+        ``now`` itself when a packet may go now, or when the last packet went out late
+        (:attr:`~gcu_async.session.pacing.Pacer.late`): the driver then polls
+        at its next turn, which on a busy event loop is the next iteration, late enough for
+        the next slot."""
         state = self._state
         if state is SessionState.CLOSED:
             return math.inf
@@ -467,6 +473,8 @@ class Session:
                 gate = pacer.last_time + pacer.guard
                 if gate > when:
                     when = gate
+            if when <= now or pacer.late:
+                return now  # poll(now) sends the null (the same gates), or settles the owed slot
             last = self._health.last_reply
             if state is SessionState.UP and last is not None:
                 silence = last + self.silence_timeout
@@ -478,6 +486,8 @@ class Session:
         when = max(pacer.next_slot, gate)
         if self._kick and start is not None:  # a command may start before its slot
             when = min(when, max(now, gate, pacer.early_open_at()))
+        if when <= now or pacer.late:
+            return now  # poll(now) sends (the same gates, after its timers), or settles
         t = self._in_flight
         if t is not None and t.first_sent is not None:
             when = min(when, t.first_sent + t.timeout)
