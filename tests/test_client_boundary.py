@@ -613,7 +613,9 @@ def _client_options(owner: str, build: Callable[[dict[str, Any]], GcuClient],
     opt("version", "int", low=1, high=2, valid=(1, 2), read=_read_version,
         expected=lambda v: {v})
     opt("clock", "callable", valid=(time.monotonic, time.perf_counter),
-        wrong=(None, 5, "time", b"", object(), time.monotonic(), [time.monotonic],
+        # 1234.5 stands for clock=time.monotonic() (a reading, not the clock); a fixed value
+        # keeps the test id the same in every pytest-xdist worker
+        wrong=(None, 5, "time", b"", object(), 1234.5, [time.monotonic],
                lambda: "x", lambda: None), bad=(lambda: NAN, lambda: -INF))
     opt("capture", "part", optional=True, valid=(None,),
         wrong=(5, 1.5, True, b"x.pcapng", object(), ["x.pcapng"]), bad=("",))
@@ -763,9 +765,14 @@ CATALOGUE = [c for p in PARAMS for c in misuse(p)]
 POSITIVE = [(p, v) for p in PARAMS for v in p.valid]
 
 
+_ADDRESS = re.compile(r" at 0x[0-9a-f]+")
+"""Memory addresses in reprs: left out of test ids, which must be the same in every process
+(pytest-xdist's workers collect separately and compare)."""
+
+
 def _id(p: P, v: Any) -> str:
     text = repr(v) if not callable(v) or isinstance(v, type) else getattr(v, "__name__", "fn")
-    return f"{p.owner}.{p.param}={text[:40]}"
+    return f"{p.owner}.{p.param}={_ADDRESS.sub('', text)[:40]}"
 
 
 def _shown(v: Any) -> list[str]:
