@@ -2,13 +2,16 @@
 
     python .ci/pythons.py --main-venv .venv --versions "3.10 3.11 3.12 3.13" [-- PYTEST ARGS]
 
-The main venv (the one that lints and builds the docs) runs the suite at full size
-(``GCU_TEST_SIZE=full``); every other version found runs it in its own venv, ``.venv-3.X``
-(created, or refreshed when pyproject.toml or the package version changed), at reduced size
-(``GCU_TEST_SIZE=reduced``, see tests/_scale.py). An interpreter is looked for in pyenv's versions
-(``pyenv root``, else ``$PYENV_ROOT`` or ``.pyenv`` in the home directory), then as ``python3.X`` on
-PATH. At the end it prints which versions ran (and how they did) and which were missing. Exit
-status: 0 if every run passed, 1 if one failed, 2 on a usage error.
+The main venv (the one that lints and builds the docs) runs the whole suite at full size
+(``GCU_TEST_SIZE=full``): every test but the ``alone`` ones in parallel (pytest-xdist,
+``--jobs`` workers), then the ``alone`` ones one at a time. Every other version found runs the
+fast tier (``-m fast``: sans-I/O, in-memory, virtual time; tests/_tiers.py) in parallel in its
+own venv, ``.venv-3.X`` (created, or refreshed when pyproject.toml or the package version
+changed), at reduced size (``GCU_TEST_SIZE=reduced``, see tests/_scale.py). An interpreter is
+looked for in pyenv's versions (``pyenv root``, else ``$PYENV_ROOT`` or ``.pyenv`` in the home
+directory), then as ``python3.X`` on PATH. At the end it prints which versions ran (which tier,
+how they did) and which were missing. Exit status: 0 if every run passed, 1 if one failed, 2 on
+a usage error.
 
 Standard library only: it runs before any venv exists but the main one.
 """
@@ -37,6 +40,7 @@ class Run:
     python: Path | None = None
     venv: Path | None = None
     size: str = "reduced"
+    tier: str = "fast"
     status: str = "missing"
     seconds: float = 0.0
     detail: str = ""
@@ -102,24 +106,45 @@ def needs_install(venv: Path) -> bool:
     return any((ROOT / name).stat().st_mtime > stamp.stat().st_mtime for name in INPUTS)
 
 
-def install(python: Path, venv: Path, extras: str) -> None:
+def install(python: Path, venv: Path, extras: str, groups: str) -> None:
     print(f"--- creating {venv.name} with {python}", flush=True)
     subprocess.run([str(python), "-m", "venv", str(venv)], check=True)
     pip = [str(venv / "bin" / "python"), "-m", "pip", "install", "--quiet"]
-    subprocess.run([*pip, "--upgrade", "pip"], check=True)
-    subprocess.run([*pip, "-e", f".[{extras}]"], check=True, cwd=ROOT)
+    subprocess.run([*pip, "--upgrade", "pip"], check=True)  # --group needs pip >= 25.1
+    target = f".[{extras}]" if extras else "."
+    group_args = [arg for group in groups.split(",") if group for arg in ("--group", group)]
+    subprocess.run([*pip, "-e", target, *group_args], check=True, cwd=ROOT)
     (venv / STAMP).touch()
 
 
-def run_suite(run: Run, pytest_args: list[str]) -> None:
+NO_TESTS = 5
+"""pytest's exit status when the selection is empty (no ``alone`` tests, say): not a failure."""
+
+
+def phases(run: Run, jobs: int) -> list[tuple[str, list[str]]]:
+    """The pytest invocations of a run: (name, arguments before the user's)."""
+    parallel = ["-n", str(jobs)] if jobs > 1 else ["-p", "no:xdist"]
+    if run.tier == "full":
+        return [("parallel", [*parallel, "-m", "not alone"]),
+                ("alone", ["-p", "no:xdist", "-m", "alone"])]  # fmt: skip
+    return [("fast tier", [*parallel, "-m", "fast"])]
+
+
+def run_suite(run: Run, pytest_args: list[str], jobs: int) -> None:
     assert run.venv is not None
     env = {**os.environ, "GCU_TEST_SIZE": run.size}
-    print(f"\n=== Python {run.version} ({run.venv.name}, {run.size} size) ===", flush=True)
     start = time.monotonic()
-    proc = subprocess.run([str(run.venv / "bin" / "python"), "-m", "pytest", *pytest_args],
-                          cwd=ROOT, env=env, check=False)  # fmt: skip
+    failed = []
+    for name, args in phases(run, jobs):
+        print(f"\n=== Python {run.version} ({run.venv.name}, {run.size} size, {run.tier} "
+              f"tier): {name} ===", flush=True)  # fmt: skip
+        proc = subprocess.run(
+            [str(run.venv / "bin" / "python"), "-m", "pytest", *args, *pytest_args],
+            cwd=ROOT, env=env, check=False)  # fmt: skip
+        if proc.returncode not in (0, NO_TESTS):
+            failed.append(f"{name}: pytest exit {proc.returncode}")
     run.seconds = time.monotonic() - start
-    run.status = "passed" if proc.returncode == 0 else f"FAILED (pytest exit {proc.returncode})"
+    run.status = "passed" if not failed else f"FAILED ({'; '.join(failed)})"
 
 
 def summary(runs: list[Run]) -> str:
@@ -129,8 +154,8 @@ def summary(runs: list[Run]) -> str:
             lines.append(f"  {run.version:<6} missing: {run.detail}")
         else:
             minutes, seconds = divmod(round(run.seconds), 60)
-            lines.append(f"  {run.version:<6} ran {run.detail}, {run.size} size: {run.status} "
-                         f"in {minutes}m{seconds:02d}s")  # fmt: skip
+            lines.append(f"  {run.version:<6} ran {run.detail}, {run.size} size, {run.tier} "
+                         f"tier: {run.status} in {minutes}m{seconds:02d}s")  # fmt: skip
     ran = [r.version for r in runs if r.status != "missing"]
     missing = [r.version for r in runs if r.status == "missing"]
     lines.append(f"  ran: {', '.join(ran) or 'none'}; missing: {', '.join(missing) or 'none'}")
@@ -143,8 +168,13 @@ def main(argv: list[str] | None = None) -> int:
                         help="venv that runs the full-size suite (and already exists)")
     parser.add_argument("--versions", default="3.10 3.11 3.12 3.13",
                         help="CPython minor versions to look for, space-separated")
-    parser.add_argument("--extras", default="test,bench,mavlink,web",
+    parser.add_argument("--extras", default="mavlink,web,capture",
                         help="extras installed in the other versions' venvs")
+    parser.add_argument("--groups", default="test",
+                        help="dependency groups (pyproject.toml) installed in the other "
+                        "versions' venvs, comma-separated")
+    parser.add_argument("--jobs", type=int, default=4,
+                        help="pytest-xdist workers per run (1: no xdist)")
     parser.add_argument("--venv-prefix", default=".venv-",
                         help="the other versions' venvs are PREFIX3.X (default .venv-)")
     parser.add_argument("pytest_args", nargs="*", help="arguments for pytest (after --)")
@@ -158,7 +188,9 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--main-venv: {main_venv} has no working bin/python")
     main_minor = main_full.rsplit(".", 1)[0]
 
-    runs = [Run(main_minor, main_venv / "bin" / "python", main_venv, "full", "pending",
+    if args.jobs < 1:
+        parser.error(f"--jobs: {args.jobs} is not a number of workers >= 1")
+    runs = [Run(main_minor, main_venv / "bin" / "python", main_venv, "full", "full", "pending",
                 detail=f"CPython {main_full} (main venv {main_venv.name})")]  # fmt: skip
     roots = pyenv_roots()
     for version in versions:
@@ -169,11 +201,11 @@ def main(argv: list[str] | None = None) -> int:
             looked = ", ".join(str(r / "versions") for r in roots)
             runs.append(Run(version, detail=f"no CPython {version} in {looked} or on PATH"))
             continue
-        run = Run(version, python, ROOT / f"{args.venv_prefix}{version}", "reduced", "pending",
-                  detail=f"CPython {version_of(python)} ({python})")  # fmt: skip
+        run = Run(version, python, ROOT / f"{args.venv_prefix}{version}", "reduced", "fast",
+                  "pending", detail=f"CPython {version_of(python)} ({python})")  # fmt: skip
         runs.append(run)
     print("Python versions: " + ", ".join(
-        f"{r.version} ({'full' if r.size == 'full' else 'reduced'})" if r.status != "missing"
+        f"{r.version} ({r.size} size, {r.tier} tier)" if r.status != "missing"
         else f"{r.version} (missing)" for r in runs), flush=True)  # fmt: skip
 
     for run in runs:
@@ -183,11 +215,11 @@ def main(argv: list[str] | None = None) -> int:
         assert run.python is not None
         if run.size != "full" and needs_install(run.venv):
             try:
-                install(run.python, run.venv, args.extras)
+                install(run.python, run.venv, args.extras, args.groups)
             except subprocess.CalledProcessError as exc:
                 run.status = f"FAILED (venv set-up: {exc})"
                 continue
-        run_suite(run, args.pytest_args)
+        run_suite(run, args.pytest_args, args.jobs)
     print(summary(runs), flush=True)
     return 0 if all(r.status in ("passed", "missing") for r in runs) else 1
 
