@@ -129,6 +129,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_transport_udp_drain.py": "realtime",
     "test_transport_udp_errors.py": "realtime",
     "test_transport_url.py": "realtime",
+    "test_tiers.py": FAST,
     "test_url_rules.py": FAST,
     "test_wireshark_dissector.py": "tshark",
     "test_wireshark_property.py": "tshark",
