@@ -69,7 +69,7 @@ def _run(tmp_path: Path, test_body: str, versions: str) -> subprocess.CompletedP
     main_venv = Path(sys.prefix)
     return subprocess.run(
         [sys.executable, str(SCRIPT), "--main-venv", str(main_venv), "--versions", versions,
-         "--", "-q", "-p", "no:cacheprovider", str(test_file)],
+         "--jobs", "1", "--", "-q", "-p", "no:cacheprovider", str(test_file)],
         cwd=ROOT, env=env, capture_output=True, text=True, timeout=120, check=False,
     )  # fmt: skip
 
@@ -85,8 +85,11 @@ def test_reports_what_ran_at_which_size_and_what_was_missing(tmp_path: Path) -> 
     )
     out = proc.stdout
     assert proc.returncode == 0, out + proc.stderr
-    assert f"=== Python {mine} ({Path(sys.prefix).name}, full size) ===" in out, out
+    assert f"=== Python {mine} ({Path(sys.prefix).name}, full size, full tier): parallel ===" in out
+    assert f"=== Python {mine} ({Path(sys.prefix).name}, full size, full tier): alone ===" in out
     assert "1 passed" in out, out
+    assert "1 deselected" in out, out  # the alone phase had nothing: exit 5 is not a failure
+    assert "full size, full tier: passed in " in out, out
     assert f"ran: {mine}; missing: 3.98, 3.99" in out, out
     assert "3.99   missing: no CPython 3.99 in " in out, out
 
@@ -96,7 +99,7 @@ def test_a_failing_run_fails_the_whole(tmp_path: Path) -> None:
         pytest.skip("the suite is not running in a venv: no main venv to hand the script")
     proc = _run(tmp_path, "def test_fails():\n    assert False\n", "")
     assert proc.returncode == 1, proc.stdout + proc.stderr
-    assert "full size: FAILED (pytest exit 1)" in proc.stdout, proc.stdout
+    assert "full size, full tier: FAILED (parallel: pytest exit 1)" in proc.stdout, proc.stdout
     assert "missing: none" in proc.stdout, proc.stdout
 
 
@@ -107,3 +110,22 @@ def test_bad_versions_are_a_usage_error(tmp_path: Path) -> None:
     )  # fmt: skip
     assert proc.returncode == 2
     assert "--versions: '3.x' is not a list like '3.10 3.11'" in proc.stderr
+
+
+def test_the_main_run_is_everything_once_and_the_others_the_fast_tier() -> None:
+    ci = load()
+    main = ci.Run("3.11", tier="full", size="full")
+    other = ci.Run("3.12", tier="fast", size="reduced")
+    assert ci.phases(main, 4) == [("parallel", ["-n", "4", "-m", "not alone"]),
+                                  ("alone", ["-p", "no:xdist", "-m", "alone"])]  # fmt: skip
+    assert ci.phases(other, 4) == [("fast tier", ["-n", "4", "-m", "fast"])]
+    assert ci.phases(other, 1) == [("fast tier", ["-p", "no:xdist", "-m", "fast"])]
+
+
+def test_jobs_below_one_is_a_usage_error() -> None:
+    proc = subprocess.run(
+        [sys.executable, str(SCRIPT), "--main-venv", sys.prefix, "--jobs", "0"],
+        capture_output=True, text=True, timeout=60, check=False,
+    )  # fmt: skip
+    assert proc.returncode == 2
+    assert "--jobs: 0 is not a number of workers >= 1" in proc.stderr

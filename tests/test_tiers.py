@@ -42,18 +42,28 @@ def test_entries_name_one_kind_and_alone_only_for_full_tier_files() -> None:
     assert set(MARKERS) == {*KINDS, ALONE}
 
 
-def _collect(tmp_path: Path, *args: str) -> set[str]:
-    """Node ids pytest collects in ``tmp_path`` with this conftest and ``args``."""
+REPORTER = """
+def pytest_collection_finish(session):
+    for item in session.items:
+        names = sorted({m.name for m in item.iter_markers()})
+        print("MARKS", item.name, ",".join(names))
+"""
+
+
+def _markers(project: Path) -> dict[str, set[str]]:
+    """Each test's markers after this suite's conftest has assigned the tiers (one pytest
+    collection in a fresh interpreter: a conftest is per directory)."""
     proc = subprocess.run(
         [sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-p", "no:xdist",
-         "--collect-only", "-q", "--rootdir", str(tmp_path), "--confcutdir", str(tmp_path),
-         "-c", str(tmp_path / "pytest.ini"), *args, str(tmp_path)],
-        cwd=tmp_path, env={**os.environ, "PYTHONPATH": os.pathsep.join(
-            [str(TESTS), os.environ.get("PYTHONPATH", "")])},
+         "-p", "reporter", "--collect-only", "-q", "-c", str(project / "pytest.ini"),
+         str(project)],
+        cwd=project, env={**os.environ, "PYTHONPATH": os.pathsep.join(
+            [str(project), str(TESTS), os.environ.get("PYTHONPATH", "")])},
         capture_output=True, text=True, timeout=60, check=False,
     )  # fmt: skip
-    assert proc.returncode in (0, 5), proc.stdout + proc.stderr
-    return {line.split("::", 1)[1] for line in proc.stdout.splitlines() if "::" in line}
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    lines = [line.split(" ") for line in proc.stdout.splitlines() if line.startswith("MARKS ")]
+    return {name: set(marks.split(",")) for _, name, marks in lines}
 
 
 @pytest.fixture
@@ -61,27 +71,30 @@ def project(tmp_path: Path) -> Path:
     """A test directory with this suite's conftest, a listed fast file, an unlisted file and
     a fast file with a test of another kind."""
     (tmp_path / "pytest.ini").write_text("[pytest]\naddopts = --strict-markers\n")
+    (tmp_path / "reporter.py").write_text(REPORTER)
     (tmp_path / "conftest.py").write_text((TESTS / "conftest.py").read_text(encoding="utf-8"))
     (tmp_path / "test_protocol_crc.py").write_text(  # a name TIERS lists as fast
         "import pytest\n\ndef test_listed():\n    pass\n\n"
-        "@pytest.mark.subprocess\ndef test_own_kind():\n    pass\n"
+        "@pytest.mark.subprocess\ndef test_own_kind():\n    pass\n\n"
+        "@pytest.mark.realtime\n@pytest.mark.alone\ndef test_alone():\n    pass\n"
     )
     (tmp_path / "test_brand_new.py").write_text("def test_unlisted():\n    pass\n")
     return tmp_path
 
 
 @pytest.mark.subprocess
-def test_phases_select_every_test_once_and_an_unlisted_file_runs_in_the_full_tier(
-    project: Path,
-) -> None:
+def test_each_test_gets_one_kind_and_an_unlisted_file_the_full_tier(project: Path) -> None:
     assert TIERS["test_protocol_crc.py"] == FAST
-    everything = _collect(project)
-    fast = _collect(project, "-m", FAST)
-    parallel, alone = _collect(project, "-m", f"not {ALONE}"), _collect(project, "-m", ALONE)
-    assert everything == {"test_listed", "test_own_kind", "test_unlisted"}
-    assert fast == {"test_listed"}  # its own marker takes test_own_kind out of the fast tier
-    assert parallel | alone == everything and not parallel & alone  # the full run: each once
-    assert _collect(project, "-m", DEFAULT) == {"test_unlisted"}
+    marks = _markers(project)
+    assert marks == {
+        "test_listed": {FAST},
+        "test_own_kind": {"subprocess"},  # its own marker takes it out of the fast tier
+        "test_alone": {"realtime", ALONE},
+        "test_unlisted": {DEFAULT},  # not in TIERS: still runs, in the full tier
+    }
+    # make test's main run (-m "not alone", then -m alone) selects every test exactly once,
+    # and the other interpreters' run (-m fast) only the fast one
+    assert all(len(m & set(KINDS)) == 1 for m in marks.values())
 
 
 @pytest.mark.subprocess
@@ -93,7 +106,8 @@ def test_two_kinds_on_one_test_is_a_usage_error(project: Path) -> None:
     proc = subprocess.run(
         [sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-p", "no:xdist",
          "--collect-only", "-q", "-c", str(project / "pytest.ini"), str(project)],
-        cwd=project, env={**os.environ, "PYTHONPATH": str(TESTS)},
+        cwd=project, env={**os.environ, "PYTHONPATH": os.pathsep.join(
+            [str(TESTS), os.environ.get("PYTHONPATH", "")])},
         capture_output=True, text=True, timeout=60, check=False,
     )  # fmt: skip
     assert proc.returncode == 4, proc.stdout + proc.stderr
