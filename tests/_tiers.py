@@ -54,7 +54,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_bridge_mapping.py": FAST,
     "test_bridge_mavsdk.py": "realtime",
     "test_bridge_qgc.py": "realtime",
-    "test_capture_independent.py": "tshark",
+    "test_capture_independent.py": ("tshark", ALONE),  # 200 packets/s, counted
     "test_capture_library.py": "tshark",
     "test_catalogue.py": FAST,
     "test_ci_pythons.py": "subprocess",
@@ -107,7 +107,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_self_contained.py": "subprocess",
     "test_session_contract.py": FAST,
     "test_session_regressions.py": FAST,
-    "test_session_sockets.py": "realtime",
+    "test_session_sockets.py": ("realtime", ALONE),  # reordering below the 15 ms guard
     "test_sim_cli.py": "subprocess",
     "test_sim_execution_log.py": FAST,
     "test_sim_fault_bounds.py": FAST,
