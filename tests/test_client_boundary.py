@@ -46,6 +46,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from _scale import scaled
 from gcu_async import GcuClient
 from gcu_async.client.connect import CLIENT_OPTIONS, connect
 from gcu_async.errors import CommandError, CommandFailed, FieldRangeError, WaitTimeout
@@ -1054,7 +1055,7 @@ async def _try(p: P, v: Any) -> BaseException | None:
         return None
 
 
-@settings(max_examples=600, deadline=None)
+@settings(max_examples=scaled(600, 60), deadline=None)
 @given(st.data())
 def test_arbitrary_values_accepted_iff_valid(data: st.DataObject) -> None:
     p = data.draw(st.sampled_from(SCALARS), label="parameter")

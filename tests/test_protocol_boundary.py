@@ -30,6 +30,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from _protocol_strategies import RAW_RANGES
+from _scale import scaled
 from gcu_async.errors import FieldRangeError
 from gcu_async.protocol import (
     COMMAND_TYPES,
@@ -841,7 +842,7 @@ def _valid(p: P, v: Any) -> bool | None:
     return True if inside else False if outside else None
 
 
-@settings(max_examples=1000, deadline=None)
+@settings(max_examples=scaled(1000, 100), deadline=None)
 @given(st.data())
 def test_arbitrary_values_accepted_iff_valid(data: st.DataObject) -> None:
     p = data.draw(st.sampled_from(SCALARS), label="parameter")
