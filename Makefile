@@ -16,10 +16,11 @@ INPUTS := pyproject.toml src/gcu_async/__init__.py
 
 # `make test` lints and builds the docs once, then runs the suite on every CPython in PYTHONS
 # it finds (pyenv's versions, or python3.X on PATH; .ci/pythons.py) and prints which ran and
-# which were missing. $(VENV) (made with $(PYTHON)) runs every test at full size: in parallel
-# with JOBS pytest-xdist workers, then the tests marked `alone` one at a time. Every other
-# version runs the fast tier (sans-I/O, in-memory, virtual time) in its own .venv-3.X at
-# reduced size (tests/_tiers.py, tests/_scale.py). `make test PYTHONS=` runs the main venv only.
+# which were missing. $(VENV) (made with $(PYTHON)) runs every test at full size: the full
+# tier (real time, processes, ...) with JOBS pytest-xdist workers while the fast tier
+# (sans-I/O, in-memory, virtual time) runs in one process, then the tests marked `alone` one
+# at a time. Every other version runs the fast tier in its own .venv-3.X at reduced size
+# (tests/_tiers.py, tests/_scale.py). `make test PYTHONS=` runs the main venv only.
 PYTHONS ?= 3.10 3.11 3.12 3.13
 JOBS ?= 4
 
@@ -86,9 +87,10 @@ test: lint docs browser tshark iproute2
 	  --extras $(USER_EXTRAS) --groups test --jobs $(JOBS)
 
 # The inner loop: lint and the fast tier at reduced size on the main venv (no docs build, no
-# other interpreters, nothing real-time).
+# other interpreters, nothing real-time). One process: for ~10,000 small CPU-bound tests
+# pytest-xdist's per-test cost exceeds what a second core gains.
 check: lint
-	GCU_TEST_SIZE=reduced $(BIN)/python -m pytest -q -p no:cacheprovider -n $(JOBS) -m fast
+	GCU_TEST_SIZE=reduced $(BIN)/python -m pytest -q -p no:cacheprovider -p no:xdist -m fast
 
 bench: $(DEV_STAMP)
 	$(BIN)/python benchmarks/bench_codec.py

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import re
 import stat
 import subprocess
 import sys
@@ -85,11 +86,13 @@ def test_reports_what_ran_at_which_size_and_what_was_missing(tmp_path: Path) -> 
     )
     out = proc.stdout
     assert proc.returncode == 0, out + proc.stderr
-    assert f"=== Python {mine} ({Path(sys.prefix).name}, full size, full tier): parallel ===" in out
-    assert f"=== Python {mine} ({Path(sys.prefix).name}, full size, full tier): alone ===" in out
-    assert "1 passed" in out, out
-    assert "1 deselected" in out, out  # the alone phase had nothing: exit 5 is not a failure
-    assert "full size, full tier: passed in " in out, out
+    venv = Path(sys.prefix).name
+    for phase in ("full tier", "fast tier", "alone"):
+        assert f"=== Python {mine} ({venv}, full size): {phase} ===" in out, out
+    assert "1 passed" in out, out  # the probe has no kind marker: the full tier runs it
+    assert "1 deselected" in out, out  # the others had nothing: exit 5 is not a failure
+    assert re.search(r"full size, every tier: passed \(full tier \dm\d\ds, fast tier \dm\d\ds, "
+                     r"alone \dm\d\ds\)", out), out  # fmt: skip
     assert f"ran: {mine}; missing: 3.98, 3.99" in out, out
     assert "3.99   missing: no CPython 3.99 in " in out, out
 
@@ -99,7 +102,7 @@ def test_a_failing_run_fails_the_whole(tmp_path: Path) -> None:
         pytest.skip("the suite is not running in a venv: no main venv to hand the script")
     proc = _run(tmp_path, "def test_fails():\n    assert False\n", "")
     assert proc.returncode == 1, proc.stdout + proc.stderr
-    assert "full size, full tier: FAILED (parallel: pytest exit 1)" in proc.stdout, proc.stdout
+    assert "full size, every tier: FAILED (full tier: pytest exit 1)" in proc.stdout, proc.stdout
     assert "missing: none" in proc.stdout, proc.stdout
 
 
@@ -114,12 +117,20 @@ def test_bad_versions_are_a_usage_error(tmp_path: Path) -> None:
 
 def test_the_main_run_is_everything_once_and_the_others_the_fast_tier() -> None:
     ci = load()
-    main = ci.Run("3.11", tier="full", size="full")
+    main = ci.Run("3.11", tier="every", size="full")
     other = ci.Run("3.12", tier="fast", size="reduced")
-    assert ci.phases(main, 4) == [("parallel", ["-n", "4", "-m", "not alone"]),
-                                  ("alone", ["-p", "no:xdist", "-m", "alone"])]  # fmt: skip
-    assert ci.phases(other, 4) == [("fast tier", ["-n", "4", "-m", "fast"])]
-    assert ci.phases(other, 1) == [("fast tier", ["-p", "no:xdist", "-m", "fast"])]
+    serial = ["-p", "no:xdist"]
+
+    def shown(run: object, jobs: int) -> list[tuple[str, list[str], str]]:
+        return [(p.name, p.args, p.lane) for p in ci.phases(run, jobs)]
+
+    assert shown(main, 4) == [
+        ("full tier", ["-n", "4", "-m", "not fast and not alone"], "background"),
+        ("fast tier", [*serial, "-m", "fast"], "foreground"),
+        ("alone", [*serial, "-m", "alone"], "last"),
+    ]  # each test once: not fast and not alone, fast (never alone), alone
+    assert shown(other, 4) == [("fast tier", [*serial, "-m", "fast"], "foreground")]
+    assert shown(main, 1)[0][1] == [*serial, "-m", "not fast and not alone"]
 
 
 def test_jobs_below_one_is_a_usage_error() -> None:
