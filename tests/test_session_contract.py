@@ -23,7 +23,7 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, seed, settings
 from hypothesis import strategies as st
 
-from _scale import scaled
+from _scale import FULL, scaled
 from _vtime import Direction, Fate, Rig, tagged_commands
 from gcu_async.protocol import HostPacket
 from gcu_async.session import Session, SessionState, TicketState
@@ -247,8 +247,10 @@ def test_exactly_once_truthful_outcomes_rate_and_control_under_bounded_reorderin
 
 # -- the boundary of the contract -----------------------------------------------------------
 def _expect_violation(strategy: st.SearchStrategy[Scenario], examples: int) -> str:
+    # shrinking the counterexample is most of the time: full size only (tests/_scale.py)
     @settings(max_examples=examples, deadline=None, database=None, derandomize=True,
-              phases=[Phase.generate, Phase.shrink], report_multiple_bugs=False,
+              phases=[Phase.generate, Phase.shrink] if FULL else [Phase.generate],
+              report_multiple_bugs=False,
               suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])  # fmt: skip
     @given(strategy)
     def inner(sc: Scenario) -> None:
