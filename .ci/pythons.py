@@ -3,16 +3,16 @@
     python .ci/pythons.py --main-venv .venv --versions "3.10 3.11 3.12 3.13" [-- PYTEST ARGS]
 
 The main venv (the one that lints and builds the docs) runs every test at full size
-(``GCU_TEST_SIZE=full``): the full tier (every kind but ``fast``; tests/_tiers.py) in parallel
-(pytest-xdist, ``--jobs`` workers) in the background, while the fast tier (sans-I/O, in-memory,
-virtual time) runs in one process, then every other version found runs the fast tier in its own
-venv, ``.venv-3.X`` (created, or refreshed when pyproject.toml or the package version
-changed), at reduced size (``GCU_TEST_SIZE=reduced``, see tests/_scale.py); last, with nothing
-else running, the ``alone`` tests one at a time. An interpreter is
-looked for in pyenv's versions (``pyenv root``, else ``$PYENV_ROOT`` or ``.pyenv`` in the home
-directory), then as ``python3.X`` on PATH. At the end it prints which versions ran (which tier,
-how they did) and which were missing. Exit status: 0 if every run passed, 1 if one failed, 2 on
-a usage error.
+(``GCU_TEST_SIZE=full``): the full tier (every kind but ``fast``; tests/_tiers.py) and the
+``heavy`` fast tests in parallel (pytest-xdist, ``--jobs`` workers) in the background, while the
+rest of the fast tier (sans-I/O, in-memory, virtual time) runs in one process, then every other
+version found runs the fast tier in its own venv, ``.venv-3.X`` (created, or refreshed when
+pyproject.toml or the package version changed), at reduced size (``GCU_TEST_SIZE=reduced``, see
+tests/_scale.py); last, with nothing else running, the ``alone`` tests one at a time.
+An interpreter is looked for in pyenv's versions (``pyenv root``, else ``$PYENV_ROOT`` or
+``.pyenv`` in the home directory), then as ``python3.X`` on PATH. At the end it prints which
+versions ran (which tier, how they did) and which were missing. Exit status: 0 if every run
+passed, 1 if one failed, 2 on a usage error.
 
 Standard library only: it runs before any venv exists but the main one.
 """
@@ -139,14 +139,17 @@ class Phase:
 
 def phases(run: Run, jobs: int) -> list[Phase]:
     """The pytest invocations of a run. The full tier is mostly real-time waiting: it runs in
-    parallel (``jobs`` pytest-xdist workers) in the background, while the fast tier, CPU-bound
-    and ~10,000 small tests (pytest-xdist's per-test cost would exceed the gain), runs in
-    one process in the foreground, this run's then the other interpreters'."""
+    parallel (``jobs`` pytest-xdist workers) in the background with the ``heavy`` fast tests,
+    while the rest of the fast tier, CPU-bound and ~10,000 small tests (pytest-xdist's per-test
+    cost would exceed the gain), runs in one process in the foreground, this run's then the
+    other interpreters'. The other interpreters' runs are at reduced size, where nothing is
+    heavy: they run the whole fast tier."""
     serial = ["-p", "no:xdist"]
     parallel = ["-n", str(jobs)] if jobs > 1 else serial
     if run.tier == "every":
-        return [Phase(run, "full tier", [*parallel, "-m", "not fast and not alone"], "background"),
-                Phase(run, "fast tier", [*serial, "-m", "fast"], "foreground"),
+        return [Phase(run, "full tier", [*parallel, "-m", "(not fast or heavy) and not alone"],
+                      "background"),
+                Phase(run, "fast tier", [*serial, "-m", "fast and not heavy"], "foreground"),
                 Phase(run, "alone", [*serial, "-m", "alone"], "last")]  # fmt: skip
     return [Phase(run, "fast tier", [*serial, "-m", "fast"], "foreground")]
 

@@ -14,7 +14,9 @@ Every test has exactly one *kind*:
 
 and may also be ``alone``: it cannot share the machine (it measures a rate or real-time
 latency against a bound the protocol sets), so ``make test`` runs it after the parallel phase,
-one test at a time. Only full-tier tests can be ``alone``.
+one test at a time. Only full-tier tests can be ``alone``. A ``fast`` test that runs for many
+seconds of CPU at full size (the session contract's shards) is also ``heavy``: the main run
+spreads it over the pytest-xdist workers instead of running it in the fast tier's one process.
 
 A test's kind comes from the closest of: its own marker (``@pytest.mark.realtime`` on the test
 or class, or a module-level ``pytestmark``), else its file's entry in :data:`TIERS`. A file in
@@ -28,6 +30,7 @@ FAST = "fast"
 SLOW_KINDS = ("realtime", "subprocess", "netns", "browser", "tshark", "sitl")
 KINDS = (FAST, *SLOW_KINDS)
 ALONE = "alone"
+HEAVY = "heavy"
 DEFAULT = "realtime"
 """The kind of a test in no table and with no marker: full tier, main interpreter only."""
 
@@ -42,6 +45,8 @@ MARKERS = {
     "sitl": "an ArduPilot SITL, GCU_ARDUPILOT_SITL (full tier)",
     ALONE: "cannot share the machine (measures a rate or latency): run after the parallel "
     "phase, one at a time",
+    HEAVY: "a fast test with many seconds of CPU at full size: the main run gives it to the "
+    "pytest-xdist workers",
 }
 
 TIERS: dict[str, str | tuple[str, ...]] = {
@@ -105,7 +110,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_protocol_vectors.py": FAST,
     "test_public_surface.py": FAST,
     "test_self_contained.py": "subprocess",
-    "test_session_contract.py": FAST,
+    "test_session_contract.py": (FAST, HEAVY),  # 100,000 commands in 8 shards
     "test_session_regressions.py": FAST,
     "test_session_sockets.py": ("realtime", ALONE),  # reordering below the 15 ms guard
     "test_sim_cli.py": "subprocess",
@@ -135,8 +140,8 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_wireshark_property.py": "tshark",
     "test_wireshark_tables.py": "subprocess",
 }
-"""Each test file's kind (or ``(kind, ALONE)``). A test marked with a kind of its own (a
-subprocess test in a fast file, say) keeps that kind."""
+"""Each test file's kind (or ``(kind, ALONE)``, ``(FAST, HEAVY)``). A test marked with a kind
+of its own (a subprocess test in a fast file, say) keeps that kind."""
 
 
 def kinds_of(entry: str | tuple[str, ...]) -> tuple[str, ...]:

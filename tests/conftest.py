@@ -19,7 +19,7 @@ import pytest
 from hypothesis import HealthCheck, settings
 
 from _scale import FULL
-from _tiers import ALONE, DEFAULT, FAST, KINDS, MARKERS, TIERS, kinds_of
+from _tiers import ALONE, DEFAULT, FAST, HEAVY, KINDS, MARKERS, TIERS, kinds_of
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -27,8 +27,8 @@ def pytest_configure(config: pytest.Config) -> None:
         config.addinivalue_line("markers", f"{name}: {meaning}")
 
 
-def tier_of(item: pytest.Item) -> tuple[str, bool]:
-    """``(kind, alone)`` of a collected test: its own kind marker (test, class or module
+def tier_of(item: pytest.Item) -> tuple[str, bool, bool]:
+    """``(kind, alone, heavy)`` of a collected test: its own kind marker (test, class or module
     ``pytestmark``) if it has one, else its file's entry in TIERS, else the full tier."""
     own = list(dict.fromkeys(m.name for m in item.iter_markers() if m.name in KINDS))
     entry = kinds_of(TIERS.get(item.path.name, DEFAULT))
@@ -36,19 +36,21 @@ def tier_of(item: pytest.Item) -> tuple[str, bool]:
         raise pytest.UsageError(f"{item.nodeid}: more than one test kind marker: {own}")
     kind = own[0] if own else next(k for k in entry if k in KINDS)
     alone = item.get_closest_marker(ALONE) is not None or (not own and ALONE in entry)
+    heavy = item.get_closest_marker(HEAVY) is not None or (not own and HEAVY in entry)
     if alone and kind == FAST:
         raise pytest.UsageError(f"{item.nodeid}: a fast test cannot be {ALONE!r}")
-    return kind, alone
+    if heavy and kind != FAST:
+        raise pytest.UsageError(f"{item.nodeid}: only a fast test can be {HEAVY!r}")
+    return kind, alone, heavy
 
 
 @pytest.hookimpl(tryfirst=True)  # before -m deselects by marker
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     for item in items:
-        kind, alone = tier_of(item)
-        if item.get_closest_marker(kind) is None:
-            item.add_marker(kind)
-        if alone and item.get_closest_marker(ALONE) is None:
-            item.add_marker(ALONE)
+        kind, alone, heavy = tier_of(item)
+        for name, wanted in ((kind, True), (ALONE, alone), (HEAVY, heavy)):
+            if wanted and item.get_closest_marker(name) is None:
+                item.add_marker(name)
 
 settings.register_profile(
     "ci",

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from _tiers import ALONE, DEFAULT, FAST, KINDS, MARKERS, SLOW_KINDS, TIERS, kinds_of
+from _tiers import ALONE, DEFAULT, FAST, HEAVY, KINDS, MARKERS, SLOW_KINDS, TIERS, kinds_of
 
 TESTS = Path(__file__).resolve().parent
 
@@ -36,10 +36,11 @@ def test_entries_name_one_kind_and_alone_only_for_full_tier_files() -> None:
     for name, entry in TIERS.items():
         kinds = kinds_of(entry)
         assert len([k for k in kinds if k in KINDS]) == 1, (name, entry)
-        assert set(kinds) <= {*KINDS, ALONE}, (name, entry)
+        assert set(kinds) <= {*KINDS, ALONE, HEAVY}, (name, entry)
         assert not (FAST in kinds and ALONE in kinds), name
+        assert HEAVY not in kinds or FAST in kinds, name
     assert DEFAULT in SLOW_KINDS  # an undeclared test runs in the full tier, not nowhere
-    assert set(MARKERS) == {*KINDS, ALONE}
+    assert set(MARKERS) == {*KINDS, ALONE, HEAVY}
 
 
 REPORTER = """
@@ -76,7 +77,8 @@ def project(tmp_path: Path) -> Path:
     (tmp_path / "test_protocol_crc.py").write_text(  # a name TIERS lists as fast
         "import pytest\n\ndef test_listed():\n    pass\n\n"
         "@pytest.mark.subprocess\ndef test_own_kind():\n    pass\n\n"
-        "@pytest.mark.realtime\n@pytest.mark.alone\ndef test_alone():\n    pass\n"
+        "@pytest.mark.realtime\n@pytest.mark.alone\ndef test_alone():\n    pass\n\n"
+        "@pytest.mark.heavy\ndef test_heavy():\n    pass\n"
     )
     (tmp_path / "test_brand_new.py").write_text("def test_unlisted():\n    pass\n")
     return tmp_path
@@ -90,10 +92,11 @@ def test_each_test_gets_one_kind_and_an_unlisted_file_the_full_tier(project: Pat
         "test_listed": {FAST},
         "test_own_kind": {"subprocess"},  # its own marker takes it out of the fast tier
         "test_alone": {"realtime", ALONE},
+        "test_heavy": {FAST, HEAVY},
         "test_unlisted": {DEFAULT},  # not in TIERS: still runs, in the full tier
     }
-    # make test's main run (-m "not alone", then -m alone) selects every test exactly once,
-    # and the other interpreters' run (-m fast) only the fast one
+    # each test has one kind, so make test's main run ("(not fast or heavy) and not alone",
+    # "fast and not heavy", "alone") selects every test exactly once
     assert all(len(m & set(KINDS)) == 1 for m in marks.values())
 
 
