@@ -15,8 +15,10 @@ Every test has exactly one *kind*:
 and may also be ``alone``: it cannot share the machine (it measures a rate or real-time
 latency against a bound the protocol sets), so ``make test`` runs it after the parallel phase,
 one test at a time. Only full-tier tests can be ``alone``. A ``fast`` test that runs for many
-seconds of CPU at full size (the session contract's shards) is also ``heavy``: the main run
-spreads it over the pytest-xdist workers instead of running it in the fast tier's one process.
+seconds of CPU at full size (the session contract's shards, the deframer and round-trip
+properties) is also ``heavy``: the main run spreads it over the pytest-xdist workers instead of
+running it in the fast tier's one process. Only for files of few tests: pytest-xdist costs
+milliseconds a test.
 
 A test's kind comes from the closest of: its own marker (``@pytest.mark.realtime`` on the test
 or class, or a module-level ``pytestmark``), else its file's entry in :data:`TIERS`. A file in
@@ -98,15 +100,15 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_protocol_cli_decode.py": "subprocess",
     "test_protocol_crc.py": FAST,
     "test_protocol_decode_errors.py": FAST,
-    "test_protocol_deframer.py": FAST,
-    "test_protocol_deframer_contract.py": FAST,
+    "test_protocol_deframer.py": (FAST, HEAVY),
+    "test_protocol_deframer_contract.py": (FAST, HEAVY),
     "test_protocol_feedback.py": FAST,
     "test_protocol_gpstime.py": FAST,
-    "test_protocol_liberal.py": FAST,
+    "test_protocol_liberal.py": (FAST, HEAVY),
     "test_protocol_liberal_frames.py": FAST,
     "test_protocol_pods.py": FAST,
     "test_protocol_ranges.py": FAST,
-    "test_protocol_roundtrip.py": FAST,
+    "test_protocol_roundtrip.py": (FAST, HEAVY),
     "test_protocol_vectors.py": FAST,
     "test_public_surface.py": FAST,
     "test_self_contained.py": "subprocess",
