@@ -73,7 +73,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_client_behaviour.py": "realtime",
     "test_client_boundary.py": FAST,
     "test_client_open_retry.py": "realtime",
-    "test_client_robustness.py": "realtime",
+    "test_client_robustness.py": ("realtime", ALONE),  # exactly once needs delays < the guard
     "test_client_session.py": "realtime",
     "test_client_waiting.py": "realtime",
     "test_client_wirelog.py": "subprocess",
