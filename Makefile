@@ -12,7 +12,7 @@ USER_EXTRAS := mavlink,web,capture
 DEV_GROUPS := dev
 DEMO_STAMP := $(VENV)/.demo-stamp
 DEV_STAMP := $(VENV)/.installed-stamp
-INPUTS := pyproject.toml src/gcu_async/__init__.py
+INPUTS := pyproject.toml src/gcu_async/__init__.py README.md  # README.md: the long description
 
 # `make test` lints and builds the docs once, then runs the suite on every CPython in PYTHONS
 # it finds (pyenv's versions, or python3.X on PATH; .ci/pythons.py) and prints which ran and
