@@ -1,41 +1,51 @@
 # Two commands do all the set-up on a fresh machine (python3 >= 3.10 with venv, and make):
 #   make demo   - the main job: the demo against the built-in simulator
 #   make test   - ruff, mypy --strict, the strict docs build and the tests (what .ci/run calls)
+# and `make check` is the inner loop: ruff, mypy and the fast tier (CONTRIBUTING.md).
 VENV ?= .venv
 PYTHON ?= python3
 BIN := $(VENV)/bin
-EXTRAS := test,bench,mavlink,web,docs,capture
-STAMP := $(VENV)/.installed-stamp
+# `make demo` installs the package alone; `make test` and `make check` add the user extras
+# and the development dependency groups (pyproject.toml) to the same venv, so one venv serves
+# both and the demo never waits for, or fails on, a development tool.
+USER_EXTRAS := mavlink,web,capture
+DEV_GROUPS := dev
+DEMO_STAMP := $(VENV)/.demo-stamp
+DEV_STAMP := $(VENV)/.installed-stamp
+INPUTS := pyproject.toml src/gcu_async/__init__.py README.md  # README.md: the long description
 
-# `make test` lints and builds the docs once, then runs the suite on every CPython in
-# PYTHONS it finds (pyenv's versions, or python3.X on PATH; .ci/pythons.py) and prints which
-# ran and which were missing. $(VENV) (made with $(PYTHON)) runs it at full size; every other
-# version runs in its own .venv-3.X with GCU_TEST_SIZE=reduced (set per run by the script):
-# the generated heavy tests shrink (the session contract from 100,000 to 10,000 commands,
-# Hypothesis to 25 examples a test, ...; tests/_scale.py), so each CI run has exactly one
-# full-size run, and `make test` on a fresh clone with all four took 36.5 minutes on a
-# shared 2-core VM (10.5 min full, ~8 min per reduced run: most of the suite is real-time
-# waiting on sockets, subprocesses and the browser, which the reduced size does not shrink).
-# `make test PYTHONS=` runs the main venv only.
+# `make test` lints and builds the docs once, then runs the suite on every CPython in PYTHONS
+# it finds (pyenv's versions, or python3.X on PATH; .ci/pythons.py) and prints which ran and
+# which were missing. $(VENV) (made with $(PYTHON)) runs every test at full size: the full
+# tier (real time, processes, ...) with JOBS pytest-xdist workers while the fast tier
+# (sans-I/O, in-memory, virtual time) runs in one process, then the tests marked `alone` one
+# at a time. Every other version runs the fast tier in its own .venv-3.X at reduced size
+# (tests/_tiers.py, tests/_scale.py). `make test PYTHONS=` runs the main venv only.
 PYTHONS ?= 3.10 3.11 3.12 3.13
-TEST_EXTRAS := test,bench,mavlink,web,capture
+JOBS ?= 4
 
-.PHONY: demo test lint docs browser tshark iproute2 bench clean
+.PHONY: demo test check lint docs browser tshark iproute2 bench clean
 
-$(STAMP): pyproject.toml src/gcu_async/__init__.py
+$(DEMO_STAMP): $(INPUTS)
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet -e .
+	touch $(DEMO_STAMP)
+
+# --group needs pip >= 25.1: upgraded first
+$(DEV_STAMP): $(INPUTS)
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[$(EXTRAS)]'
-	touch $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[$(USER_EXTRAS)]' --group $(DEV_GROUPS)
+	touch $(DEV_STAMP) $(DEMO_STAMP)
 
-demo: $(STAMP)
+demo: $(DEMO_STAMP)
 	$(BIN)/gcu-async demo
 
-lint: $(STAMP)
+lint: $(DEV_STAMP)
 	$(BIN)/ruff check src tests examples benchmarks tools .ci
 	$(BIN)/mypy
 
-docs: $(STAMP)
+docs: $(DEV_STAMP)
 	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet --site-dir $(CURDIR)/site
 
 # The web example's page is tested in Debian's Chromium when it is there. In CI (CI=true,
@@ -73,9 +83,16 @@ iproute2:
 	fi
 
 test: lint docs browser tshark iproute2
-	$(BIN)/python .ci/pythons.py --main-venv $(VENV) --versions "$(PYTHONS)" --extras $(TEST_EXTRAS)
+	$(BIN)/python .ci/pythons.py --main-venv $(VENV) --versions "$(PYTHONS)" \
+	  --extras $(USER_EXTRAS) --groups test --jobs $(JOBS)
 
-bench: $(STAMP)
+# The inner loop: lint and the fast tier at reduced size on the main venv (no docs build, no
+# other interpreters, nothing real-time). One process: for ~10,000 small CPU-bound tests
+# pytest-xdist's per-test cost exceeds what a second core gains.
+check: lint
+	GCU_TEST_SIZE=reduced $(BIN)/python -m pytest -q -p no:cacheprovider -p no:xdist -m fast
+
+bench: $(DEV_STAMP)
 	$(BIN)/python benchmarks/bench_codec.py
 	$(BIN)/python benchmarks/bench_client.py
 

@@ -8,7 +8,7 @@ Run from the repository root::
 Every figure is measured on one core (one thread, no multiprocessing). Each measurement is
 repeated ``--repeats`` times, in rounds that interleave all workloads (each sample runs whole
 passes for at least ``--seconds``); the best and the median sample are printed, because the
-machine may be shared and noisy. pymavlink comes from the ``bench`` extra.
+machine may be shared and noisy. pymavlink comes from the ``mavlink`` extra.
 Before timing anything, each workload is checked once for correctness (every packet / message
 comes back, equal to what was encoded, and the deframer accounts for every byte), so the
 timed loops measure real work.
@@ -320,7 +320,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         import pymavlink
     except ImportError:
-        raise SystemExit("pymavlink is missing: .venv/bin/pip install -e '.[bench]'") from None
+        raise SystemExit("pymavlink is missing: .venv/bin/pip install -e '.[mavlink]'") from None
 
     print("gcu_async codec benchmark")
     print(f"  python    : {platform.python_implementation()} {platform.python_version()}"

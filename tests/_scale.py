@@ -1,14 +1,15 @@
 """How big the heavy generated tests run, from ``GCU_TEST_SIZE``: ``full`` (the default) or
 ``reduced``.
 
-``make test`` runs the suite on every CPython 3.10–3.13 it finds: at full size on the main
-interpreter (the one that also lints and builds the docs), reduced on the others, so every
-CI run has one full-size run and stays well inside its time budget (.ci/pythons.py).
-Reduced: the 100,000-command session contract runs 10,000 commands, the 500-command bad-link
-test one seed instead of two, the UDP exactly-once test over real sockets 200 commands at the
-10 ms hold instead of 500 at each of 5 and 10 ms, and Hypothesis tests without their own
-``max_examples`` 25 examples instead of 100.
-"""
+``make test`` runs every test at full size once, on the main interpreter; the fast tier on the
+other CPythons 3.10–3.13, and ``make check``, run at reduced size (.ci/pythons.py, Makefile).
+Reduced: the 100,000-command session contract runs 10,000 commands (2 shards instead of 8),
+the 500-command bad-link test one seed instead of two, the UDP exactly-once test over real
+sockets 200 commands at the 10 ms hold instead of 500 at each of 5 and 10 ms, the boundary
+properties (arbitrary values accepted iff valid) a tenth of their examples, the deframer's
+split and byte-by-byte contracts 25 examples instead of 200, the session contract's boundary
+tests find their violation without shrinking it, and Hypothesis tests without their own
+``max_examples`` 25 examples instead of 100."""
 
 from __future__ import annotations
 

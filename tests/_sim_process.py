@@ -4,11 +4,13 @@ the client's work would stretch it). Its log tells which commands it executed.""
 
 from __future__ import annotations
 
+import os
 import re
 import selectors
 import signal
 import subprocess
 import sys
+import time
 from collections import Counter
 
 CLI = [sys.executable, "-c", "import sys; from gcu_async.cli import main; sys.exit(main())"]
@@ -35,12 +37,32 @@ class SimProcess:
             raise AssertionError(line)
         self.url = match.group(1)
         self.log = ""
+        self._early = b""
+        """What :meth:`wait_for` read of the log before :meth:`stop`."""
+
+    def wait_for(self, text: str, timeout: float = 30.0) -> None:
+        """Block until the log shows ``text`` (a readiness signal: the simulator executed a
+        command, say), so a test acts on the event, not after a guessed sleep."""
+        assert self.proc.stderr is not None
+        fd = self.proc.stderr.fileno()
+        deadline = time.monotonic() + timeout
+        with selectors.DefaultSelector() as sel:
+            sel.register(fd, selectors.EVENT_READ)
+            while text.encode() not in self._early:
+                left = deadline - time.monotonic()
+                if left <= 0 or not sel.select(left):
+                    raise TimeoutError(f"the simulator did not log {text!r} in {timeout} s")
+                chunk = os.read(fd, 65536)
+                if not chunk:
+                    raise AssertionError(f"the simulator ended before logging {text!r}")
+                self._early += chunk
 
     def stop(self) -> str:
         """SIGTERM, wait, return everything it logged (once)."""
         if self.proc.poll() is None:
             self.proc.send_signal(signal.SIGTERM)
-            _, self.log = self.proc.communicate(timeout=15)
+            _, rest = self.proc.communicate(timeout=15)
+            self.log = self._early.decode() + rest
         return self.log
 
     def kill(self) -> None:

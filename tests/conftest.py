@@ -1,4 +1,8 @@
-"""Shared pytest configuration: Hypothesis profiles.
+"""Shared pytest configuration: test tiers (tests/_tiers.py) and Hypothesis profiles.
+
+Every collected test gets exactly one kind marker (``fast``, ``realtime``, ``subprocess``,
+``netns``, ``browser``, ``tshark``, ``sitl``) and, if it cannot share the machine, ``alone``:
+``pytest -m fast`` is the fast tier, ``-m "not alone"`` the parallel phase of the full run.
 
 ``ci`` (selected when the environment has ``CI=true``) is derandomised so a CI run is
 reproducible and never flakes on a lucky draw; ``dev`` (the default) explores new examples
@@ -11,9 +15,42 @@ from __future__ import annotations
 
 import os
 
+import pytest
 from hypothesis import HealthCheck, settings
 
 from _scale import FULL
+from _tiers import ALONE, DEFAULT, FAST, HEAVY, KINDS, MARKERS, TIERS, kinds_of
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    for name, meaning in MARKERS.items():
+        config.addinivalue_line("markers", f"{name}: {meaning}")
+
+
+def tier_of(item: pytest.Item) -> tuple[str, bool, bool]:
+    """``(kind, alone, heavy)`` of a collected test: its own kind marker (test, class or module
+    ``pytestmark``) if it has one, else its file's entry in TIERS, else the full tier."""
+    own = list(dict.fromkeys(m.name for m in item.iter_markers() if m.name in KINDS))
+    entry = kinds_of(TIERS.get(item.path.name, DEFAULT))
+    if len(own) > 1:
+        raise pytest.UsageError(f"{item.nodeid}: more than one test kind marker: {own}")
+    kind = own[0] if own else next(k for k in entry if k in KINDS)
+    alone = item.get_closest_marker(ALONE) is not None or (not own and ALONE in entry)
+    heavy = item.get_closest_marker(HEAVY) is not None or (not own and HEAVY in entry)
+    if alone and kind == FAST:
+        raise pytest.UsageError(f"{item.nodeid}: a fast test cannot be {ALONE!r}")
+    if heavy and kind != FAST:
+        raise pytest.UsageError(f"{item.nodeid}: only a fast test can be {HEAVY!r}")
+    return kind, alone, heavy
+
+
+@pytest.hookimpl(tryfirst=True)  # before -m deselects by marker
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    for item in items:
+        kind, alone, heavy = tier_of(item)
+        for name, wanted in ((kind, True), (ALONE, alone), (HEAVY, heavy)):
+            if wanted and item.get_closest_marker(name) is None:
+                item.add_marker(name)
 
 settings.register_profile(
     "ci",

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import re
 import stat
 import subprocess
 import sys
@@ -69,7 +70,7 @@ def _run(tmp_path: Path, test_body: str, versions: str) -> subprocess.CompletedP
     main_venv = Path(sys.prefix)
     return subprocess.run(
         [sys.executable, str(SCRIPT), "--main-venv", str(main_venv), "--versions", versions,
-         "--", "-q", "-p", "no:cacheprovider", str(test_file)],
+         "--jobs", "1", "--", "-q", "-p", "no:cacheprovider", str(test_file)],
         cwd=ROOT, env=env, capture_output=True, text=True, timeout=120, check=False,
     )  # fmt: skip
 
@@ -85,8 +86,13 @@ def test_reports_what_ran_at_which_size_and_what_was_missing(tmp_path: Path) -> 
     )
     out = proc.stdout
     assert proc.returncode == 0, out + proc.stderr
-    assert f"=== Python {mine} ({Path(sys.prefix).name}, full size) ===" in out, out
-    assert "1 passed" in out, out
+    venv = Path(sys.prefix).name
+    for phase in ("full tier", "fast tier", "alone"):
+        assert f"=== Python {mine} ({venv}, full size): {phase} ===" in out, out
+    assert "1 passed" in out, out  # the probe has no kind marker: the full tier runs it
+    assert "1 deselected" in out, out  # the others had nothing: exit 5 is not a failure
+    assert re.search(r"full size, every tier: passed \(full tier \dm\d\ds, fast tier \dm\d\ds, "
+                     r"alone \dm\d\ds\)", out), out  # fmt: skip
     assert f"ran: {mine}; missing: 3.98, 3.99" in out, out
     assert "3.99   missing: no CPython 3.99 in " in out, out
 
@@ -96,7 +102,7 @@ def test_a_failing_run_fails_the_whole(tmp_path: Path) -> None:
         pytest.skip("the suite is not running in a venv: no main venv to hand the script")
     proc = _run(tmp_path, "def test_fails():\n    assert False\n", "")
     assert proc.returncode == 1, proc.stdout + proc.stderr
-    assert "full size: FAILED (pytest exit 1)" in proc.stdout, proc.stdout
+    assert "full size, every tier: FAILED (full tier: pytest exit 1)" in proc.stdout, proc.stdout
     assert "missing: none" in proc.stdout, proc.stdout
 
 
@@ -107,3 +113,30 @@ def test_bad_versions_are_a_usage_error(tmp_path: Path) -> None:
     )  # fmt: skip
     assert proc.returncode == 2
     assert "--versions: '3.x' is not a list like '3.10 3.11'" in proc.stderr
+
+
+def test_the_main_run_is_everything_once_and_the_others_the_fast_tier() -> None:
+    ci = load()
+    main = ci.Run("3.11", tier="every", size="full")
+    other = ci.Run("3.12", tier="fast", size="reduced")
+    serial = ["-p", "no:xdist"]
+
+    def shown(run: object, jobs: int) -> list[tuple[str, list[str], str]]:
+        return [(p.name, p.args, p.lane) for p in ci.phases(run, jobs)]
+
+    assert shown(main, 4) == [
+        ("full tier", ["-n", "4", "-m", "(not fast or heavy) and not alone"], "background"),
+        ("fast tier", [*serial, "-m", "fast and not heavy"], "foreground"),
+        ("alone", [*serial, "-m", "alone"], "last"),
+    ]  # each test once: heavy ones are fast, never alone
+    assert shown(other, 4) == [("fast tier", [*serial, "-m", "fast"], "foreground")]
+    assert shown(main, 1)[0][1] == [*serial, "-m", "(not fast or heavy) and not alone"]
+
+
+def test_jobs_below_one_is_a_usage_error() -> None:
+    proc = subprocess.run(
+        [sys.executable, str(SCRIPT), "--main-venv", sys.prefix, "--jobs", "0"],
+        capture_output=True, text=True, timeout=60, check=False,
+    )  # fmt: skip
+    assert proc.returncode == 2
+    assert "--jobs: 0 is not a number of workers >= 1" in proc.stderr

@@ -81,6 +81,7 @@ def test_every_command_help_is_its_own(name: str, capsys: pytest.CaptureFixture[
 
 
 # -- 2. --timeout applies to every command ---------------------------------------------------
+@pytest.mark.alone  # a bound on the wall clock, interpreter start-up included (tests/_tiers.py)
 @pytest.mark.parametrize("before", [False, True], ids=["after", "before"])
 def test_calibrate_obeys_timeout(sim: SimProcess, before: bool) -> None:
     """The simulator calibrates for 3 s: with ``--timeout 1`` the command gives up after
@@ -104,6 +105,7 @@ def test_calibrate_without_timeout_waits_for_the_calibration(sim: SimProcess) ->
     assert json.loads(done.stdout)["command"] == "CALIBRATION"
 
 
+@pytest.mark.alone  # a bound on the wall clock, interpreter start-up included (tests/_tiers.py)
 def test_timeout_bounds_every_other_command_too() -> None:
     t0 = time.monotonic()
     done = cli("send", DEAD, "zoom-to", "4", "--timeout", "0.4")

@@ -6,7 +6,6 @@ from __future__ import annotations
 import json
 import signal
 import subprocess
-import time
 
 import pytest
 
@@ -41,7 +40,7 @@ def test_send_interrupted_closes_cleanly_with_130(sig: signal.Signals) -> None:
                                  "0", "5", "--hold", "60"], stdout=subprocess.PIPE,
                                 stderr=subprocess.PIPE, text=True)  # fmt: skip
         try:
-            time.sleep(1.5)  # connected, command sent, holding
+            sim.wait_for("executed POINTING_LOCK")  # connected, command sent, holding
             running = proc.poll() is None
             proc.send_signal(sig)
             out, err = proc.communicate(timeout=10)

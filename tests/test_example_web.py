@@ -23,7 +23,7 @@ from gcu_async.client import ClientState
 from gcu_async.pytest_plugin import SimHandle
 from gcu_async.sim import GcuSimulator
 
-_INSTALL = "pip install -e '.[web,test]'"
+_INSTALL = "pip install -e '.[web]' --group test"
 pytest.importorskip("starlette", reason=f"the web example needs starlette: {_INSTALL}")
 uvicorn = pytest.importorskip("uvicorn", reason=f"the web example needs uvicorn: {_INSTALL}")
 httpx = pytest.importorskip("httpx", reason=f"the web example tests need httpx: {_INSTALL}")

@@ -34,7 +34,7 @@ def pyproject() -> dict[str, Any]:
 def test_the_version_is_written_once_in_the_package() -> None:
     data = pyproject()
     assert "version" not in data["project"]
-    assert data["project"]["dynamic"] == ["version"]
+    assert "version" in data["project"]["dynamic"]
     assert data["tool"]["hatch"]["version"]["path"] == "src/gcu_async/__init__.py"
     source = (ROOT / "src" / "gcu_async" / "__init__.py").read_text(encoding="utf-8")
     [written] = re.findall(r'^__version__ = "([^"]+)"$', source, re.MULTILINE)
@@ -136,3 +136,75 @@ def test_without_the_setup_the_async_test_does_not_run(tmp_path: Path) -> None:
     assert proc.returncode != 0, output
     assert "async def functions are not natively supported" in output, output
     assert " passed" not in output, output
+
+
+# -- extras, dependency groups, metadata ------------------------------------------------------
+
+USER_EXTRAS = {"pytest", "mavlink", "web", "capture"}
+
+
+def test_only_user_extras_are_published_and_dev_tools_are_groups() -> None:
+    data = pyproject()
+    extras = data["project"]["optional-dependencies"]
+    assert set(extras) == USER_EXTRAS  # no test/docs/bench extras next to the users' ones
+    groups = data["dependency-groups"]
+    assert {"test", "test-full", "lint", "docs", "dev"} <= set(groups)
+    assert groups["dev"] == [{"include-group": g} for g in ("test", "test-full", "lint", "docs")]
+    assert {"pytest-xdist", "pytest-timeout", "hypothesis"} <= _names(groups["test"])
+    assert {"ruff", "mypy"} == _names(groups["lint"])
+    # the fast tier's venvs (.ci/pythons.py) and `make test` install what the Makefile says
+    makefile = (ROOT / "Makefile").read_text(encoding="utf-8")
+    [user] = re.findall(r"^USER_EXTRAS := (\S+)$", makefile, re.MULTILINE)
+    assert set(user.split(",")) == USER_EXTRAS - {"pytest"}  # the suite brings its own pytest
+    assert re.search(r"^\t.*pip install --quiet -e \.$", makefile, re.MULTILINE)  # demo: alone
+
+
+def test_metadata_names_urls_and_the_operating_system() -> None:
+    project = pyproject()["project"]
+    assert set(project["urls"]) == {"Documentation", "Source", "Changelog"}
+    assert all(url.startswith("https://") for url in project["urls"].values())
+    assert "Operating System :: POSIX :: Linux" in project["classifiers"]
+
+
+def _readme_extras_table() -> dict[str, set[str]]:
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    part = readme.split("<!-- extras-table:", 1)[1].split("\n\n", 1)[0]
+    rows = re.findall(r"^\| `([\w-]+)` \| ([^|]+) \|", part, re.MULTILINE)
+    return {name: {n.strip().lower() for n in adds.split(",")} for name, adds in rows}
+
+
+def test_the_readme_lists_every_user_extra_with_what_it_adds() -> None:
+    extras = pyproject()["project"]["optional-dependencies"]
+    assert _readme_extras_table() == {name: _names(reqs) for name, reqs in extras.items()}
+
+
+def _pypi_description() -> str:
+    """The long description as hatch-fancy-pypi-readme assembles it from pyproject.toml."""
+    config = pyproject()["tool"]["hatch"]["metadata"]["hooks"]["fancy-pypi-readme"]
+    out = []
+    for fragment in config["fragments"]:
+        if "text" in fragment:
+            out.append(fragment["text"])
+            continue
+        text = (ROOT / fragment["path"]).read_text(encoding="utf-8")
+        assert text.count(fragment["start-after"]) == 1, fragment["start-after"]
+        assert text.count(fragment["end-before"]) == 1, fragment["end-before"]
+        text = text.split(fragment["start-after"], 1)[1]
+        out.append(text.split(fragment["end-before"], 1)[0])
+    return "".join(out)
+
+
+def test_the_pypi_description_is_for_pip_users() -> None:
+    assert "readme" in pyproject()["project"]["dynamic"]
+    description = _pypi_description()
+    assert description.startswith("# gcu_async\n\nasyncio driver, simulator and sans-I/O codec")
+    assert "pip install gcu-async" in description
+    assert "## Install and extras" in description and "## Quickstart" in description
+    for checkout_only in ("make demo", "make test", "make check", "CONTRIBUTING.md", ".venv",
+                          "checkout-only", "## Development", "## Examples"):  # fmt: skip
+        assert checkout_only not in description, checkout_only
+    # what the installed distribution carries is that text (`make test` reinstalls after a
+    # change to pyproject.toml; an older install fails here until then)
+    installed = importlib.metadata.metadata("gcu-async")
+    assert installed["Description-Content-Type"] == "text/markdown"
+    assert installed.get_payload().strip() == description.strip()  # type: ignore[attr-defined]

@@ -22,6 +22,7 @@ from hypothesis import event, given, settings
 from hypothesis import strategies as st
 
 from _protocol_strategies import gcu_packets, host_main_frames, host_packets, seal
+from _scale import scaled
 from gcu_async.protocol import (
     COMMAND_TYPES,
     GCU_HEADER,
@@ -220,7 +221,7 @@ def streams(draw: st.DrawFn, direction: str) -> tuple[int, bytes]:
 
 # --- chunk independence --------------------------------------------------------------------------
 @pytest.mark.parametrize("direction", ["gcu", "host"])
-@settings(max_examples=200)
+@settings(max_examples=scaled(200, 25))
 @given(data=st.data())
 def test_every_split_matches_the_reference_after_every_feed(
     direction: str, data: st.DataObject
@@ -254,7 +255,7 @@ def test_every_split_matches_the_reference_after_every_feed(
 
 
 @pytest.mark.parametrize("direction", ["gcu", "host"])
-@settings(max_examples=200)
+@settings(max_examples=scaled(200, 25))
 @given(data=st.data())
 def test_byte_by_byte_each_packet_comes_out_within_the_hold_back_bound(
     direction: str, data: st.DataObject

@@ -97,6 +97,7 @@ def test_the_issue_style_examples_keep_their_values() -> None:
     ]
 
 
+@pytest.mark.subprocess  # a fresh interpreter (tests/_tiers.py)
 def test_decode_shows_frame_anomalies_and_exits_0() -> None:
     raw = bytearray(GcuPacket(GcuMainFrame()).encode())
     raw[10:12] = (-1001).to_bytes(2, "little", signed=True)  # miss distance y
