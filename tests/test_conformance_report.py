@@ -184,6 +184,7 @@ def test_undecodable_bytes_are_counted() -> None:
     assert c.report().undecodable == 1
 
 
+@pytest.mark.realtime
 async def test_this_librarys_client_conforms() -> None:
     """The client over real TCP, flying north-east and climbing, running the commands
     ArduPilot sends: the simulator's report finds nothing."""
