@@ -18,18 +18,13 @@ from typing import Any
 
 import pytest
 
+from _web_deps import require_web
 from gcu_async import GcuClient, Opcode
 from gcu_async.client import ClientState
 from gcu_async.pytest_plugin import SimHandle
 from gcu_async.sim import GcuSimulator
 
-_INSTALL = "pip install -e '.[web]' --group test"
-pytest.importorskip("starlette", reason=f"the web example needs starlette: {_INSTALL}")
-uvicorn = pytest.importorskip("uvicorn", reason=f"the web example needs uvicorn: {_INSTALL}")
-httpx = pytest.importorskip("httpx", reason=f"the web example tests need httpx: {_INSTALL}")
-pytest.importorskip(
-    "websockets.asyncio.client", reason=f"the web example tests need websockets>=13: {_INSTALL}"
-)
+require_web()
 from websockets.asyncio.client import ClientConnection  # noqa: E402
 from websockets.asyncio.client import connect as ws_connect  # noqa: E402
 from websockets.exceptions import ConnectionClosed  # noqa: E402

@@ -26,13 +26,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-_INSTALL = "pip install -e '.[web,test]'"
-pytest.importorskip("starlette", reason=f"the web example needs starlette: {_INSTALL}")
-pytest.importorskip("uvicorn", reason=f"the web example needs uvicorn: {_INSTALL}")
-httpx = pytest.importorskip("httpx", reason=f"the web example tests need httpx: {_INSTALL}")
-pytest.importorskip(
-    "websockets.asyncio.client", reason=f"the web example tests need websockets>=13: {_INSTALL}"
-)
+from _web_deps import require_web
+
+require_web()
+import httpx  # noqa: E402
 
 from _web_example import Web, running_web  # noqa: E402
 from gcu_async.sim import GcuSimulator  # noqa: E402

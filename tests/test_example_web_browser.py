@@ -9,7 +9,6 @@ without the ``web`` extra, Playwright or Chromium.
 
 from __future__ import annotations
 
-import os
 import re
 from collections.abc import AsyncIterator
 from pathlib import Path
@@ -17,28 +16,14 @@ from typing import Any
 
 import pytest
 
+from _web_deps import require_browser
 from gcu_async.pytest_plugin import SimHandle
 from gcu_async.sim import GcuSimulator
 
-_INSTALL = "pip install -e '.[web]' --group test"
-pytest.importorskip("starlette", reason=f"the web example needs starlette: {_INSTALL}")
-pytest.importorskip("uvicorn", reason=f"the web example needs uvicorn: {_INSTALL}")
-pytest.importorskip("httpx", reason=f"the web example tests need httpx: {_INSTALL}")
-pytest.importorskip(
-    "websockets.asyncio.client", reason=f"the web example tests need websockets>=13: {_INSTALL}"
-)
-async_api = pytest.importorskip(
-    "playwright.async_api",
-    reason="the browser tests need Playwright: pip install playwright (never `playwright "
-    "install`: they drive Debian's chromium)",
-)
-from _web_example import CHROMIUM  # noqa: E402
-
-if not os.access(CHROMIUM, os.X_OK):
-    pytest.skip(f"the browser tests need {CHROMIUM}: apt-get install chromium",
-                allow_module_level=True)  # fmt: skip
+async_api = require_browser()
 
 from _web_example import (  # noqa: E402
+    CHROMIUM,
     CHROMIUM_ARGS,
     Web,
     aircraft_heading,

@@ -13,38 +13,22 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import os
 from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 
+from _web_deps import require_browser
 from gcu_async.pytest_plugin import SimHandle
 
-_INSTALL = "pip install -e '.[web,test]'"
-pytest.importorskip("starlette", reason=f"the web example needs starlette: {_INSTALL}")
-pytest.importorskip("uvicorn", reason=f"the web example needs uvicorn: {_INSTALL}")
-pytest.importorskip("httpx", reason=f"the web example tests need httpx: {_INSTALL}")
-pytest.importorskip(
-    "websockets.asyncio.client", reason=f"the web example tests need websockets>=13: {_INSTALL}"
-)
-async_api = pytest.importorskip(
-    "playwright.async_api",
-    reason="the browser tests need Playwright: pip install playwright (never `playwright "
-    "install`: they drive Debian's chromium)",
-)
-from _web_example import CHROMIUM  # noqa: E402
-
-if not os.access(CHROMIUM, os.X_OK):
-    pytest.skip(f"the browser tests need {CHROMIUM}: apt-get install chromium",
-                allow_module_level=True)  # fmt: skip
+async_api = require_browser()
 
 from starlette.applications import Starlette  # noqa: E402
 from starlette.responses import HTMLResponse  # noqa: E402
 from starlette.routing import Route  # noqa: E402
 
-from _web_example import CHROMIUM_ARGS, Web, running_web, serve  # noqa: E402
+from _web_example import CHROMIUM, CHROMIUM_ARGS, Web, running_web, serve  # noqa: E402
 
 WAIT_MS = 10_000
 REBOUND = "rebind.example"

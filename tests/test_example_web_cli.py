@@ -14,10 +14,10 @@ from pathlib import Path
 
 import pytest
 
-_INSTALL = "pip install -e '.[web,test]'"
-pytest.importorskip("starlette", reason=f"the web example needs starlette: {_INSTALL}")
-pytest.importorskip("uvicorn", reason=f"the web example needs uvicorn: {_INSTALL}")
-httpx = pytest.importorskip("httpx", reason=f"the web example tests need httpx: {_INSTALL}")
+from _web_deps import require_web
+
+require_web()
+import httpx  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:  # the examples live beside src/, not inside the package

@@ -14,15 +14,10 @@ from typing import Any
 
 import pytest
 
+from _web_deps import require_web
 from gcu_async.pytest_plugin import SimHandle
 
-_INSTALL = "pip install -e '.[web,test]'"
-pytest.importorskip("starlette", reason=f"the web example needs starlette: {_INSTALL}")
-pytest.importorskip("uvicorn", reason=f"the web example needs uvicorn: {_INSTALL}")
-pytest.importorskip("httpx", reason=f"the web example tests need httpx: {_INSTALL}")
-pytest.importorskip(
-    "websockets.asyncio.client", reason=f"the web example tests need websockets>=13: {_INSTALL}"
-)
+require_web()
 from websockets.asyncio.client import connect as ws_connect  # noqa: E402
 from websockets.exceptions import InvalidStatus  # noqa: E402
 from websockets.typing import Origin, Subprotocol  # noqa: E402
