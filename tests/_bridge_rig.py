@@ -162,9 +162,9 @@ async def bridge_rig(pod: str = "D-90Pro(TA)", *, max_zoom: float | None = 30.0,
     packet_times: list[float] = []
     handle = sim.model.handle
 
-    def timed_handle(packet: Any, **kwargs: Any) -> Any:
+    def timed_handle(packet: Any) -> Any:
         packet_times.append(time.monotonic())
-        return handle(packet, **kwargs)
+        return handle(packet)
 
     sim.model.handle = timed_handle  # type: ignore[method-assign]
     gcs = Peer(*GCS)

@@ -8,7 +8,6 @@ import asyncio
 import contextlib
 import itertools
 import os
-import resource
 import socket
 import threading
 import time
@@ -103,6 +102,8 @@ def rss_mib() -> float:
         for line in status:
             if line.startswith("VmRSS:"):
                 return int(line.split()[1]) / 1024
+    import resource  # POSIX only: the suite collects without it (tests/test_platforms.py)
+
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # pragma: no cover
 
 

@@ -117,9 +117,9 @@ async def open_rig(**options: Any) -> AsyncIterator[Rig]:
     received: list[HostPacket] = []
     handle = model.handle
 
-    def spy(packet: HostPacket, **kwargs: Any) -> Any:
+    def spy(packet: HostPacket) -> Any:
         received.append(packet)
-        return handle(packet, **kwargs)
+        return handle(packet)
 
     model.handle = spy  # type: ignore[method-assign]
     server = GcuSimulator(model).serve_memory()
@@ -988,9 +988,9 @@ async def test_connect_version_true_fails_at_once_and_version_1_connects(gcu_sim
     received: list[int] = []
     handle = gcu_sim.simulator.model.handle
 
-    def spy(packet: HostPacket, **kwargs: Any) -> Any:
+    def spy(packet: HostPacket) -> Any:
         received.append(packet.version)
-        return handle(packet, **kwargs)
+        return handle(packet)
 
     gcu_sim.simulator.model.handle = spy
     async with gcu_sim.client(version=1, connect_timeout=WAIT) as gcu:  # real UDP, loopback

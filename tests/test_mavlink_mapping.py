@@ -436,4 +436,4 @@ def test_gcu_async_imports_without_pymavlink() -> None:
         [sys.executable, "-c", code], capture_output=True, text=True, timeout=30, check=False
     )
     assert done.returncode == 0, done.stderr
-    assert "pip install gcu-async[mavlink]" in done.stdout
+    assert "pip install 'gcu-async[mavlink]'" in done.stdout

@@ -138,9 +138,9 @@ class Recorder:
         model = sim.model
         original = model.handle
 
-        def handle(packet: HostPacket, **kwargs: Any) -> Any:
+        def handle(packet: HostPacket) -> Any:
             self.packets.append((time.monotonic(), packet, model.state.mode))
-            return original(packet, **kwargs)
+            return original(packet)
 
         model.handle = handle  # type: ignore[method-assign]
 

@@ -93,3 +93,21 @@ def test_signed_yaw_is_used_counted_and_logged_once(caplog: pytest.LogCaptureFix
     assert "signed ±18000" in warnings[0] and "uses 250.00°" in warnings[0]
     report = model.conformance.report()
     assert report.keys == ("main.aircraft_yaw_raw",)
+
+
+def test_a_model_that_overrides_handle_with_its_documented_signature_still_works() -> None:
+    """Applications watch packets by overriding ``handle(packet)``; the conformance report
+    still shows each deviating packet's bytes as they arrived."""
+    seen: list[int] = []
+
+    class Watching(SimulatorModel):
+        def handle(self, packet):  # type: ignore[no-untyped-def]
+            seen.append(packet.version)
+            return super().handle(packet)
+
+    model = Watching(clock=ManualClock())
+    packet = host_bytes(version=3)
+    assert model.receive(packet)  # answered
+    assert seen == [3]
+    (deviation,) = [d for d in model.conformance.report().deviations if d.examples]
+    assert deviation.examples[0].raw_hex.replace(" ", "").lower() == packet.hex()
