@@ -80,6 +80,16 @@ class TappedClock(MonotonicClock):
         return self.last
 
 
+
+def end_process(proc: subprocess.Popen[Any]) -> None:
+    """SIGTERM ``proc``; SIGKILL if it is still there after 10 s (SITL, the bridge)."""
+    proc.terminate()
+    try:
+        proc.wait(10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait(10)
+
 class RecordingModel(SimulatorModel):
     """The simulator's model, keeping every (time, host packet, reply) it handled; the
     time is the one the model used for the packet (a replay on these times repeats it)."""
@@ -304,12 +314,7 @@ def run_session(binary: Path, workdir: Path, *, fly: bool = True) -> Session:
         finally:
             if driver is not None:
                 driver.m.close()
-            proc.terminate()
-            try:
-                proc.wait(10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait(10)
+            end_process(proc)
             log.close()
     session.total_s = time.monotonic() - t0
     return session

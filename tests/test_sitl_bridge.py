@@ -30,6 +30,7 @@ from _sitl_ardupilot import (
     RecordingModel,
     Session,
     SimThread,
+    end_process,
     free_block,
     wrap180,
 )
@@ -194,12 +195,7 @@ def run_bridge(binary: Path, workdir: Path) -> BridgeRun:
                     run.bridge_log = bridge.communicate(timeout=15)[0]
             if d is not None:
                 d.m.close()
-            sitl.terminate()
-            try:
-                sitl.wait(10)
-            except subprocess.TimeoutExpired:
-                sitl.kill()
-                sitl.wait(10)
+            end_process(sitl)
     return run
 
 
