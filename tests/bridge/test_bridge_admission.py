@@ -142,7 +142,7 @@ def test_log_limiter(caplog: pytest.LogCaptureFixture) -> None:
 def test_the_contract_states_the_bounds_the_code_uses() -> None:
     from pathlib import Path
 
-    text = " ".join((Path(__file__).parents[1] / "docs" / "mavlink-bridge.md").read_text(
+    text = " ".join((Path(__file__).parents[2] / "docs" / "mavlink-bridge.md").read_text(
         encoding="utf-8").split())
     a = admission
     for phrase in (

@@ -56,8 +56,8 @@ REJECTED = mavlink.MAV_RESULT_TEMPORARILY_REJECTED
 FAILED = mavlink.MAV_RESULT_FAILED
 RATE_LOW, RATE_HIGH = 45, 51
 """Host packets the simulator receives in any whole second (50 Hz; G4's floor(50) + 1)."""
-FLOOD = Path(__file__).with_name("_mavlink_flood.py")
-SIM = Path(__file__).with_name("_bridge_sim_process.py")
+FLOOD = Path(__file__).parent.parent / "_mavlink_flood.py"
+SIM = Path(__file__).parent.parent / "_bridge_sim_process.py"
 ENV = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
 RSS_GROWTH_MIB = 30.0
 THREAD_GROWTH = 2

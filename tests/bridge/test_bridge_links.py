@@ -23,7 +23,7 @@ from gcu_async.bridge._mavlink import mavlink, mavutil
 
 REQUEST = mavlink.MAV_CMD_REQUEST_MESSAGE
 INFO = mavlink.MAVLINK_MSG_ID_CAMERA_INFORMATION
-FLOOD = os.path.join(os.path.dirname(__file__), "_udp_flood.py")
+FLOOD = os.path.join(os.path.dirname(os.path.dirname(__file__)), "_udp_flood.py")
 
 
 class MavPeer:

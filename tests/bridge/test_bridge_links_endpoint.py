@@ -100,7 +100,7 @@ def test_the_docs_state_the_link_constants() -> None:
 
     from gcu_async.bridge import links, stream_link, udp_link
 
-    text = (Path(__file__).parent.parent / "docs" / "mavlink-bridge.md").read_text()
+    text = (Path(__file__).parent.parent.parent / "docs" / "mavlink-bridge.md").read_text()
     section = text[text.index("\n## Links\n"):]
     stated = [
         f"**{udp_link.DESTINATION_EXPIRY_SECONDS:g} s**", f"**{udp_link.MAX_DESTINATIONS}**",

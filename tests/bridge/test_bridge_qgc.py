@@ -13,7 +13,7 @@ import pytest
 from _bridge_rig import bridge_rig
 from gcu_async.bridge._mavlink import mavlink
 
-DOC = Path(__file__).resolve().parents[1] / "docs" / "qgroundcontrol.md"
+DOC = Path(__file__).resolve().parents[2] / "docs" / "qgroundcontrol.md"
 ROW = re.compile(r"^\|(?P<what>[^|]+)\|\s*`(?P<sends>[^`]+)`\s*\|\s*(?P<to>\d+)\s*\|"
                  r"\s*`(?P<answer>[^`]+)`\s*\|$")  # fmt: skip
 STREAM_ROW = re.compile(r"^\|\s*`(?P<msg>[A-Z_0-9]+)`\s*\|\s*(?P<from>[\d, ]+)\|")

@@ -237,7 +237,7 @@ def test_the_documented_bounds_are_the_codes() -> None:
     from gcu_async.capture.reassembly import MAX_STREAMS, SEGMENT_COST, WAITING_BUDGET
     from gcu_async.cli.decode import RAW_PROBE
 
-    docs = Path(__file__).resolve().parent.parent / "docs"
+    docs = Path(__file__).resolve().parent.parent.parent / "docs"
     wireshark = " ".join((docs / "wireshark.md").read_text().split())
     cli = " ".join((docs / "cli.md").read_text().split())
     for fact in (f"longer than {MAX_PACKET:,} bytes", f"over {MAX_BLOCK:,} bytes",

@@ -20,7 +20,7 @@ import pytest
 from gcu_async.protocol.catalogue import CATALOGUE
 
 CLI = [sys.executable, "-m", "gcu_async.cli"]
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 NEEDS_MARK = "[--aircraft]"
 
 

@@ -90,7 +90,7 @@ async def test_udp_ins_valid_goes_off_after_the_timeout_and_back_on(
 
 
 def test_the_client_guide_example_runs(tmp_path: Path) -> None:
-    guide = (Path(__file__).resolve().parents[1] / "docs" / "client.md").read_text("utf-8")
+    guide = (Path(__file__).resolve().parents[2] / "docs" / "client.md").read_text("utf-8")
     start = guide.index("<!-- aircraft-feed-example -->")
     match = re.compile(r"```python\n(.*?)```", re.DOTALL).search(guide, start)
     assert match is not None

@@ -216,7 +216,7 @@ async def test_link_events_iterators_are_independent_and_bounded(
 
 def test_the_docs_waiting_example_runs(tmp_path: Path) -> None:
     """The example in docs/client.md ("Waiting for …") runs as a reader would run it."""
-    text = (Path(__file__).resolve().parents[1] / "docs" / "client.md").read_text("utf-8")
+    text = (Path(__file__).resolve().parents[2] / "docs" / "client.md").read_text("utf-8")
     start = text.index("[start:waiting]")
     block = re.search(r"```python\n(.*?)```", text[start:], re.DOTALL)
     assert block is not None

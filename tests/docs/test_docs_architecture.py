@@ -8,7 +8,7 @@ from pathlib import Path
 
 import gcu_async
 
-PAGE = Path(__file__).resolve().parents[1] / "docs" / "architecture.md"
+PAGE = Path(__file__).resolve().parents[2] / "docs" / "architecture.md"
 
 
 def test_the_export_counts_are_true() -> None:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from gcu_async import Feedback, GcuMainFrame, Mode, Opcode
 
-PAGE = Path(__file__).resolve().parents[1] / "docs" / "client.md"
+PAGE = Path(__file__).resolve().parents[2] / "docs" / "client.md"
 
 
 def _example() -> dict[str, object]:

@@ -27,7 +27,7 @@ from gcu_async.protocol import Attitude, CameraFlags, Command, ControlValues, Fe
 from gcu_async.protocol.catalogue import CATALOGUE, REQUIRED, CatalogueEntry, Kind, Parameter
 from gcu_async.session import ControlKind
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 README = ROOT / "README.md"
 CLIENT_DOC = ROOT / "docs" / "client.md"
 START = "<!-- --8<-- [start:commands] -->"

@@ -30,7 +30,7 @@ from gcu_async.sim import GcuSimulator, SimulatorModel
 
 pytest.importorskip("pymavlink")
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "autopilot"
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "autopilot"
 
 
 def _load_flight() -> ModuleType:

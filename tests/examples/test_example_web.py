@@ -40,7 +40,7 @@ from _web_example import (  # noqa: E402
     running_web,
 )
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 if str(ROOT) not in sys.path:  # the examples live beside src/, not inside the package
     sys.path.insert(0, str(ROOT))
 

@@ -34,7 +34,7 @@ import httpx  # noqa: E402
 from _web_example import Web, running_web  # noqa: E402
 from gcu_async.sim import GcuSimulator  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 START_TIMEOUT = 15.0
 
 

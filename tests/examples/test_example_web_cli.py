@@ -19,7 +19,7 @@ from _web_deps import require_web
 require_web()
 import httpx  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 if str(ROOT) not in sys.path:  # the examples live beside src/, not inside the package
     sys.path.insert(0, str(ROOT))
 

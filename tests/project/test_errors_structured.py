@@ -13,7 +13,7 @@ from gcu_async.errors import LinkLost, ProtocolErrorReason
 from gcu_async.sim import ManualClock, SimulatorModel
 from gcu_async.transport._common import link_lost
 
-SRC = Path(__file__).resolve().parents[1] / "src" / "gcu_async"
+SRC = Path(__file__).resolve().parents[2] / "src" / "gcu_async"
 
 
 def _imports(tree: ast.AST) -> list[str]:

@@ -27,7 +27,7 @@ from gcu_async.transport.base import LinkEventKind
 from gcu_async.transport.udp import ignore_icmp_connreset
 from gcu_async.transport.url import serial_device
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 LOOP = "127.0.0.1"
 
 # -- serial://COM3 ---------------------------------------------------------------------------

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import gcu_async
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parent.parent.parent
 INIT = ROOT / "src" / "gcu_async" / "__init__.py"
 PAGE = ROOT / "docs" / "reference" / "top-level.md"
 

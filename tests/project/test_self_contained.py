@@ -30,8 +30,8 @@ from pathlib import Path, PurePosixPath
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-THIS = PurePosixPath("tests") / Path(__file__).name
+ROOT = Path(__file__).resolve().parents[2]
+THIS = PurePosixPath(Path(__file__).resolve().relative_to(ROOT).as_posix())
 NOTES_PAGE = ROOT / "docs" / "protocol-notes.md"
 
 _PRIVATE_ROOTS = ("home", "root", "Users", "work", "mnt", "media", "srv", "opt", "tmp")
@@ -180,10 +180,10 @@ def test_detector_flags_references_outside(path: str, text: str) -> None:
     [
         ("docs/transports.md", "`serial:///dev/ttyUSB0?baudrate=115200`"),
         ("benchmarks/_machine.py", 'open("/proc/cpuinfo")'),
-        ("tests/test_example_web.py", 'CHROMIUM = "/usr/bin/chromium"'),
+        ("tests/examples/test_example_web.py", 'CHROMIUM = "/usr/bin/chromium"'),
         ("examples/web/app.py", "GET /api/state and /static/app.js"),
         ("docs/reference/cli.md", "the [Command line](../cli.md) page"),
-        ("tests/test_docs_commands.py", 'Path(__file__).resolve().parents[1] / "README.md"'),
+        ("tests/docs/test_docs_commands.py", 'Path(__file__).resolve().parents[2] / "README.md"'),
         ("tests/conftest.py", "Path(__file__).parent.parent / 'docs'"),
         ("docs/cli.md", "`udp://192.168.144.108:2337`, `tcp://[::1]:2332`"),
         ("docs/x.md", "the folder src/gcu_async/tmp/ and https://example.org/home/x"),

@@ -13,12 +13,48 @@ import pytest
 
 from _tiers import ALONE, DEFAULT, FAST, HEAVY, KINDS, MARKERS, SLOW_KINDS, TIERS, kinds_of
 
-TESTS = Path(__file__).resolve().parent
+TESTS = Path(__file__).resolve().parent.parent
+LAYERS = ("protocol", "session", "transport", "client", "sim", "cli", "bridge", "capture",
+          "wireshark", "examples", "netns", "sitl", "docs", "project")  # fmt: skip
+"""The folders of tests/, one per layer of the architecture (CONTRIBUTING.md, "Where a test
+goes"); the shared modules (``_*.py``), conftest.py and data/ stay at the top."""
+
+
+def _by_name(tests: Path) -> tuple[dict[str, Path], list[str]]:
+    """Every test file under ``tests`` by name, and the names used more than once: TIERS (and
+    conftest's lookup) key files by name, and pytest imports them by name."""
+    paths = sorted(tests.rglob("test_*.py"))
+    names = [p.name for p in paths]
+    return {p.name: p for p in paths}, sorted({n for n in names if names.count(n) > 1})
+
+
+def _misplaced(tests: Path) -> list[str]:
+    """Test files under ``tests`` that are not directly in a layer's folder."""
+    return sorted(p.relative_to(tests).as_posix() for p in tests.rglob("test_*.py")
+                  if p.parent.parent != tests or p.parent.name not in LAYERS)  # fmt: skip
+
+
+def test_each_test_file_name_is_used_once() -> None:
+    assert _by_name(TESTS)[1] == [], "test file names used in more than one folder"
+
+
+def test_every_test_file_is_in_its_layer_folder() -> None:
+    assert _misplaced(TESTS) == [], "move each into its layer's folder (CONTRIBUTING.md)"
+
+
+def test_the_layout_checks_catch_a_repeated_name_and_a_stray_file(tmp_path: Path) -> None:
+    for rel in ("protocol/test_a.py", "sim/test_a.py", "test_b.py", "misc/test_c.py",
+                "sim/deeper/test_d.py", "sim/test_e.py"):  # fmt: skip
+        (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / rel).write_text("")
+    assert _by_name(tmp_path)[1] == ["test_a.py"]
+    assert _misplaced(tmp_path) == ["misc/test_c.py", "sim/deeper/test_d.py", "test_b.py"]
 
 
 def test_every_test_file_has_a_tier_and_every_entry_a_file() -> None:
-    files = {p.name for p in TESTS.glob("test_*.py")}
-    declared = {name for name in files if name in TIERS or _module_marks_a_kind(TESTS / name)}
+    paths, _ = _by_name(TESTS)
+    files = set(paths)
+    declared = {name for name in files if name in TIERS or _module_marks_a_kind(paths[name])}
     assert files - declared == set(), (
         "test files without a tier: add each to TIERS in tests/_tiers.py (or give it a "
         "module-level pytestmark with one of " + ", ".join(KINDS) + ")"

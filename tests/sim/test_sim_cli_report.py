@@ -15,7 +15,7 @@ from pathlib import Path
 from _sim_process import SimProcess
 from _sitl_ardupilot import load_conversation
 
-DATA = Path(__file__).parent / "data" / "ardupilot-4.7.0-sitl.gcuconv.gz"
+DATA = Path(__file__).parent.parent / "data" / "ardupilot-4.7.0-sitl.gcuconv.gz"
 
 
 def ardupilot_slice() -> list[tuple[float, bytes]]:

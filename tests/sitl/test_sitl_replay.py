@@ -22,7 +22,7 @@ from gcu_async.protocol import Opcode, command_code, decode_gcu_packet
 from gcu_async.sim import ManualClock, SimulatorModel
 from test_sitl_ardupilot import ARDUPILOT_DEVIATIONS
 
-DATA = Path(__file__).parent / "data" / "ardupilot-4.7.0-sitl.gcuconv.gz"
+DATA = Path(__file__).parent.parent / "data" / "ardupilot-4.7.0-sitl.gcuconv.gz"
 TOLERANCE_CENTIDEG = 5
 """0.05°: the replay runs the recorded packets at the recorded times."""
 

@@ -8,7 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-TOOL = Path(__file__).resolve().parents[1] / "tools" / "gen_wireshark_tables.py"
+TOOL = Path(__file__).resolve().parents[2] / "tools" / "gen_wireshark_tables.py"
 sys.path.insert(0, str(TOOL.parent))
 
 import gen_wireshark_tables as gen  # noqa: E402
