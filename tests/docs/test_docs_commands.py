@@ -2,7 +2,7 @@
 
 The command table of docs/client.md and the ``send`` table of docs/cli.md are generated from
 the catalogue (:mod:`gcu_async.protocol.catalogue`): each must equal what :func:`client_table`
-/ :func:`cli_table` render (``python tests/test_docs_commands.py --write`` rewrites them; the
+/ :func:`cli_table` render (``python tests/docs/test_docs_commands.py --write`` rewrites them; the
 README's copy, if it has one, must equal the docs' too). The client table is also parsed and
 every row checked against ``GcuClient``: the method exists and is awaitable, the backticked
 lower-case names of the parameters column are exactly the method's parameters, and calling
@@ -255,7 +255,9 @@ def _section(text: str, start: str, end: str) -> str:
 
 def test_client_table_is_the_catalogue() -> None:
     text = CLIENT_DOC.read_text(encoding="utf-8")
-    assert _section(text, START, END) == client_table(), "run tests/test_docs_commands.py --write"
+    assert _section(text, START, END) == client_table(), (
+        "run tests/docs/test_docs_commands.py --write"
+    )
 
 
 def test_cli_table_is_the_catalogue() -> None:

@@ -1,6 +1,6 @@
 """The web example (examples/web) end to end: the real app under uvicorn on 127.0.0.1 (an
 ephemeral port), connected to the simulator, driven by an HTTP client (httpx) and a
-WebSocket client (websockets); the page in a browser is tests/test_example_web_browser.py.
+WebSocket client (websockets); the page in a browser is tests/examples/test_example_web_browser.py.
 Needs the ``web`` extra (starlette, uvicorn, websockets) and httpx; skips without.
 """
 

@@ -1,8 +1,8 @@
 """The web example's protections over HTTP (httpx) and WebSocket (websockets), against the
 real app under uvicorn on 127.0.0.1 and the simulator, which counts every command it
 executes: every refused request must leave that count at zero. The browser's view of the
-same rules is tests/test_example_web_browser_security.py; hostile bodies by hypothesis and
-the body limit's memory bound are tests/test_example_web_bodies.py.
+same rules is tests/examples/test_example_web_browser_security.py; hostile bodies by hypothesis and
+the body limit's memory bound are tests/examples/test_example_web_bodies.py.
 """
 
 from __future__ import annotations

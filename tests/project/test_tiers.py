@@ -40,6 +40,10 @@ def test_each_test_file_name_is_used_once() -> None:
 
 def test_every_test_file_is_in_its_layer_folder() -> None:
     assert _misplaced(TESTS) == [], "move each into its layer's folder (CONTRIBUTING.md)"
+    guide = (TESTS.parent / "CONTRIBUTING.md").read_text(encoding="utf-8")
+    rows = [line for line in guide.splitlines() if line.startswith("| `tests/")]
+    named = {folder for row in rows for folder in re.findall(r"`tests/(\w+)/`", row)}
+    assert named == set(LAYERS), "CONTRIBUTING.md's table of folders"
 
 
 def test_the_layout_checks_catch_a_repeated_name_and_a_stray_file(tmp_path: Path) -> None:

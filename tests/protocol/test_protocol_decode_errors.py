@@ -1,6 +1,6 @@
 """Malformed packets (too short, bad header, length or CRC) raise RemoteProtocolError naming
 the problem, with its reason as data; anything else decodes (liberal receive: unexpected
-versions, status bytes and parameters are flagged, tests/test_protocol_liberal.py); unknown
+versions, status bytes and parameters are flagged, tests/protocol/test_protocol_liberal.py); unknown
 opcodes and sub frames are kept byte for byte; an all-zero sub frame is "none"."""
 
 from __future__ import annotations

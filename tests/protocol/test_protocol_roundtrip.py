@@ -81,7 +81,7 @@ def test_command_types_cover_every_opcode_and_every_public_command_class() -> No
         if not c.__name__.startswith("_")
         and getattr(sys.modules[c.__module__], c.__name__, None) is c
     }
-    # AnomalousCommand is decode-only (it never encodes): tests/test_protocol_liberal.py
+    # AnomalousCommand is decode-only (it never encodes): tests/protocol/test_protocol_liberal.py
     assert concrete == {*ALL_COMMAND_CLASSES, AnomalousCommand}
 
 

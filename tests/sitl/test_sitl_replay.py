@@ -2,7 +2,7 @@
 
 tests/data/ardupilot-4.7.0-sitl.gcuconv.gz holds both directions of a session between
 ArduPilot SITL 4.7.0 (its ``AP_Mount_XFRobot`` driver, the hardware-tested host) and the
-simulator (made by tests/test_sitl_ardupilot.py with ``GCU_SITL_RECORD``): ~50 s, 2,400
+simulator (made by tests/sitl/test_sitl_ardupilot.py with ``GCU_SITL_RECORD``): ~50 s, 2,400
 host packets. Replayed on a :class:`ManualClock` at the recorded times, the simulator must
 answer every packet, run each camera command once (record stop with parameter 0x00
 included: docs/protocol-notes.md §14), point the camera where the recorded replies — the ones
