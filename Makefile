@@ -71,7 +71,7 @@ tshark:
 	    tcpdump >/dev/null) || echo "tshark could not be installed: the dissector tests will skip"; \
 	fi
 
-# The network-topology tests (tests/test_netns_*.py) build two hosts in network namespaces
+# The network-topology tests (tests/netns/test_netns_*.py) build two hosts in network namespaces
 # with iproute2's `ip`, as root. In CI (CI=true, root, apt available) it is installed when
 # missing; elsewhere, or without root, those tests skip and say why.
 iproute2:

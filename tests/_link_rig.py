@@ -102,7 +102,7 @@ def rss_mib() -> float:
         for line in status:
             if line.startswith("VmRSS:"):
                 return int(line.split()[1]) / 1024
-    import resource  # POSIX only: the suite collects without it (tests/test_platforms.py)
+    import resource  # POSIX only: the suite collects without it (tests/project/test_platforms.py)
 
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # pragma: no cover
 

@@ -23,7 +23,7 @@ milliseconds a test.
 A test's kind comes from the closest of: its own marker (``@pytest.mark.realtime`` on the test
 or class, or a module-level ``pytestmark``), else its file's entry in :data:`TIERS`. A file in
 neither gets the full tier by default (so it still runs once on the main interpreter, never
-silently nowhere) and tests/test_tiers.py fails until it has an entry.
+silently nowhere) and tests/project/test_tiers.py fails until it has an entry.
 """
 
 from __future__ import annotations

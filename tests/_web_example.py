@@ -1,5 +1,5 @@
-"""Shared by the web example's tests (tests/test_example_web*.py): run the app under uvicorn
-on 127.0.0.1 (an ephemeral port) and talk to it. Imported only after the test module has
+"""Shared by the web example's tests (tests/examples/test_example_web*.py): run the app under
+uvicorn on 127.0.0.1 (an ephemeral port) and talk to it. Imported only after the test module has
 checked that starlette, uvicorn, httpx and websockets are there."""
 
 from __future__ import annotations

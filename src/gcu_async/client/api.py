@@ -8,11 +8,11 @@ values, a box an :class:`~gcu_async.protocol.ImageBox` or a plain 4-tuple. Nothi
 coerced, clipped or wrapped. A bad argument raises ``TypeError`` or
 :class:`~gcu_async.errors.FieldRangeError` whose message starts with the parameter name as
 the caller wrote it (``pitch_rate``, ``box.right``) and gives the allowed range and the
-value; then nothing is sent and no state changes (tests/test_client_boundary.py).
+value; then nothing is sent and no state changes (tests/client/test_client_boundary.py).
 
 The methods' names, parameters, defaults and ranges are those of the command catalogue
 (:mod:`gcu_async.protocol.catalogue`, docs/architecture.md "One command catalogue");
-tests/test_catalogue.py checks every method against its entry.
+tests/protocol/test_catalogue.py checks every method against its entry.
 """
 
 from __future__ import annotations

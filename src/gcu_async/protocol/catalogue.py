@@ -7,7 +7,7 @@ parameters (:class:`Parameter`: name, kind, unit, range, default), a one-line do
 its feedback's execution status reads (:class:`StatusRule`, docs/protocol-notes.md §2
 "Execution status per command"). The command line's ``send`` subcommands, the web example's
 table and the docs' command table are made from it; the client's methods and the command
-classes' own validation are checked against it by tests (tests/test_catalogue.py), so the
+classes' own validation are checked against it by tests (tests/protocol/test_catalogue.py), so the
 copies cannot drift. Sans-I/O and immutable: tuples of frozen dataclasses.
 
 One opcode may have several entries (``track`` / ``stop_tracking`` both send 0x17); the

@@ -1,0 +1,293 @@
+"""The docs' command tables are the command catalogue's, and match the client.
+
+The command table of docs/client.md and the ``send`` table of docs/cli.md are generated from
+the catalogue (:mod:`gcu_async.protocol.catalogue`): each must equal what :func:`client_table`
+/ :func:`cli_table` render (``python tests/docs/test_docs_commands.py --write`` rewrites them; the
+README's copy, if it has one, must equal the docs' too). The client table is also parsed and
+every row checked against ``GcuClient``: the method exists and is awaitable, the backticked
+lower-case names of the parameters column are exactly the method's parameters, and calling
+the method sends the command with the opcode of the row. Every command method of the client
+must have a row, so the table cannot silently drift.
+"""
+
+from __future__ import annotations
+
+import enum
+import inspect
+import re
+import sys
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import pytest
+
+from gcu_async import GcuClient, GcuSubFrame
+from gcu_async.client.api import CommandMethods
+from gcu_async.protocol import Attitude, CameraFlags, Command, ControlValues, Feedback, command_code
+from gcu_async.protocol.catalogue import CATALOGUE, REQUIRED, CatalogueEntry, Kind, Parameter
+from gcu_async.session import ControlKind
+
+ROOT = Path(__file__).resolve().parents[2]
+README = ROOT / "README.md"
+CLIENT_DOC = ROOT / "docs" / "client.md"
+START = "<!-- --8<-- [start:commands] -->"
+END = "<!-- --8<-- [end:commands] -->"
+PARAM_NAME = re.compile(r"`([a-z_][a-z0-9_]*)`")
+# Values for the parameters without a default (by name), in range for every method.
+SAMPLES: dict[str, Any] = {
+    "latitude": 47.39, "longitude": 8.54, "altitude": 420.0, "box": (0.4, 0.4, 0.6, 0.6),
+    "x": 0.5, "y": 0.5, "ratio": 10.0, "fraction": 0.5, "offset_hours": 1, "brightness": 128,
+}  # fmt: skip
+
+
+class Row(NamedTuple):
+    method: str
+    opcode: int
+    params: frozenset[str]
+
+
+def table_rows(text: str) -> list[Row]:
+    """The rows of the command table in ``text``."""
+    start, end = text.index(START), text.index(END)
+    rows = []
+    for line in text[start:end].splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) != 4 or not cells[0].startswith("`"):
+            continue  # header, separator, markers
+        method = cells[0].strip("`")
+        params = frozenset(PARAM_NAME.findall(cells[2]))
+        rows.append(Row(method, int(cells[1], 16), params))
+    return rows
+
+
+ROWS = table_rows(CLIENT_DOC.read_text(encoding="utf-8"))
+
+
+class Recorder(CommandMethods):
+    """The client's command methods with ``_submit`` recording instead of sending; a
+    state-checked record command is recorded only if the camera flags call for it."""
+
+    def __init__(self, info: GcuSubFrame | None) -> None:
+        self._sub = info
+        self.commands: list[Command] = []
+
+    @property
+    def _info(self) -> GcuSubFrame | None:
+        return self._sub
+
+    async def _submit(
+        self,
+        command: Command,
+        *,
+        timeout: float | None = None,
+        queue_timeout: float | None = None,
+        control: ControlValues | None = None,
+        recording_target: bool | None = None,
+    ) -> Feedback | None:
+        recording = self._sub is not None and self._sub.recording
+        if recording_target is not None and recording == recording_target:
+            return None
+        self.commands.append(command)
+        return Feedback(command_code(command), 0)
+
+    def _set_control(self, control: ControlValues | None, kind: ControlKind) -> None:
+        pass
+
+    def _current_attitude(self) -> Attitude:
+        return Attitude(0.0, 0.0, 0.0)
+
+
+def command_methods() -> set[str]:
+    return {
+        name
+        for name, member in inspect.getmembers(CommandMethods, inspect.iscoroutinefunction)
+        if not name.startswith("_") and name != "execute"
+    }
+
+
+def test_table_was_found() -> None:
+    assert len(ROWS) >= 30
+    assert len({r.method for r in ROWS}) == len(ROWS), "a method is listed twice"
+
+
+def test_every_command_method_has_a_row() -> None:
+    listed = {r.method for r in ROWS}
+    assert command_methods() - listed == set(), "command methods missing from the table"
+    assert listed - command_methods() == set(), "table rows without a command method"
+
+
+@pytest.mark.parametrize("row", ROWS, ids=lambda r: r.method)
+def test_row_matches_the_client(row: Row) -> None:
+    method = getattr(GcuClient, row.method, None)
+    assert method is not None, f"GcuClient has no method {row.method}"
+    assert inspect.iscoroutinefunction(method), f"{row.method} is not awaitable"
+    params = [p for p in inspect.signature(method).parameters.values() if p.name != "self"]
+    assert {p.name for p in params} == row.params, f"{row.method}: parameters differ"
+
+
+@pytest.mark.parametrize("row", ROWS, ids=lambda r: r.method)
+async def test_row_sends_its_opcode(row: Row) -> None:
+    signature = inspect.signature(getattr(CommandMethods, row.method))
+    kwargs = {
+        p.name: SAMPLES[p.name]
+        for p in signature.parameters.values()
+        if p.name != "self" and p.default is inspect.Parameter.empty
+    }
+    # start/stop_recording act only when the camera flags allow it: try both states
+    for info in (None, GcuSubFrame.build(camera_flags=CameraFlags.RECORDING)):
+        recorder = Recorder(info)
+        await getattr(recorder, row.method)(**kwargs)
+        if recorder.commands:
+            break
+    assert [command_code(c) for c in recorder.commands] == [row.opcode]
+
+
+def test_parser_rejects_a_drifted_table() -> None:
+    """The checks above can fail: a wrong opcode or parameter shows up in the parsed row."""
+    text = f"{START}\n| `zoom_to` | 0x26 | `ratio`, `speed` | |\n{END}"
+    (row,) = table_rows(text)
+    assert row == Row("zoom_to", 0x26, frozenset({"ratio", "speed"}))
+    signature = inspect.signature(GcuClient.zoom_to)
+    assert set(signature.parameters) - {"self"} != row.params
+
+
+# -- the `gcu-async send` table of docs/cli.md ------------------------------------------
+CLI_DOC = ROOT / "docs" / "cli.md"
+CLI_START = "<!-- --8<-- [start:send-commands] -->"
+CLI_END = "<!-- --8<-- [end:send-commands] -->"
+
+
+class CliRow(NamedTuple):
+    command: str
+    params: tuple[str, ...]
+    method: str
+
+
+def cli_rows(text: str) -> list[CliRow]:
+    start, end = text.index(CLI_START), text.index(CLI_END)
+    rows = []
+    for line in text[start:end].splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) != 3 or not cells[0].startswith("`"):
+            continue
+        params = tuple(PARAM_NAME.findall(cells[1]))
+        rows.append(CliRow(cells[0].strip("`"), params, cells[2].strip("`")))
+    return rows
+
+
+class Spy:
+    """Records which client method a CLI command calls."""
+
+    def __init__(self) -> None:
+        self.called: list[str] = []
+
+    def __getattr__(self, name: str) -> Any:
+        def method(*args: Any, **kwargs: Any) -> None:
+            self.called.append(name)
+
+        return method
+
+
+def test_cli_send_table_matches_the_cli() -> None:
+    from gcu_async.cli.send_commands import COMMANDS
+
+    rows = cli_rows(CLI_DOC.read_text(encoding="utf-8"))
+    assert [r.command for r in rows] == list(COMMANDS)
+    for row in rows:
+        spec = COMMANDS[row.command]
+        assert row.params == tuple(p.name for p in spec.params), row.command
+        spy = Spy()
+        spec.call(spy, [0.5] * len(spec.params))
+        assert spy.called == [row.method] == [spec.method], row.command
+        assert hasattr(GcuClient, row.method)
+
+
+# -- the tables, generated from the catalogue ---------------------------------------------
+def _value(value: object) -> str:
+    if isinstance(value, enum.Enum):
+        return value.name
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def _param_cell(p: Parameter) -> str:
+    """``name``: range unit (default), the doc."""
+    text = f"`{p.name}`"
+    bounds = " ".join(part for part in (p.range_text(), p.unit) if part)
+    if p.choices is not None:
+        bounds = f"`{p.choices.__name__}` {p.range_text()}"
+    detail = "; ".join(part for part in (bounds, p.doc) if part)
+    if p.default is None:
+        detail += " (default: the current one)"
+    elif p.default is not REQUIRED:
+        detail += f" (default {_value(p.default)})"
+    return f"{text}: {detail}" if p.kind is not Kind.CAMERAS else f"{text} ({_value(p.default)})"
+
+
+def _notes(entry: CatalogueEntry) -> str:
+    rule = entry.status.value
+    return f"{entry.doc} Status: {rule}." if entry.status.name != "STANDARD" else entry.doc
+
+
+def client_table() -> str:
+    """The command table of docs/client.md, from the catalogue."""
+    lines = [START, "| Method | Opcode | Parameters: range unit; what (default) | Notes |",
+             "|---|---|---|---|"]  # fmt: skip
+    for e in CATALOGUE:
+        params = "<br>".join(_param_cell(p) for p in e.parameters) or "—"
+        lines.append(f"| `{e.method}` | 0x{e.opcode:02X} | {params} | {_notes(e)} |")
+    return "\n".join([*lines, END])
+
+
+def cli_table() -> str:
+    """The ``send`` table of docs/cli.md, from the commands (made from the catalogue)."""
+    from gcu_async.cli.send_commands import COMMANDS
+
+    lines = [CLI_START, "| Command | Arguments | Client method |", "|---|---|---|"]
+    for name, spec in COMMANDS.items():
+        args = " ".join(f"[`{p.name}`]" if p.optional else f"`{p.name}`" for p in spec.params)
+        lines.append(f"| `{name}` | {args or '—'} | `{spec.method}` |")
+    return "\n".join([*lines, CLI_END])
+
+
+def _section(text: str, start: str, end: str) -> str:
+    return text[text.index(start) : text.index(end) + len(end)]
+
+
+def test_client_table_is_the_catalogue() -> None:
+    text = CLIENT_DOC.read_text(encoding="utf-8")
+    assert _section(text, START, END) == client_table(), (
+        "run tests/docs/test_docs_commands.py --write"
+    )
+
+
+def test_cli_table_is_the_catalogue() -> None:
+    text = CLI_DOC.read_text(encoding="utf-8")
+    assert _section(text, CLI_START, CLI_END) == cli_table(), "run with --write"
+
+
+def test_readme_table_if_any_is_the_docs_one() -> None:
+    text = README.read_text(encoding="utf-8")
+    if START in text:
+        assert _section(text, START, END) == client_table(), "README's command table is stale"
+
+
+def test_generated_table_parses_back() -> None:
+    """The parser above reads the generated table: one row per entry, its parameters."""
+    rows = table_rows(client_table())
+    assert [(r.method, r.opcode) for r in rows] == [(e.method, e.opcode) for e in CATALOGUE]
+    for row, entry in zip(rows, CATALOGUE, strict=True):
+        assert row.params == {p.name for p in entry.parameters}, entry.method
+
+
+def _write() -> None:
+    for path, start, end, table in ((CLIENT_DOC, START, END, client_table()),
+                                    (CLI_DOC, CLI_START, CLI_END, cli_table())):  # fmt: skip
+        text = path.read_text(encoding="utf-8")
+        path.write_text(text.replace(_section(text, start, end), table), encoding="utf-8")
+
+
+if __name__ == "__main__":
+    if sys.argv[1:] == ["--write"]:
+        _write()
+    else:
+        print(client_table())
