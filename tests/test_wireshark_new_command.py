@@ -26,7 +26,7 @@ from gcu_async.protocol import (
     UnknownCommand,
 )
 from gcu_async.wireshark import tables, template_path
-from gcu_async.wireshark._rows_shim import WireParam, WireRow
+from gcu_async.wireshark.tables import WireParam, WireRow
 
 pytestmark = needs_tshark
 
