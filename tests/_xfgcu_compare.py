@@ -6,10 +6,10 @@ the same field repeated, in order (``main.aircraft_attitude_raw`` three times); 
 field that is absent; a list of flag names is the set of bit fields under ``<path>`` whose
 value is true; ``*_hex`` is a bytes field without the suffix; a command's ``params`` are
 under the command's own name (``xfgcu.host.command.zoom_to.ratio``, :func:`params_prefix`).
-The exceptions are listed in :data:`RENAMED`. Every leaf of the JSON must have its field, every xfgcu field must map to a
-leaf or be one of the :data:`DISPLAY_ONLY` fields (checked on their own here), and every
-value must agree: integers and strings exactly, reals as the same double *and* printed with
-the digits decode prints (Python's repr) in the item's label.
+The exceptions are listed in :data:`RENAMED`. Every leaf of the JSON must have its field,
+every xfgcu field must map to a leaf or be one of the :data:`DISPLAY_ONLY` fields (checked on
+their own here), and every value must agree: integers and strings exactly, reals as the
+same double *and* printed with the digits decode prints (Python's repr) in the item's label.
 
 Anomalies (docs/client.md, "Liberal receive, strict send"): decode's ``anomalies`` list and the
 dissector's ``xfgcu.anomaly`` fields carry the same messages in the same order. For a command

@@ -57,8 +57,9 @@ def test_a_new_row_is_dissected_with_its_name_and_value(
     path = tmp_path / "defog.pcapng"
     write(path)
     before = [f.items[0] for f in dissect(path)]  # today's rows: an opcode V2.0.6 lacks
-    assert shown(before[0], "xfgcu.host.command.command") == [("UNKNOWN_0x82",
-                                                              "Command name: UNKNOWN_0x82")]
+    assert shown(before[0], "xfgcu.host.command.command") == [
+        ("UNKNOWN_0x82", "Command name: UNKNOWN_0x82")
+    ]
     assert not any(f.name.startswith("xfgcu.host.command.defog") for f in before[0].fields)
 
     real = tables.wire_rows()
@@ -76,12 +77,14 @@ def test_a_new_row_is_dissected_with_its_name_and_value(
         assert not item.has("xfgcu.anomaly")
     assert shown(host[2], "xfgcu.host.command.defog.level") == [("3", "Level: 3")]
     assert [f.show for f in host[2].named("xfgcu.anomaly")] == [
-        "level: 3 is outside the allowed range [0, 2]"]
+        "level: 3 is outside the allowed range [0, 2]"
+    ]
     assert host[2].has("xfgcu.anomaly.expert")
     for item, size in zip(host[3:], (0, 2), strict=True):
         assert not item.has("xfgcu.host.command.defog.level")
         assert [f.show for f in item.named("xfgcu.anomaly")] == [
             f"params: {size} is outside the allowed range [1, 1] bytes "
-            "(DEFOG has 1 parameter bytes)"]
+            "(DEFOG has 1 parameter bytes)"
+        ]
     assert shown(feedback, "xfgcu.gcu.feedback.command") == [("DEFOG", "Command name: DEFOG")]
     assert shown(feedback, "xfgcu.gcu.feedback.status") == [("FAILED", "Result: FAILED")]

@@ -118,7 +118,7 @@ def test_concurrent_writers_leave_one_complete_file(tmp_path: Path) -> None:
 def test_an_unwritable_folder_is_an_error(tmp_path: Path) -> None:
     blocker = tmp_path / "file"
     blocker.write_text("not a folder")
-    with pytest.raises(OSError):
+    with pytest.raises(NotADirectoryError):
         dissector_path(blocker / "cache")
     done = subprocess.run([*CLI, "wireshark", "--print-path", "--cache-dir", str(blocker / "c")],
                           capture_output=True, text=True, timeout=120, check=False)  # fmt: skip

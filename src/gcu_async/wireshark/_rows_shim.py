@@ -90,8 +90,8 @@ def _param(cls: type[c.Command], name: str, fmt: str, index: int) -> WireParam:
     low = high = None
     choice: str | None = None
     if name in _SWITCHES.get(cls, ()):  # the raw bytes "on" and "off" send
-        on = cls(**{name: True}).raw_params()[index]  # type: ignore[arg-type]
-        off = cls(**{name: False}).raw_params()[index]  # type: ignore[arg-type]
+        on = cls(**{name: True}).raw_params()[index]
+        off = cls(**{name: False}).raw_params()[index]
         low, high = min(on, off), max(on, off)
     elif p is not None and p.choices is not None:
         choice = p.choices.__name__

@@ -30,6 +30,7 @@ from gcu_async.protocol import AnomalousCommand, decode_command
 from gcu_async.protocol.anomalies import Anomaly
 from gcu_async.protocol.catalogue import CATALOGUE
 from gcu_async.protocol.enums import (
+    PIP_MODE_MASK,
     CameraFlags,
     FaultFlags,
     HostFlags,
@@ -40,7 +41,6 @@ from gcu_async.protocol.enums import (
     ThermalFlags,
 )
 from gcu_async.protocol.feedback import CALIBRATION_IN_PROGRESS, THERMAL_OPCODES, ZOOM_OPCODES
-from gcu_async.protocol.gcu_frames import PIP_MODE_MASK
 from gcu_async.protocol.pods import POD_NAMES
 from gcu_async.wireshark._rows_shim import WireParam, WireRow, wire_rows
 
@@ -243,13 +243,36 @@ def _unit_of(opcode: int, name: str) -> str:
     return ""
 
 
+def _raise(probe: _Probe, group: Sequence[int], raised: Sequence[int],
+           level: int) -> tuple[Anomaly, ...] | None:  # fmt: skip
+    """The anomalies of ``group`` at ``level`` with ``raised`` one step above it (``None``:
+    accepted)."""
+    assert probe.base is not None
+    raws = list(probe.base)
+    for i in group:
+        raws[i] = level + 1 if i in raised else level
+    shown, found = probe.decode(raws)
+    return None if shown is not None else found
+
+
+def _reference(one: int, two: int, levels: tuple[int, int], a: str, b: str) -> str | int:
+    """What a bound of an order anomaly is, from its values at the two levels: parameter
+    ``a`` (raised), ``b`` or a constant."""
+    if (one, two) == (levels[0] + 1, levels[1] + 1):
+        return a
+    if (one, two) == levels:
+        return b
+    if one == two:
+        return one
+    raise ValueError(f"order rule of {a} and {b}: a bound reads {one} then {two}")
+
+
 def _order_rules(probe: _Probe) -> Iterator[dict[str, Any]]:
     """Pairs of parameters decode wants in order (``a`` above ``b`` is flagged), found by
     raising ``a`` one step above the rest of its kind (same struct code and scale), then
     ``b`` with it; each reference of the anomaly (value, low, high) to ``a``, ``b`` or a
     constant, told apart by probing at two levels."""
     params = probe.row.params
-    assert probe.base is not None
     for kind in dict.fromkeys((p.fmt, p.scale) for p in params):
         group = [i for i, p in enumerate(params) if (p.fmt, p.scale) == kind]
         lo = max(_range(params[i])[0] for i in group)
@@ -257,36 +280,19 @@ def _order_rules(probe: _Probe) -> Iterator[dict[str, Any]]:
         if len(group) < 2 or hi - lo < 3:
             continue
         levels = (lo + (hi - lo) // 3, lo + (hi - lo) // 2)
-
-        def decode(raised: Sequence[int], level: int) -> tuple[Anomaly, ...] | None:
-            raws = list(probe.base)  # type: ignore[arg-type]
-            for i in group:
-                raws[i] = level + 1 if i in raised else level
-            shown, found = probe.decode(raws)
-            return None if shown is not None else found
-
         for a in group:
-            flagged = [decode([a], x) for x in levels]
-            if not all(flagged):
+            flagged = [_raise(probe, group, [a], x) for x in levels]
+            if not (flagged[0] and flagged[1]):
                 continue
+            first, second = flagged[0][0], flagged[1][0]
             for b in group:
-                if b == a or any(decode([a, b], x) is not None for x in levels):
+                if b == a or any(_raise(probe, group, [a, b], x) is not None for x in levels):
                     continue
-                first, second = (f[0] for f in flagged if f)
-
-                def ref(one: int, two: int) -> str | int:
-                    if (one, two) == (levels[0] + 1, levels[1] + 1):
-                        return params[a].name
-                    if (one, two) == levels:
-                        return params[b].name
-                    if one == two:
-                        return one
-                    raise ValueError(f"{probe.row.command}: order rule of {params[a].name} "
-                                     f"and {params[b].name} reads {first} / {second}")  # fmt: skip
-
-                yield {"above": params[a].name, "below": params[b].name,
-                       "field": first.field, "value": ref(first.value, second.value),
-                       "low": ref(first.low, second.low), "high": ref(first.high, second.high),
+                names = (params[a].name, params[b].name)
+                yield {"above": names[0], "below": names[1], "field": first.field,
+                       "value": _reference(first.value, second.value, levels, *names),
+                       "low": _reference(first.low, second.low, levels, *names),
+                       "high": _reference(first.high, second.high, levels, *names),
                        "unit": first.unit, "detail": first.detail}  # fmt: skip
 
 
@@ -314,22 +320,30 @@ def _lua_row(row: WireRow) -> dict[str, Any]:
 @lru_cache(maxsize=4)
 def _render(command_rows: tuple[WireRow, ...]) -> str:
     vendor = [f"  [0x{int(m):02X}] = {_lua_str(n)}," for m, n in POD_NAMES.items()]
-    opcodes = ["-- Opcode (byte 69) -> command name (the command rows)", "local OPCODE_NAMES = {",
-               *(f"  [0x{r.opcode:02X}] = {_lua_str(r.command)}," for r in command_rows), "}"]
+    opcodes = [
+        "-- Opcode (byte 69) -> command name (the command rows)",
+        "local OPCODE_NAMES = {",
+        *(f"  [0x{r.opcode:02X}] = {_lua_str(r.command)}," for r in command_rows),
+        "}",
+    ]
     enums: dict[str, type[IntEnum]] = {}
     for row in command_rows:
         for p in row.params:
             found = _enum(p)
             if found is not None and not issubclass(found, IntFlag):
-                enums[found.__name__] = found  # type: ignore[assignment]
-    enum_lines = ["-- The enums of choice parameters: name -> {value -> member name}",
-                  "local PARAM_ENUMS = {"]
+                enums[found.__name__] = found
+    enum_lines = [
+        "-- The enums of choice parameters: name -> {value -> member name}",
+        "local PARAM_ENUMS = {",
+    ]
     for name, enum in sorted(enums.items()):
         members = ", ".join(f"[{int(m)}] = {_lua_str(m.name or '')}" for m in enum)
         enum_lines.append(f"  {name} = {{{members}}},")
     enum_lines.append("}")
-    command_lines = ["-- Opcode -> its parameters in wire order (see gcu_async.wireshark.tables)",
-                     "local COMMAND_ROWS = {"]
+    command_lines = [
+        "-- Opcode -> its parameters in wire order (see gcu_async.wireshark.tables)",
+        "local COMMAND_ROWS = {",
+    ]
     for row in command_rows:
         command_lines.append(f"  [0x{row.opcode:02X}] = {_lua(_lua_row(row))},")
     command_lines.append("}")
