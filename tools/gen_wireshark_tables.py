@@ -6,7 +6,7 @@ whenever the dissector is written (``gcu-async wireshark --install`` / ``--print
 writes the same text to a file of your choice, to read or to hand to ``tshark -X
 lua_script:FILE``:
 
-    python tools/gen_wireshark_tables.py --write /tmp/xfgcu.lua
+    python tools/gen_wireshark_tables.py --write build/xfgcu.lua
 """
 
 from __future__ import annotations

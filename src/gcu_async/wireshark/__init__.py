@@ -46,7 +46,8 @@ def dissector_source() -> str:
 
 def cache_folder() -> Path:
     """Where :func:`dissector_path` writes: ``%LOCALAPPDATA%\\gcu_async\\Cache`` on
-    Windows, ``$XDG_CACHE_HOME/gcu_async`` (default ``~/.cache/gcu_async``) elsewhere."""
+    Windows, ``$XDG_CACHE_HOME/gcu_async`` elsewhere (default: ``.cache/gcu_async`` in the
+    home folder)."""
     if sys.platform == "win32":
         local = os.environ.get("LOCALAPPDATA")
         base = Path(local) if local else Path.home() / "AppData" / "Local"
