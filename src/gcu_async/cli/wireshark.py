@@ -1,4 +1,4 @@
-"""``gcu-async wireshark``: build the Wireshark dissector, say where it is, install it.
+"""``gcu-async wireshark``: write the Wireshark dissector and say where, or install it.
 
 Exit status: 0 done, 1 the file could not be written, 2 usage error.
 """
@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from gcu_async.wireshark import cache_folder, dissector_path, install, personal_plugin_folder
+from gcu_async.wireshark import dissector_path, install, personal_plugin_folder
 
 
 def register(sub: Any) -> None:
@@ -23,13 +23,15 @@ def register(sub: Any) -> None:
         "writes it to your personal Lua plugin folder (the one `tshark -G folders` reports, "
         "else ~/.local/lib/wireshark/plugins, or %APPDATA%\\Wireshark\\plugins on Windows); "
         "Wireshark loads it at its next start (or Analyze > Reload Lua Plugins). --print-path "
-        f"writes it to the user cache ({cache_folder()}) and prints its path; for one run: "
+        "writes it to your user cache ($XDG_CACHE_HOME/gcu_async, default .cache/gcu_async in "
+        "your home folder; %LOCALAPPDATA%\\gcu_async\\Cache on Windows) and prints its path; "
+        "for one run: "
         "tshark -X lua_script:$(gcu-async wireshark --print-path) -r capture.pcapng",
     )
     group = p.add_mutually_exclusive_group(required=True)
     group.add_argument("--print-path", action="store_true",
-                       help="write the dissector to the user cache (or DIR) and print its "
-                       "path")  # fmt: skip
+                       help="write the dissector to the user cache (or --cache-dir) and print "
+                       "its path")  # fmt: skip
     group.add_argument("--install", action="store_true",
                        help="write it to the personal Lua plugin folder")  # fmt: skip
     group.add_argument("--print-folder", action="store_true",
