@@ -179,7 +179,7 @@ def _learn_param(probe: _Probe, index: int, others: set[str]) -> dict[str, Any]:
     learnt: dict[str, Any] = {}
     params, _ = probe.with_value(index, low)
     assert params is not None
-    if _at(params, p.name) is _MISSING:  # its value fills one of several fields
+    if _at(params, p.name) in (_MISSING, None):  # its value fills one of several fields
         if struct.calcsize(p.fmt) > FULL_PROBE_BYTES:
             raise ValueError(f"{probe.row.command}.{p.name}: not in decode's parameters")
         learnt["segments"] = _segments(probe, index, others)

@@ -1,7 +1,8 @@
 -- xfgcu.lua: Wireshark dissector for XF Robot gimbal GCUs, "GCU private protocol" V2.0.6.
 --
--- Shipped with the Python package gcu_async: `gcu-async wireshark --install` copies it to
--- Wireshark's personal Lua plugin folder; `tshark -X lua_script:xfgcu.lua` loads it once.
+-- Shipped with the Python package gcu_async: `gcu-async wireshark --install` writes it to
+-- Wireshark's personal Lua plugin folder; `tshark -X lua_script:$(gcu-async wireshark
+-- --print-path)` loads it once.
 --
 -- What it dissects
 --   * UDP ports 2337 (GCU) and 2338 (host), TCP port 2332 (GCU server), and, by heuristics
