@@ -75,8 +75,9 @@ from gcu_async.protocol import (
     ZoomStop,
     ZoomTo,
 )
+from gcu_async.protocol.fields import WIRE_RANGES
 from gcu_async.protocol.host_frames import ControlValues
-from gcu_async.wireshark.tables import WIRE_RANGES, WireParam, rows
+from gcu_async.wireshark.tables import WireParam, rows
 
 HOST, GCU = ("127.0.0.1", 2338), ("127.0.0.1", 2337)
 TCP_HOST, TCP_GCU = ("127.0.0.1", 45000), ("127.0.0.1", 2332)

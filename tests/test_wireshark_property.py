@@ -4,8 +4,9 @@ Hypothesis draws packets of every frame kind: valid packets from the protocol st
 (every command, every sub frame kind, every feedback), and raw packets sealed with a valid
 CRC whose bytes are arbitrary (any values, versions, opcodes: every command row's and any
 other; parameters of the row's length with arbitrary bytes, so that the range checks of each
-command are exercised; wrong lengths; long execution statuses). Each example goes through UDP, TCP and serial with junk, CRC
-failures and cuts; tshark and decode must agree on every field.
+command are exercised; wrong lengths; long execution statuses). Each example goes through
+UDP, TCP and serial with junk, CRC failures and cuts; tshark and decode must agree on every
+field.
 """
 
 from __future__ import annotations

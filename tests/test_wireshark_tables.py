@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from gcu_async.protocol import COMMAND_TYPES, Opcode
+from gcu_async.protocol.fields import WIRE_RANGES
 from gcu_async.wireshark import (
     MARKER,
     dissector_path,
@@ -62,7 +63,7 @@ def test_every_command_has_its_row_in_wire_order() -> None:
         assert row.command == Opcode(row.opcode).name
         assert "<" + "".join(p.fmt for p in row.params) == layout.format, row.command
         for p in row.params:
-            low, high = tables.WIRE_RANGES[p.fmt]
+            low, high = WIRE_RANGES[p.fmt]
             assert low <= (p.low if p.low is not None else low)
             assert (p.high if p.high is not None else high) <= high
 

@@ -16,6 +16,7 @@ from typing import NamedTuple
 from gcu_async.protocol import commands as c
 from gcu_async.protocol.catalogue import CATALOGUE, Kind, Parameter
 from gcu_async.protocol.enums import Opcode
+from gcu_async.protocol.fields import WIRE_RANGES
 
 
 class WireParam(NamedTuple):
@@ -48,10 +49,6 @@ class WireRow(NamedTuple):
 _SCALES = {"box": c.IMAGE_SCALE, "point": c.IMAGE_SCALE, "latitude": 1e7, "longitude": 1e7,
            "altitude": 1000, "high": 10, "low": 10}  # fmt: skip
 _WIRE_FIRST = ("cameras", "longitude")  # KK leads; gaze-at sends longitude before latitude
-_WIRE = {"B": (0, 0xFF), "b": (-0x80, 0x7F), "H": (0, 0xFFFF), "h": (-0x8000, 0x7FFF),
-         "I": (0, 0xFFFF_FFFF), "i": (-0x8000_0000, 0x7FFF_FFFF)}  # fmt: skip
-
-
 _SWITCHES = {cls: {f.name for f in dataclasses.fields(cls) if f.type == "bool"}
              for cls in c.COMMAND_TYPES.values()}  # fmt: skip
 
@@ -99,12 +96,12 @@ def _param(cls: type[c.Command], name: str, fmt: str, index: int) -> WireParam:
     elif p is not None and p.kind is Kind.CAMERAS:
         low, high, choice = 1, 0xFF, "CameraMask"
     elif cls is c.ZoomTo:
-        low, high = _WIRE[fmt][0], c.ZOOM_FRACTION_RAW_MAX
+        low, high = WIRE_RANGES[fmt][0], c.ZOOM_FRACTION_RAW_MAX
     elif p is not None and p.low is not None and p.high is not None:
         low, high = round(p.low * scale), round(p.high * scale)
     elif name.startswith(("box.", "point.")):
         low, high = 0, c.IMAGE_SCALE
-    wire_low, wire_high = _WIRE[fmt]
+    wire_low, wire_high = WIRE_RANGES[fmt]
     if (low, high) == (wire_low, wire_high):
         low = high = None
     return WireParam(name, fmt, scale, unit, low, high, choice)

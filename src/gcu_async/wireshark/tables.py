@@ -41,12 +41,10 @@ from gcu_async.protocol.enums import (
     ThermalFlags,
 )
 from gcu_async.protocol.feedback import CALIBRATION_IN_PROGRESS, THERMAL_OPCODES, ZOOM_OPCODES
+from gcu_async.protocol.fields import WIRE_RANGES
 from gcu_async.protocol.pods import POD_NAMES
 from gcu_async.wireshark._rows_shim import WireParam, WireRow, wire_rows
 
-WIRE_RANGES = {"B": (0, 0xFF), "b": (-0x80, 0x7F), "H": (0, 0xFFFF), "h": (-0x8000, 0x7FFF),
-               "I": (0, 0xFFFF_FFFF), "i": (-0x8000_0000, 0x7FFF_FFFF)}  # fmt: skip
-"""The raw range of each struct code a parameter may have."""
 FULL_PROBE_BYTES = 2
 """A parameter this wide or narrower may be probed at every raw value its wire type has."""
 
