@@ -5,11 +5,13 @@ gain one the protocol does not have (``DEFOG``, opcode 0x82, one U8 parameter 0-
 example of docs/architecture.md's "Changing the protocol"), and real tshark, with the
 dissector written from them, shows the command by name with its parameter, its value, the
 range check and the length check, and names the GCU's feedback to it. The packaged
-``xfgcu.lua`` is the same file before and after.
+``xfgcu.lua`` is the same file before and after. A second row (a camera mask, a scaled S16
+and an S32) shows the generic decoder's other kinds of value.
 """
 
 from __future__ import annotations
 
+import struct
 from pathlib import Path
 
 import pytest
@@ -31,16 +33,22 @@ from gcu_async.wireshark.tables import WireParam, WireRow
 pytestmark = needs_tshark
 
 DEFOG = WireRow(0x82, "DEFOG", (WireParam("level", "B", 1, "", 0, 2, None),))
+HEATER = WireRow(0x83, "LENS_HEATER", (  # a wider one: a mask, a scaled S16, an S32
+    WireParam("cameras", "B", 1, "", 1, 255, "CameraMask"),
+    WireParam("target", "h", 10, "degC", -400, 850, None),
+    WireParam("heading", "i", 1e7, "deg", None, None, None),
+))  # fmt: skip
 HOST, GCU = ("127.0.0.1", 2338), ("127.0.0.1", 2337)
 PARAMS = [b"\x01", b"\x02", b"\x03", b"", b"\x01\x00"]
+HEATER_PARAMS = [struct.pack("<Bhi", 2, -123, -1_234_567_891), struct.pack("<Bhi", 0, 851, 0)]
 
 
 def write(path: Path) -> None:
     assert DEFOG.opcode not in COMMAND_TYPES  # the protocol package does not know it
     capture = PacketCapture(path)
     capture.acquire()
-    for params in PARAMS:
-        command = UnknownCommand(DEFOG.opcode, params)
+    for opcode, params in [(DEFOG.opcode, p) for p in PARAMS] + [(0x83, p) for p in HEATER_PARAMS]:
+        command = UnknownCommand(opcode, params)
         capture.udp(HOST, GCU, HostPacket(HostMainFrame(), None, command).encode())
     capture.udp(GCU, HOST, GcuPacket(GcuMainFrame(), None, Feedback(DEFOG.opcode, 1)).encode())
     capture.release()
@@ -63,9 +71,10 @@ def test_a_new_row_is_dissected_with_its_name_and_value(
     assert not any(f.name.startswith("xfgcu.host.command.defog") for f in before[0].fields)
 
     real = tables.wire_rows()
-    monkeypatch.setattr(tables, "wire_rows", lambda: (*real, DEFOG))
+    monkeypatch.setattr(tables, "wire_rows", lambda: (*real, DEFOG, HEATER))
     host = [f.items[0] for f in dissect(path)]
     feedback = host.pop()
+    heater = [host.pop(), host.pop()][::-1]
     assert template_path().read_bytes() == template  # nothing checked in was touched
 
     for item in host:
@@ -88,3 +97,19 @@ def test_a_new_row_is_dissected_with_its_name_and_value(
         ]
     assert shown(feedback, "xfgcu.gcu.feedback.command") == [("DEFOG", "Command name: DEFOG")]
     assert shown(feedback, "xfgcu.gcu.feedback.status") == [("FAILED", "Result: FAILED")]
+
+    first, second = heater
+    assert shown(first, "xfgcu.host.command.command") == [("LENS_HEATER",
+                                                           "Command name: LENS_HEATER")]
+    assert shown(first, "xfgcu.host.command.lens_heater.cameras") == [
+        ("0x02", "Cameras: 0x02 (camera_2)")]
+    assert shown(first, "xfgcu.host.command.lens_heater.target") == [
+        ("-12.3", "Target: -12.3 degC")]
+    assert shown(first, "xfgcu.host.command.lens_heater.heading") == [
+        ("-123.4567891", "Heading: -123.4567891 deg")]
+    assert [f.show for f in first.named("xfgcu.host.command.params_raw")] == [
+        "2", "-123", "-1234567891"]
+    assert not first.has("xfgcu.anomaly")
+    assert [f.show for f in second.named("xfgcu.anomaly")] == [
+        "cameras: 0 is outside the allowed range [1, 255]",
+        "target: 851 is outside the allowed range [-400, 850] degC"]
