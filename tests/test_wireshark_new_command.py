@@ -112,4 +112,4 @@ def test_a_new_row_is_dissected_with_its_name_and_value(
     assert not first.has("xfgcu.anomaly")
     assert [f.show for f in second.named("xfgcu.anomaly")] == [
         "cameras: 0 is outside the allowed range [1, 255]",
-        "target: 851 is outside the allowed range [-400, 850] degC"]
+        "target: 851 is outside the allowed range [-400, 850] 0.1 degC"]

@@ -589,8 +589,9 @@ local function add_param(ctx, row, p, off)
   if not ok then
     if template then
       anomaly(ctx, template.field, raw, template.low, template.high, template.unit, template.detail)
-    else
-      anomaly(ctx, p.name, raw, p.low, p.high, p.unit)
+    else -- a row decode does not know: the range in raw steps of the unit
+      local step = p.scale ~= 1 and pyfloat(1 / p.scale) .. " " or ""
+      anomaly(ctx, p.name, raw, p.low, p.high, p.unit ~= "" and step .. p.unit or "")
     end
   end
 end
