@@ -168,6 +168,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_url_rules.py": FAST,
     "test_wireshark_dissector.py": "tshark",
     "test_wireshark_property.py": "tshark",
+    "test_wireshark_new_command.py": "tshark",
     "test_wireshark_tables.py": "subprocess",
 }
 """Each test file's kind (or ``(kind, ALONE)``, ``(FAST, HEAVY)``). A test marked with a kind

@@ -4,11 +4,12 @@ The dissector names its fields after decode's JSON: ``xfgcu.<host|gcu>.<path>`` 
 ``<path>`` is the JSON path (``main.aircraft_attitude_deg.roll``); a JSON list of numbers is
 the same field repeated, in order (``main.aircraft_attitude_raw`` three times); ``None`` is a
 field that is absent; a list of flag names is the set of bit fields under ``<path>`` whose
-value is true; ``*_hex`` is a bytes field without the suffix. The exceptions are listed in
-:data:`RENAMED`. Every leaf of the JSON must have its field, every xfgcu field must map to a
-leaf or be one of the :data:`DISPLAY_ONLY` fields (checked on their own here), and every
-value must agree: integers and strings exactly, reals as the same double *and* printed with
-the digits decode prints (Python's repr) in the item's label.
+value is true; ``*_hex`` is a bytes field without the suffix; a command's ``params`` are
+under the command's own name (``xfgcu.host.command.zoom_to.ratio``, :func:`params_prefix`).
+The exceptions are listed in :data:`RENAMED`. Every leaf of the JSON must have its field,
+every xfgcu field must map to a leaf or be one of the :data:`DISPLAY_ONLY` fields (checked on
+their own here), and every value must agree: integers and strings exactly, reals as the
+same double *and* printed with the digits decode prints (Python's repr) in the item's label.
 
 Anomalies (docs/client.md, "Liberal receive, strict send"): decode's ``anomalies`` list and the
 dissector's ``xfgcu.anomaly`` fields carry the same messages in the same order. For a command
@@ -35,6 +36,7 @@ DISPLAY_ONLY = {
 }  # fmt: skip
 """Fields decode's JSON has no key for; checked by :func:`check_display_only`."""
 _CAMERA_BITS = re.compile(r"^xfgcu\.cameras\.camera_(\d)$")
+_PARAM_CAMERAS = re.compile(r"^xfgcu\.host\.command\.\w+\.cameras$")
 
 
 class Mismatch(AssertionError):
@@ -51,8 +53,8 @@ def expected_fields(obj: dict[str, Any]) -> tuple[dict[str, list[Any]], set[str]
 
     def walk(prefix: str, key: str, value: Any, command: str | None) -> None:
         name = f"{prefix}.{key}"
-        if key == "mode" and command == "NIGHT_VISION" and prefix.endswith(".params"):
-            name = f"{prefix}.night_vision_mode"
+        if key == "params" and command is not None and isinstance(value, dict):
+            name = params_prefix(command)  # each command's parameters: fields of their own
         if key.endswith("_hex"):
             name = RENAMED.get(name, name[: -len("_hex")])
             if value:
@@ -79,6 +81,11 @@ def expected_fields(obj: dict[str, Any]) -> tuple[dict[str, list[Any]], set[str]
             walk(f"xfgcu.{direction}", section, obj[section], command)
     values = {k: v for k, v in values.items() if v or k not in absent}
     return dict(values), absent, flags  # type: ignore[return-value]
+
+
+def params_prefix(command: str) -> str:
+    """Where the dissector puts the parameters of ``command`` (decode's name, ``ZOOM_TO``)."""
+    return f"xfgcu.host.command.{command.lower()}"
 
 
 def _same(field: Field, value: Any) -> bool:
@@ -114,7 +121,7 @@ def compare(obj: dict[str, Any], item: Item) -> list[str]:
     if want and not item.has("xfgcu.anomaly.expert"):
         problems.append("anomalies without their expert info")
     # an AnomalousCommand has raw parameters only: the dissector's unit fields are extra
-    unit_params = ("xfgcu.host.command.params."
+    unit_params = (params_prefix(obj["command"]["command"]) + "."
                    if "command" in obj and "params" not in obj["command"] else None)  # fmt: skip
     expected, absent, flags = expected_fields(obj)
     seen: dict[str, list[Field]] = defaultdict(list)
@@ -169,9 +176,9 @@ def check_display_only(obj: dict[str, Any], seen: dict[str, list[Field]]) -> lis
         vendor = [f.show for f in seen.get("xfgcu.gcu.sub.pod_model", [])]
         if vendor != [pod_name(obj["sub"]["pod_code"])]:
             problems.append(f"pod vendor name: {vendor} for code {obj['sub']['pod_code']}")
-    masks = [int(f.show, 0) for name in ("xfgcu.gcu.feedback.failed_cameras",
-                                         "xfgcu.host.command.params.cameras")
-             for f in seen.get(name, [])]  # fmt: skip
+    masks = [int(f.show, 0) for name, fs in seen.items()
+             if name == "xfgcu.gcu.feedback.failed_cameras" or _PARAM_CAMERAS.match(name)
+             for f in fs]  # fmt: skip
     bits = [(int(m.group(1)), f.show) for name, fs in seen.items()
             if (m := _CAMERA_BITS.match(name)) for f in fs]  # fmt: skip
     if len(masks) == 1:

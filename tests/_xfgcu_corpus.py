@@ -4,7 +4,8 @@
 replies of every sub frame and feedback kind, odd but valid values (unknown modes and pod
 codes, negative distances and time zones, reserved bits, version 1), and anomalous packets
 with a valid CRC that decode flags (version 3, wrong parameter lengths, parameters out of
-range, extra status bytes, statuses a command never answers). :func:`write_capture` writes
+range, extra status bytes, statuses a command never answers), and every command row at the
+edges of each parameter's range (:func:`row_packets`). :func:`write_capture` writes
 packets through :class:`PacketCapture` as UDP datagrams (some holding several packets,
 junk, or a packet whose CRC fails), a TCP connection whose segments cut packets anywhere,
 and a serial link read in random chunks.
@@ -13,6 +14,7 @@ and a serial link read in random chunks.
 from __future__ import annotations
 
 import random
+import struct
 from pathlib import Path
 
 from _protocol_strategies import seal
@@ -73,7 +75,9 @@ from gcu_async.protocol import (
     ZoomStop,
     ZoomTo,
 )
+from gcu_async.protocol.fields import WIRE_RANGES
 from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.wireshark.tables import WireParam, rows
 
 HOST, GCU = ("127.0.0.1", 2338), ("127.0.0.1", 2337)
 TCP_HOST, TCP_GCU = ("127.0.0.1", 45000), ("127.0.0.1", 2332)
@@ -215,8 +219,38 @@ def junk(rng: random.Random) -> bytes:
     return bytes(data)
 
 
+def row_packets() -> list[bytes]:
+    """Every command row (:func:`gcu_async.wireshark.tables.rows`) with each parameter in
+    turn at the ends of its range and one step past them (where its wire type has room),
+    the others at the bottom of theirs, and with one parameter byte too few: so that a
+    command added to the protocol is in the corpus without an entry here."""
+    body = bytes(64)
+    out = []
+    for row in rows():
+        layout = struct.Struct("<" + "".join(p.fmt for p in row.params))
+        ranges = [_raw_range(p) for p in row.params]
+        base = [low for low, _ in ranges]
+        for i, p in enumerate(row.params):
+            wire_low, wire_high = WIRE_RANGES[p.fmt]
+            low, high = ranges[i]
+            for raw in sorted({low - 1, low, high, high + 1}):
+                if wire_low <= raw <= wire_high:
+                    raws = list(base)
+                    raws[i] = raw
+                    out.append(seal(HOST_HEADER, body + bytes([row.opcode]) + layout.pack(*raws)))
+        if row.params:
+            out.append(seal(HOST_HEADER, body + bytes([row.opcode])
+                            + layout.pack(*base)[:-1]))  # fmt: skip
+    return out
+
+
+def _raw_range(p: WireParam) -> tuple[int, int]:
+    wire_low, wire_high = WIRE_RANGES[p.fmt]
+    return (wire_low if p.low is None else p.low, wire_high if p.high is None else p.high)
+
+
 def corpus() -> list[bytes]:
-    return host_packets() + gcu_packets() + anomalous_packets()
+    return host_packets() + gcu_packets() + anomalous_packets() + row_packets()
 
 
 def _chunks(data: bytes, rng: random.Random) -> list[bytes]:

@@ -34,7 +34,7 @@ ALLOWED: Mapping[str, frozenset[str]] = {
     "capture": FOUNDATION | {"protocol"},
     "transport": FOUNDATION | {"protocol", "capture"},
     "mavlink": FOUNDATION | {"protocol"},
-    "wireshark": FOUNDATION,
+    "wireshark": FOUNDATION | {"protocol"},
     "client": FOUNDATION | {"protocol", "session", "transport", "capture"},
     "sim": FOUNDATION | {"protocol", "transport", "capture"},
     "pytest_plugin": FOUNDATION | {"protocol", "transport", "client", "sim"},

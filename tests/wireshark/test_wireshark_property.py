@@ -2,13 +2,16 @@
 
 Hypothesis draws packets of every frame kind: valid packets from the protocol strategies
 (every command, every sub frame kind, every feedback), and raw packets sealed with a valid
-CRC whose bytes are arbitrary (any values, versions, opcodes; parameters of the right length
-with arbitrary bytes, so that the range checks of each command are exercised; wrong lengths;
-long execution statuses). Each example goes through UDP, TCP and serial with junk, CRC
-failures and cuts; tshark and decode must agree on every field.
+CRC whose bytes are arbitrary (any values, versions, opcodes: every command row's and any
+other; parameters of the row's length with arbitrary bytes, so that the range checks of each
+command are exercised; wrong lengths; long execution statuses). Each example goes through
+UDP, TCP and serial with junk, CRC failures and cuts; tshark and decode must agree on every
+field.
 """
 
 from __future__ import annotations
+
+import struct
 
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -18,9 +21,12 @@ from _tshark import dissect, needs_tshark, scratch_dir
 from _xfgcu_compare import compare_capture
 from _xfgcu_corpus import write_capture
 from gcu_async.cli.decode import decode_capture
-from gcu_async.protocol import COMMAND_TYPES, GCU_HEADER, HOST_HEADER
+from gcu_async.protocol import GCU_HEADER, HOST_HEADER
+from gcu_async.wireshark.tables import rows
 
 pytestmark = needs_tshark
+PARAMS_SIZE = {r.opcode: struct.calcsize("<" + "".join(p.fmt for p in r.params)) for r in rows()}
+"""Each command row's parameter bytes."""
 
 
 @st.composite
@@ -34,9 +40,9 @@ def raw_packets(draw: st.DrawFn) -> bytes:
     elif sub == "none":
         body[32:64] = bytes(32)
     if header == HOST_HEADER:
-        opcode = draw(st.one_of(st.sampled_from(sorted(COMMAND_TYPES)), U8))
-        cls = COMMAND_TYPES.get(opcode)
-        right = cls.LAYOUT.size if cls is not None else draw(st.integers(0, 20))
+        opcode = draw(st.one_of(st.sampled_from(sorted(PARAMS_SIZE)), U8))
+        known = PARAMS_SIZE.get(opcode)
+        right = known if known is not None else draw(st.integers(0, 20))
         size = right if draw(st.integers(0, 4)) else draw(st.integers(0, 20))
         params = draw(st.binary(min_size=size, max_size=size))
     else:

@@ -1,27 +1,94 @@
-"""The Wireshark dissector that ships with gcu_async, and where Wireshark looks for it.
+"""The Wireshark dissector that ships with gcu_async, built from the protocol package.
 
 ``xfgcu.lua`` (in this package) dissects the GCU private protocol V2.0.6 over UDP, TCP and
-the serial link type of gcu_async's captures; see docs/wireshark.md. ``gcu-async wireshark
---install`` copies it to the personal Lua plugin folder (:func:`personal_plugin_folder`).
+the serial link type of gcu_async's captures; see docs/wireshark.md. The file in the package
+is the hand-written part: one marker line stands where the tables go. :func:`dissector_source`
+is the complete dissector (the tables generated from :mod:`gcu_async.protocol` by
+:mod:`gcu_async.wireshark.tables`), so a command added to the protocol reaches Wireshark with
+no file to regenerate. ``gcu-async wireshark --install`` writes it to the personal Lua plugin
+folder (:func:`personal_plugin_folder`); ``--print-path`` writes it to the user cache
+(:func:`dissector_path`) and prints where.
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
 import shutil
 import subprocess
 import sys
+import tempfile
 from importlib.resources import files
 from pathlib import Path
 
+from gcu_async.wireshark import tables
+
 DISSECTOR_NAME = "xfgcu.lua"
+MARKER = "-- @@XFGCU_TABLES@@"
+"""The line of the packaged ``xfgcu.lua`` that the generated tables replace."""
 TSHARK_TIMEOUT = 10.0
 """Seconds ``tshark -G folders`` may take to say where the plugins go."""
 
 
-def dissector_path() -> Path:
-    """The dissector file inside the installed package."""
+def template_path() -> Path:
+    """The hand-written dissector inside the installed package (its tables not filled in)."""
     return Path(str(files("gcu_async.wireshark").joinpath(DISSECTOR_NAME)))
+
+
+def dissector_source() -> str:
+    """The complete dissector: the packaged ``xfgcu.lua`` with the tables generated from
+    :mod:`gcu_async.protocol` in place of its marker line."""
+    template = template_path().read_text(encoding="utf-8")
+    if template.count(MARKER) != 1:
+        raise ValueError(f"{template_path()}: the marker {MARKER!r} must appear exactly once")
+    return template.replace(MARKER, tables.render())
+
+
+def cache_folder() -> Path:
+    """Where :func:`dissector_path` writes: ``%LOCALAPPDATA%\\gcu_async\\Cache`` on
+    Windows, ``$XDG_CACHE_HOME/gcu_async`` elsewhere (default: ``.cache/gcu_async`` in the
+    home folder)."""
+    if sys.platform == "win32":
+        local = os.environ.get("LOCALAPPDATA")
+        base = Path(local) if local else Path.home() / "AppData" / "Local"
+        return base / "gcu_async" / "Cache"
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    return (Path(xdg) if xdg and os.path.isabs(xdg) else Path.home() / ".cache") / "gcu_async"
+
+
+def write_atomically(target: Path, text: str) -> Path:
+    """Write ``text`` to ``target`` through a temporary file in the same folder and a
+    rename, so that a reader (tshark, another writer) never sees a partial file; creates the
+    folder. Returns ``target``; raises ``OSError`` if it cannot be written."""
+    target.parent.mkdir(parents=True, exist_ok=True)
+    data = text.encode("utf-8")
+    fd, temp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.chmod(temp, 0o644)  # mkstemp's 0600 would hide a plugin from other accounts' tshark
+        os.replace(temp, target)
+    except BaseException:
+        Path(temp).unlink(missing_ok=True)
+        raise
+    return target
+
+
+def dissector_path(folder: Path | None = None) -> Path:
+    """The complete dissector as a file, for ``tshark -X lua_script:PATH``: written (once per
+    content) to ``folder`` (default :func:`cache_folder`) as ``xfgcu-<hash>.lua``, the hash
+    that of its text, so that versions of the package and their protocol tables never share
+    a file and concurrent writers write the same bytes. Raises ``OSError`` if the folder
+    cannot be written."""
+    text = dissector_source()
+    digest = hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
+    target = (folder if folder is not None else cache_folder()) / f"xfgcu-{digest}.lua"
+    try:
+        if target.read_text(encoding="utf-8") == text:
+            return target
+    except (OSError, UnicodeDecodeError):
+        pass
+    return write_atomically(target, text)
 
 
 def default_plugin_folder() -> Path:
@@ -61,10 +128,8 @@ def personal_plugin_folder() -> Path:
 
 
 def install(folder: Path | None = None) -> Path:
-    """Copy the dissector into ``folder`` (default :func:`personal_plugin_folder`), creating
-    it; returns the installed file. Raises ``OSError`` if it cannot be written."""
+    """Write the complete dissector (:func:`dissector_source`) into ``folder`` (default
+    :func:`personal_plugin_folder`) as ``xfgcu.lua``, creating the folder; returns the
+    installed file. Raises ``OSError`` if it cannot be written."""
     target_dir = folder if folder is not None else personal_plugin_folder()
-    target_dir.mkdir(parents=True, exist_ok=True)
-    target = target_dir / DISSECTOR_NAME
-    shutil.copyfile(dissector_path(), target)
-    return target
+    return write_atomically(target_dir / DISSECTOR_NAME, dissector_source())
