@@ -10,19 +10,19 @@ and raise :class:`~gcu_async.errors.LinkLost` when the client closes.
 
 from __future__ import annotations
 
-import abc
 import asyncio
 import contextlib
 from collections import deque
 from collections.abc import AsyncGenerator, Callable
 
 from gcu_async._checks import check_bool, check_positive, check_real, type_error
+from gcu_async.client.driver import ENDED, Driver
+from gcu_async.client.telemetry import Callbacks, Telemetry
 from gcu_async.errors import LinkLost, WaitTimeout
+from gcu_async.protocol.builder import build
 from gcu_async.protocol.catalogue import BY_METHOD
-from gcu_async.protocol.feedback import Feedback
-from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
 from gcu_async.protocol.units import wrap_degrees_180
-from gcu_async.session import TelemetrySample
+from gcu_async.session import SessionState, TelemetrySample
 from gcu_async.transport.base import LinkEvent
 
 Predicate = Callable[[TelemetrySample], bool]
@@ -59,46 +59,24 @@ def _attitude_targets(roll: float | None, pitch: float | None,
     return out
 
 
-class WaitingMethods(abc.ABC):
-    """Waits on telemetry and the link, shared by :class:`~gcu_async.client.GcuClient`."""
+class Waiting:
+    """Waits on telemetry and the link (the client's waiting part): it reads the driver's
+    session, subscribes to its telemetry and link events, and sends the closed-loop moves'
+    commands through the driver."""
 
-    # -- what the client provides ----------------------------------------------------------
-    @property
-    @abc.abstractmethod
-    def status(self) -> GcuMainFrame: ...
+    def __init__(self, driver: Driver, telemetry: Telemetry, links: Callbacks[LinkEvent]) -> None:
+        self._driver = driver
+        self._telemetry = telemetry
+        self._links = links
 
-    @property
-    @abc.abstractmethod
-    def _info(self) -> GcuSubFrame | None: ...
-
-    @abc.abstractmethod
-    def _latest(self) -> TelemetrySample | None:
-        """The latest reply as a sample (None before the first)."""
-
-    @abc.abstractmethod
-    def telemetry(self, maxsize: int = 1) -> AsyncGenerator[TelemetrySample, None]: ...
-
-    @abc.abstractmethod
-    def on_link_change(self, callback: Callable[[LinkEvent], None]) -> Callable[[], None]: ...
-
-    @abc.abstractmethod
-    def _link_up(self) -> bool:
-        """True while replies arrive (the session's link state)."""
-
-    @abc.abstractmethod
     def _closed(self) -> asyncio.Event | None:
-        """Set once the client closes; None while it is not open."""
+        return self._driver.closed()
 
-    @abc.abstractmethod
-    async def enter_euler_control(self, *, roll: float | None = None, pitch: float | None = None,
-                            yaw: float | None = None) -> Feedback: ...  # fmt: skip
+    def _latest(self) -> TelemetrySample | None:
+        return self._driver.session.latest
 
-    @abc.abstractmethod
-    async def zoom_to(self, ratio: float, *, cameras: int = ...) -> Feedback: ...
-
-    @property
-    @abc.abstractmethod
-    def max_zoom(self) -> float | None: ...
+    def _link_up(self) -> bool:
+        return self._driver.session.state is SessionState.UP
 
     # -- telemetry -------------------------------------------------------------------------
     async def wait_for(self, predicate: Predicate, *, timeout: float = WAIT_TIMEOUT,
@@ -123,7 +101,8 @@ class WaitingMethods(abc.ABC):
         last: list[TelemetrySample | None] = [latest]
 
         async def first() -> TelemetrySample:
-            async with contextlib.aclosing(self.telemetry()) as samples:
+            samples_ = self._telemetry.samples(1, self._driver.state in ENDED)
+            async with contextlib.aclosing(samples_) as samples:
                 async for sample in samples:
                     last[0] = sample
                     if predicate(sample):
@@ -178,11 +157,12 @@ class WaitingMethods(abc.ABC):
         _attitude_targets(roll, pitch, yaw)  # all checked before anything is sent
         check_positive("timeout", timeout)
         check_positive("tolerance", tolerance, unit="deg")
-        current = self.status.attitude
+        current = self._driver.status().attitude
         r = current.roll if roll is None else roll
         p = current.pitch if pitch is None else pitch
         y = current.yaw if yaw is None else yaw
-        await self.enter_euler_control(roll=r, pitch=p, yaw=y)
+        driver = self._driver
+        await driver.run(build("enter_euler_control", driver.context(), roll=r, pitch=p, yaw=y))
         return await self.wait_attitude(roll=r, pitch=p, yaw=y, tolerance=tolerance,
                                         timeout=timeout)  # fmt: skip
 
@@ -194,7 +174,7 @@ class WaitingMethods(abc.ABC):
         reported."""
         check_positive("timeout", timeout)
         check_positive("tolerance", tolerance, unit="x")
-        await self.zoom_to(ratio)
+        await self._driver.run(build("zoom_to", self._driver.context(), ratio=ratio))
         try:
             return await self.wait_zoom(ratio, tolerance=tolerance, timeout=timeout)
         except WaitTimeout as exc:
@@ -218,7 +198,7 @@ class WaitingMethods(abc.ABC):
             raise LinkLost("the client is not open")
         what = "the link up" if want else "the link down"
         changed = asyncio.Event()
-        unsubscribe = self.on_link_change(lambda event: changed.set())
+        unsubscribe = self._links.add(lambda event: changed.set())
         loop = asyncio.get_running_loop()
         deadline = loop.time() + timeout
         try:
@@ -249,7 +229,7 @@ class WaitingMethods(abc.ABC):
             events.append(event)
             ready.set()
 
-        unsubscribe = self.on_link_change(put)
+        unsubscribe = self._links.add(put)
         try:
             while True:
                 while events:
@@ -272,4 +252,4 @@ async def _either(a: asyncio.Event, b: asyncio.Event, timeout: float | None) -> 
             waiter.cancel()
 
 
-__all__ = ["ANGLE_TOLERANCE", "WAIT_TIMEOUT", "ZOOM_TOLERANCE", "WaitingMethods", "angle_error"]
+__all__ = ["ANGLE_TOLERANCE", "WAIT_TIMEOUT", "ZOOM_TOLERANCE", "Waiting", "angle_error"]

@@ -120,7 +120,8 @@ def check(p: Parameter, value: object, context: Context = NO_CONTEXT) -> Any:
             value = getattr(context.attitude, p.name)
         return _real(p, value, context)
     if kind is Kind.CAMERAS or kind is Kind.INTEGER:
-        assert p.low is not None and p.high is not None
+        assert p.low is not None
+        assert p.high is not None
         unit = CAMERA_MASK if kind is Kind.CAMERAS else p.unit
         return check_int(p.name, value, int(p.low), int(p.high), unit)
     if kind is Kind.SWITCH:
@@ -134,7 +135,8 @@ def check(p: Parameter, value: object, context: Context = NO_CONTEXT) -> Any:
 
 
 def _real(p: Parameter, value: object, context: Context) -> float:
-    assert p.low is not None and p.high is not None
+    assert p.low is not None
+    assert p.high is not None
     low, high, unit, detail = p.low, p.high, p.unit, ""
     if unit == RATE_UNIT:
         zoom = context.zoom
@@ -167,8 +169,10 @@ def _box(name: str, value: object) -> c.ImageBox:
     """An ImageBox, a plain 4-tuple or a list of 4, each edge a fraction checked under
     ``box.<edge>``."""
     box = check_sequence(name, value, c.ImageBox)
-    edge = FRACTION
-    return c.ImageBox(*(check_real(f"{name}.{f}", v, edge.low, edge.high, edge.unit)
+    low, high = FRACTION.low, FRACTION.high
+    assert low is not None
+    assert high is not None
+    return c.ImageBox(*(check_real(f"{name}.{f}", v, low, high, FRACTION.unit)
                         for f, v in zip(c.ImageBox._fields, box, strict=True)))  # fmt: skip
 
 
@@ -201,7 +205,8 @@ Maker = Callable[[CatalogueEntry, dict[str, Any], Context], Submission]
 
 def _positional(entry: CatalogueEntry, v: dict[str, Any], context: Context) -> Submission:
     """The command class called with the values in the catalogue's order."""
-    return Submission(entry.command(*v.values()))
+    command: Callable[..., c.Command] = entry.command
+    return Submission(command(*v.values()))
 
 
 def _euler(entry: CatalogueEntry, v: dict[str, Any], context: Context) -> Submission:
@@ -223,7 +228,8 @@ def _rates(entry: CatalogueEntry, v: dict[str, Any], context: Context) -> Submis
 
 def _keywords(entry: CatalogueEntry, v: dict[str, Any], context: Context) -> Submission:
     """The command class called with the values by name (gaze_at, zoom_to...)."""
-    return Submission(entry.command(**v))
+    command: Callable[..., c.Command] = entry.command
+    return Submission(command(**v))
 
 
 def _timeout(entry: CatalogueEntry, v: dict[str, Any], context: Context) -> Submission:
@@ -243,12 +249,13 @@ def _point(entry: CatalogueEntry, v: dict[str, Any], context: Context) -> Submis
     args = dict(v)
     point = c.ImagePoint(args.pop("x"), args.pop("y"))
     cameras = args.pop("cameras")
-    return Submission(entry.command(*args.values(), point, cameras))
+    command: Callable[..., c.Command] = entry.command
+    return Submission(command(*args.values(), point, cameras))
 
 
 def _recording(target: bool) -> Maker:
     def make(entry: CatalogueEntry, v: dict[str, Any], context: Context) -> Submission:
-        return Submission(entry.command(v["cameras"]), recording_target=target)
+        return Submission(c.Record(v["cameras"]), recording_target=target)
 
     return make
 
