@@ -216,6 +216,10 @@ class GcuClient(OpenClose):
         """Samples dropped so far by telemetry iterators that fell behind, all together."""
         return self._telemetry.dropped
 
+    @telemetry_dropped.setter
+    def telemetry_dropped(self, value: int) -> None:
+        self._telemetry.dropped = check_int("telemetry_dropped", value, 0)
+
     # -- configuration (read-only views of the session's) ----------------------------------
     @property
     def rate_hz(self) -> float:
@@ -556,11 +560,14 @@ class GcuClient(OpenClose):
         :class:`~gcu_async.errors.LinkLost` if the client closes meanwhile."""
         await self._waiting.wait_link(up, timeout=timeout)
 
-    def link_events(self) -> AsyncGenerator[LinkEvent, None]:
+    async def link_events(self) -> AsyncGenerator[LinkEvent, None]:
         """Iterate over link events (lost, restored, an OS error, a new peer, a retried
         open) from now on; ends when the client closes. Up to 256 unread events are kept
         (the oldest go first)."""
-        return self._waiting.link_events()
+        events = self._waiting.link_events()
+        async with contextlib.aclosing(events):
+            async for event in events:
+                yield event
 
     # -- commands: pod modes --------------------------------------------------------------
     async def enter_euler_control(
