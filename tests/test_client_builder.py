@@ -442,14 +442,16 @@ def test_the_option_attributes_stay_readable_and_writable() -> None:
 
 
 # -- options checked once --------------------------------------------------------------------
-@pytest.mark.parametrize(("option", "value"), [("rate_hz", 500.0), ("rate_hz", 1.9),
-                                               ("rate_hz", True), ("rate_hz", math.inf),
-                                               ("version", 3), ("version", 0),
-                                               ("version", 2.0), ("version", None)])  # fmt: skip
+@pytest.mark.parametrize(("option", "value", "error"), [
+    *(("rate_hz", v, ValueError) for v in (0, -1, 1.5, 1.9, 200.5, 500.0, math.inf, math.nan)),
+    ("rate_hz", True, TypeError), ("rate_hz", "50", TypeError),
+    ("version", 3, ValueError), ("version", 0, ValueError),
+    ("version", 2.0, TypeError), ("version", None, TypeError),
+])  # fmt: skip
 def test_rate_and_version_are_refused_at_construction_with_the_sessions_message(
-    option: str, value: object
+    option: str, value: object, error: type[Exception]
 ) -> None:
-    with pytest.raises((TypeError, ValueError)) as session_error:
+    with pytest.raises(error) as session_error:
         Session(**{option: value})  # type: ignore[arg-type]
     with pytest.raises(type(session_error.value)) as client_error:
         GcuClient(MemoryTransport(), **{option: value})
