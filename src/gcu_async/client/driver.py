@@ -73,7 +73,7 @@ class Driver:
                  max_zoom: float | None) -> None:  # fmt: skip
         self.session = session
         self.transport = transport
-        self.clock = clock
+        self._clock = clock
         self.telemetry = telemetry
         self.links = links
         self.check_support = check_support
@@ -132,7 +132,7 @@ class Driver:
         except BaseException:
             self.state = ClientState.CLOSED
             raise
-        self.session.open(self.clock())
+        self.session.open(self._clock())
         self._arrival_bound(loop)
         self._pump()
         try:
@@ -153,7 +153,7 @@ class Driver:
         transport."""
         self.state = ClientState.CLOSING
         try:
-            self.session.close(self.clock(), reason)
+            self.session.close(self._clock(), reason)
             self._dispatch()
             if self._timer is not None:
                 self._timer.cancel()
@@ -190,7 +190,7 @@ class Driver:
         self._check_support(command)
         loop = asyncio.get_running_loop()
         ticket = self.session.submit(
-            command, self.clock(), timeout=submission.timeout, queue_timeout=queue_timeout,
+            command, self._clock(), timeout=submission.timeout, queue_timeout=queue_timeout,
             control=submission.control, recording_target=submission.recording_target,
         )  # fmt: skip
         future: asyncio.Future[Feedback | None] = loop.create_future()
@@ -204,7 +204,7 @@ class Driver:
             self._futures.pop(ticket, None)
             self._needs_ins.pop(ticket, None)
             if not ticket.done:
-                self.session.cancel(ticket, self.clock())
+                self.session.cancel(ticket, self._clock())
                 self._dispatch()
                 self._schedule()
             raise
@@ -229,8 +229,8 @@ class Driver:
         transport = self.transport
         if transport.ordered:
             return
-        now = self.clock()
-        if (transport.drains and self.clock is time.monotonic
+        now = self._clock()
+        if (transport.drains and self._clock is time.monotonic
                 and type(loop).time is asyncio.BaseEventLoop.time):  # fmt: skip
             self._bound_from_loop = True
             self._rx_bound = now
@@ -255,12 +255,12 @@ class Driver:
         session = self.session
         try:
             if self._rx_bound is not None and not self._bound_from_loop:
-                now = self.clock()  # read what waits first: replies before sends
+                now = self._clock()  # read what waits first: replies before sends
                 if self.transport.read_pending():
                     self._rx_bound = now
             wire = WIRE_LOG.isEnabledFor(logging.DEBUG)  # the level may change at run time
             session.trace = self._trace if wire else None
-            now = self.clock()
+            now = self._clock()
             data = session.poll(now)
             if data is not None and self._needs_ins and not session.ins_valid(now):
                 for ticket in self._needs_ins:  # they went out with INS invalid
@@ -281,7 +281,7 @@ class Driver:
     def _schedule(self) -> None:
         if self.state is ClientState.CLOSED:
             return
-        now = self.clock()
+        now = self._clock()
         when = self.session.next_wakeup(now)
         if when == math.inf or when >= self._timer_at:
             return
@@ -298,7 +298,7 @@ class Driver:
         log_packet(self.transport.url, False, packet)
 
     def _on_data(self, data: bytes) -> None:
-        self.session.receive(data, self.clock(), datagram=self._datagram,
+        self.session.receive(data, self._clock(), datagram=self._datagram,
                              arrived_after=self._rx_bound)  # fmt: skip
         self._dispatch()
         if self._timer is None:  # a reply never brings the next wake-up forward
@@ -306,7 +306,7 @@ class Driver:
 
     def _on_link_event(self, event: LinkEvent) -> None:
         if event.kind is LinkEventKind.LOST:
-            self.session.connection_lost(self.clock(), event.detail or "transport lost")
+            self.session.connection_lost(self._clock(), event.detail or "transport lost")
             self._dispatch()
             self._schedule()
         elif event.kind is LinkEventKind.PEER:
