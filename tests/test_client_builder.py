@@ -28,7 +28,7 @@ from gcu_async import GcuClient, GcuSubFrame
 from gcu_async.cli.send_commands import COMMANDS
 from gcu_async.errors import CommandLinkLost, FieldRangeError
 from gcu_async.protocol import commands as c
-from gcu_async.protocol.builder import Context, Submission, angles, build, rates
+from gcu_async.protocol.builder import MAKERS, Context, Submission, angles, build, check, rates
 from gcu_async.protocol.catalogue import BY_METHOD, CATALOGUE, CatalogueEntry, Kind, Parameter
 from gcu_async.protocol.gcu_frames import GcuMainFrame
 from gcu_async.protocol.host_frames import ControlValues
@@ -135,6 +135,39 @@ async def test_good_arguments_build_and_the_client_only_refuses_to_send(
     assert type(submission.command) is entry.command
     error, message = await through_client(entry, **good(entry))
     assert error is CommandLinkLost and "not opened" in message
+
+
+@pytest.mark.parametrize("entry", [e for e in CATALOGUE if e.method not in MAKERS],
+                         ids=lambda e: e.method)  # fmt: skip
+def test_a_positional_command_gets_each_value_in_its_field_of_the_same_name(
+    entry: CatalogueEntry,
+) -> None:
+    """The default maker calls the class with the values in the catalogue's order: the
+    class's fields must be in that order (a drift puts a value in the wrong field)."""
+    distinct = {p.name: p for p in entry.parameters}
+    given = {name: _non_default(p, i) for i, (name, p) in enumerate(distinct.items())}
+    command = build(entry, **given).command
+    for name, p in distinct.items():
+        assert getattr(command, name) == check(p, given[name]), (entry.method, name)
+
+
+def _non_default(p: Parameter, i: int) -> object:
+    """A valid value other than the default, different for each position ``i`` (so a swap
+    of two fields of the same kind and range shows)."""
+    if p.kind is Kind.SWITCH:
+        return p.default is not True
+    if p.kind is Kind.CHOICE:
+        assert p.choices is not None
+        return next(m for m in p.choices if m != p.default)
+    if p.kind in (Kind.INTEGER, Kind.CAMERAS):
+        assert p.high is not None
+        value = int(p.high) - i
+        return value if value != p.default else value - 1
+    if p.kind is Kind.BOX:
+        return (0.1, 0.2, 0.7, 0.8)
+    assert p.low is not None and p.high is not None
+    # decreasing with i: a high threshold (before its low) stays above it
+    return p.low + (min(p.high, p.low + 100.0) - p.low) * (0.77 - 0.1 * i)
 
 
 def test_missing_and_unknown_arguments_are_type_errors() -> None:
