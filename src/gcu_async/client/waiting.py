@@ -81,13 +81,7 @@ class Waiting:
     # -- telemetry -------------------------------------------------------------------------
     async def wait_for(self, predicate: Predicate, *, timeout: float = WAIT_TIMEOUT,
                        what: str = "the condition") -> TelemetrySample:  # fmt: skip
-        """Return the first telemetry sample for which ``predicate(sample)`` is true — the
-        latest reply already, if it qualifies and the link is up. ``what`` names the
-        condition in the error.
-
-        Raises :class:`~gcu_async.errors.WaitTimeout` after ``timeout`` seconds (the last
-        sample seen is its ``last``), :class:`~gcu_async.errors.LinkLost` if the client
-        closes, and whatever ``predicate`` raises."""
+        """See :meth:`GcuClient.wait_for <gcu_async.client.GcuClient.wait_for>`."""
         if not callable(predicate):
             raise type_error("predicate", "a callable taking a TelemetrySample", predicate)
         timeout = check_positive("timeout", timeout)
@@ -117,9 +111,7 @@ class Waiting:
     async def wait_attitude(self, *, roll: float | None = None, pitch: float | None = None,
                             yaw: float | None = None, tolerance: float = ANGLE_TOLERANCE,
                             timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
-        """Wait until the camera's reported attitude (``status.attitude``: absolute Euler
-        angles, degrees) is within ``tolerance`` degrees of every angle given; angles left
-        ``None`` are not checked. Yaw compares the short way round (359° is 2° from 1°)."""
+        """See :meth:`GcuClient.wait_attitude <gcu_async.client.GcuClient.wait_attitude>`."""
         given = _attitude_targets(roll, pitch, yaw)
         tol = check_positive("tolerance", tolerance, unit="deg")
         if not given:
@@ -134,8 +126,7 @@ class Waiting:
 
     async def wait_zoom(self, ratio: float, *, tolerance: float = ZOOM_TOLERANCE,
                         timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
-        """Wait until camera 1's reported zoom ratio (sub frame) is within ``tolerance`` of
-        ``ratio``."""
+        """See :meth:`GcuClient.wait_zoom <gcu_async.client.GcuClient.wait_zoom>`."""
         target = check_real("ratio", ratio, 1.0, 6553.5, "x")
         tol = check_positive("tolerance", tolerance, unit="x")
 
@@ -150,10 +141,7 @@ class Waiting:
     async def reach_attitude(self, *, roll: float | None = None, pitch: float | None = None,
                              yaw: float | None = None, tolerance: float = ANGLE_TOLERANCE,
                              timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
-        """Euler-angle control (:meth:`enter_euler_control`) to the angles given — omitted ones
-        keep the current attitude — then wait until the camera is within ``tolerance``
-        degrees of all three. ``timeout`` bounds the wait after the GCU confirmed the mode
-        (the command itself has its own ``command_timeout``)."""
+        """See :meth:`GcuClient.reach_attitude <gcu_async.client.GcuClient.reach_attitude>`."""
         _attitude_targets(roll, pitch, yaw)  # all checked before anything is sent
         check_positive("timeout", timeout)
         check_positive("tolerance", tolerance, unit="deg")
@@ -168,10 +156,7 @@ class Waiting:
 
     async def reach_zoom(self, ratio: float, *, tolerance: float = ZOOM_TOLERANCE,
                          timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
-        """:meth:`zoom_to` ``ratio`` (camera 1), then wait until the reported zoom is within
-        ``tolerance`` of it. A ratio above :attr:`max_zoom` (when given) is refused before
-        anything is sent; a timeout with the zoom short of the ratio names the ratio last
-        reported."""
+        """See :meth:`GcuClient.reach_zoom <gcu_async.client.GcuClient.reach_zoom>`."""
         check_positive("timeout", timeout)
         check_positive("tolerance", tolerance, unit="x")
         await self._driver.run(build("zoom_to", self._driver.context(), ratio=ratio))
@@ -188,9 +173,7 @@ class Waiting:
 
     # -- the link --------------------------------------------------------------------------
     async def wait_link(self, up: bool = True, *, timeout: float = WAIT_TIMEOUT) -> None:
-        """Return once the link is up (``up=False``: down); at once if it already is.
-        :class:`~gcu_async.errors.WaitTimeout` after ``timeout`` seconds,
-        :class:`~gcu_async.errors.LinkLost` if the client closes meanwhile."""
+        """See :meth:`GcuClient.wait_link <gcu_async.client.GcuClient.wait_link>`."""
         want = check_bool("up", up)
         timeout = check_positive("timeout", timeout)
         closed = self._closed()
@@ -216,9 +199,7 @@ class Waiting:
             unsubscribe()
 
     async def link_events(self) -> AsyncGenerator[LinkEvent, None]:
-        """Iterate over link events (lost, restored, an OS error, a new peer, a retried
-        open) from now on; ends when the client closes. Up to 256 unread events are kept
-        (the oldest go first)."""
+        """See :meth:`GcuClient.link_events <gcu_async.client.GcuClient.link_events>`."""
         closed = self._closed()
         if closed is None or closed.is_set():
             raise LinkLost("the client is not open")
