@@ -83,6 +83,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_cli_new_user.py": "subprocess",
     "test_cli_send_monitor.py": "subprocess",
     "test_client_behaviour.py": "realtime",
+    "test_client_builder.py": FAST,
     "test_client_boundary.py": FAST,
     "test_client_new_user.py": "realtime",
     "test_client_open_retry.py": "realtime",

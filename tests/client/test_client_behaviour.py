@@ -8,12 +8,13 @@ from __future__ import annotations
 
 import asyncio
 import time
-from collections.abc import Awaitable, Callable
+from collections import Counter
+from collections.abc import Callable
 from typing import Any
 
 import pytest
 
-from gcu_async import CommandFailed, GcuClient, LinkLost, Mode, Opcode
+from gcu_async import CommandFailed, GcuClient, LinkLost, Mode
 from gcu_async.protocol import (
     CameraFlags,
     ExecutionStatus,
@@ -21,6 +22,8 @@ from gcu_async.protocol import (
     PodStatus,
     ThermalFlags,
 )
+from gcu_async.protocol.catalogue import CATALOGUE, CatalogueEntry
+from gcu_async.protocol.pods import supports
 from gcu_async.pytest_plugin import TRANSPORTS, SimHandle
 
 
@@ -44,47 +47,38 @@ async def wait_for(
         await asyncio.sleep(0.01)
 
 
-Call = Callable[[GcuClient], Awaitable[Any]]
-# (call, opcode) for every command the default pod (D-90Pro(TA)) supports
-ROUND_TRIPS: list[tuple[str, Call, Opcode]] = [
-    ("centre", lambda g: g.centre(), Opcode.CENTRE),
-    ("euler", lambda g: g.enter_euler_control(pitch=-10.0, yaw=20.0), Opcode.EULER_CONTROL),
-    ("angle", lambda g: g.enter_angle_control(pitch=-5.0, yaw=5.0), Opcode.ANGLE_CONTROL),
-    ("fpv", lambda g: g.enter_fpv(pitch=-5.0), Opcode.FPV),
-    ("lock", lambda g: g.enter_pointing_lock(yaw_rate=2.0), Opcode.POINTING_LOCK),
-    ("follow", lambda g: g.enter_pointing_follow(), Opcode.POINTING_FOLLOW),
-    ("top-down", lambda g: g.enter_top_down(), Opcode.TOP_DOWN),
-    ("gaze-lock", lambda g: g.enter_gaze_lock(), Opcode.GAZE_LOCK),
-    ("gaze-at", lambda g: g.gaze_at(47.39, 8.54, 420.0), Opcode.GAZE_AT_COORDINATES),
-    ("track", lambda g: g.track((0.4, 0.4, 0.6, 0.6)), Opcode.TRACK),
-    ("stop-track", lambda g: g.stop_tracking(), Opcode.TRACK),
-    ("click", lambda g: g.click_to_pan(0.7, 0.3), Opcode.CLICK_TO_PAN),
-    ("photo", lambda g: g.take_photo(), Opcode.TAKE_PHOTO),
-    ("record", lambda g: g.toggle_recording(), Opcode.RECORD),
-    ("zoom-in", lambda g: g.zoom_in(), Opcode.ZOOM_IN),
-    ("zoom-stop", lambda g: g.stop_zoom(), Opcode.ZOOM_STOP),
-    ("zoom-out", lambda g: g.zoom_out(), Opcode.ZOOM_OUT),
-    ("zoom-to", lambda g: g.zoom_to(4.0), Opcode.ZOOM_TO),
-    ("zoom-fraction", lambda g: g.zoom_to_fraction(0.5), Opcode.ZOOM_TO),
-    ("focus", lambda g: g.focus(), Opcode.FOCUS),
-    ("palette", lambda g: g.set_palette(3), Opcode.PALETTE),
-    ("night", lambda g: g.set_night_vision(NightVisionMode.AUTO), Opcode.NIGHT_VISION),
-    ("area-t", lambda g: g.set_area_temperature(True, (0.1, 0.1, 0.5, 0.5)),
-     Opcode.AREA_TEMPERATURE),
-    ("alarm", lambda g: g.set_temperature_alarm(True, high=80.0, low=-10.0),
-     Opcode.TEMPERATURE_ALARM),
-    ("isotherm", lambda g: g.set_isotherm(True, high=60.0, low=20.0), Opcode.ISOTHERM),
-    ("spot-t", lambda g: g.set_spot_temperature(True, 0.5, 0.5), Opcode.SPOT_TEMPERATURE),
-    ("osd", lambda g: g.set_osd(True), Opcode.OSD),
-    ("osd-coords", lambda g: g.set_osd_coordinates(1), Opcode.OSD_COORDINATES),
-    ("auto-flip", lambda g: g.set_image_auto_flip(False), Opcode.IMAGE_AUTO_FLIP),
-    ("time-zone", lambda g: g.set_time_zone(-5), Opcode.TIME_ZONE),
-    ("pip", lambda g: g.set_picture_in_picture(2), Opcode.PICTURE_IN_PICTURE),
-    ("detect", lambda g: g.set_target_detection(True), Opcode.TARGET_DETECTION),
-    ("digital", lambda g: g.set_digital_zoom(True), Opcode.DIGITAL_ZOOM),
-    ("ranging", lambda g: g.set_ranging(True), Opcode.RANGING),
-    ("calibrate", lambda g: g.calibrate(timeout=10.0), Opcode.CALIBRATION),
-]
+SAMPLES: dict[str, Any] = {
+    "latitude": 47.39, "longitude": 8.54, "altitude": 420.0, "box": (0.4, 0.4, 0.6, 0.6),
+    "x": 0.7, "y": 0.3, "ratio": 4.0, "fraction": 0.5, "offset_hours": -5, "brightness": 100,
+}  # fmt: skip
+"""Values for the parameters without a default, by name (a new one fails the test)."""
+ARGUMENTS: dict[str, dict[str, Any]] = {
+    "enter_euler_control": {"pitch": -10.0, "yaw": 20.0},
+    "enter_angle_control": {"pitch": -5.0, "yaw": 5.0},
+    "enter_fpv": {"pitch": -5.0},
+    "enter_pointing_lock": {"yaw_rate": 2.0},
+    "calibrate": {"timeout": 10.0},
+    "set_palette": {"palette": 3},
+    "set_night_vision": {"mode": NightVisionMode.AUTO},
+    "set_area_temperature": {"box": (0.1, 0.1, 0.5, 0.5)},
+    "set_temperature_alarm": {"high": 80.0, "low": -10.0},
+    "set_isotherm": {"high": 60.0, "low": 20.0},
+    "set_osd_coordinates": {"coordinates": 1},
+    "set_image_auto_flip": {"enabled": False},
+    "set_picture_in_picture": {"mode": 2},
+}
+"""Values other than the defaults, where they make the command do more."""
+
+
+FIRST, LAST = ("centre",), ("calibrate",)
+"""Centre works in the default mode (pointing-lock), not after a gaze; calibration last."""
+ORDER = sorted(CATALOGUE, key=lambda e: (e.method not in FIRST, e.method in LAST))
+"""The catalogue's order, but for FIRST and LAST."""
+
+
+def arguments(entry: CatalogueEntry) -> dict[str, Any]:
+    given = {p.name: SAMPLES[p.name] for p in entry.parameters if p.required}
+    return {**given, **ARGUMENTS.get(entry.method, {})}
 
 
 async def hover(gcu: GcuClient, period: float = 0.1) -> None:
@@ -96,25 +90,40 @@ async def hover(gcu: GcuClient, period: float = 0.1) -> None:
 
 
 async def test_every_command_round_trip(gcu_sim: SimHandle, gcu_client: GcuClient) -> None:
+    """Every catalogue entry, through its client method, in ORDER: the pod
+    (D-90Pro(TA)) runs each command it supports exactly once and answers the others with
+    the failure status; a state-checked record command that is not needed sends nothing."""
     model = gcu_sim.simulator.model
+    await gcu_client.wait_for(lambda s: s.info is not None, timeout=3.0, what="a sub frame")
+    pod = gcu_client.pod_model
+    assert pod is not None
     # gaze needs valid aircraft INS data and position, current all along
     feed = asyncio.create_task(hover(gcu_client))
-    expected: dict[int, int] = {}
+    expected: Counter[int] = Counter()
+    unsupported = []
     try:
-        for name, call, opcode in ROUND_TRIPS:
-            feedback = await call(gcu_client)
-            assert feedback.opcode == opcode, name
-            assert feedback.result is ExecutionStatus.SUCCESS, name
-            expected[opcode] = expected.get(opcode, 0) + 1
+        for entry in ORDER:
+            call = getattr(gcu_client, entry.method)(**arguments(entry))
+            if not supports(pod, entry.opcode):
+                with pytest.raises(CommandFailed) as info:
+                    await call
+                assert info.value.opcode == entry.opcode
+                assert info.value.status == 0x01
+                unsupported.append(entry.method)
+                continue
+            feedback = await call
+            if feedback is None:  # start/stop_recording with the camera already there
+                assert entry.method in ("start_recording", "stop_recording"), entry.method
+                continue
+            assert feedback.opcode == entry.opcode, entry.method
+            assert feedback.result is ExecutionStatus.SUCCESS, entry.method
+            expected[entry.opcode] += 1
     finally:
         feed.cancel()
+    assert unsupported == ["set_fill_light"]  # the one Appendix 8 command this pod lacks
+    assert set(expected) == {e.opcode for e in CATALOGUE if supports(pod, e.opcode)}
     # every command ran exactly once on the GCU (nothing twice, nothing skipped)
-    assert {op: model.executions[op] for op in expected} == expected
-    # the one Appendix 8 command this pod lacks answers with the failure status
-    with pytest.raises(CommandFailed) as info:
-        await gcu_client.set_fill_light(100)
-    assert info.value.opcode == Opcode.FILL_LIGHT
-    assert info.value.status == 0x01
+    assert {op: model.executions[op] for op in expected} == dict(expected)
 
 
 async def test_telemetry_follows_the_gimbal(gcu_sim: SimHandle, gcu_client: GcuClient) -> None:

@@ -70,7 +70,7 @@ async def test_appendix_8_names_the_pod_model(gcu_client: GcuClient) -> None:
 def test_a_zoom_beyond_the_limit_names_it() -> None:
     gcu = GcuClient(MemoryTransport(), max_zoom=30.0)
     error = CommandFailed(0x25, 0x01, 0x01, name="ZOOM_TO")
-    gcu._explain(error, ZoomTo(ratio=31.0), ins_invalid=False)
+    gcu._driver._explain(error, ZoomTo(ratio=31.0), ins_invalid=False)
     assert error.likely_cause is LikelyCause.ZOOM_LIMIT
     assert "31x is beyond camera 1's maximum zoom 30x" in str(error)
 

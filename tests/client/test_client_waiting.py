@@ -203,7 +203,7 @@ async def test_link_events_iterators_are_independent_and_bounded(
     c = asyncio.create_task(slow.__anext__())
     await asyncio.sleep(0)
     for _ in range(LINK_EVENTS_MAX + 10):
-        gcu_client._emit_link(LinkEvent(LinkEventKind.PEER, "test"))
+        gcu_client._links.emit(LinkEvent(LinkEventKind.PEER, "test"))
     assert (await c).kind is LinkEventKind.PEER
     received = 0
     with contextlib.suppress(asyncio.TimeoutError):

@@ -63,3 +63,10 @@ def test_a_bad_client_keyword_is_the_clients_error(option: str, value: Any, mess
 def test_other_keywords_go_to_the_transport() -> None:
     with pytest.raises(ValueError, match="'rate' is not a udp option"):
         connect("udp://127.0.0.1:4000", rate=40.0)
+
+
+def test_connect_passes_reorder_guard_and_its_default_follows_the_transport() -> None:
+    client = connect("udp://127.0.0.1:2337", reorder_guard=0.05, local_port=0)
+    assert client.reorder_guard == 0.05
+    assert connect("udp://127.0.0.1:2337").reorder_guard == 0.015
+    assert connect("tcp://127.0.0.1:2332").reorder_guard == 0.0

@@ -481,7 +481,7 @@ async def test_several_sockets_and_a_silent_reader(web: Web) -> None:
 
 
 async def _no_subscribers(gcu: GcuClient) -> bool:
-    return not gcu._subscriptions
+    return not gcu._telemetry.subscriptions
 
 
 # -- lifecycle ----------------------------------------------------------------------------

@@ -6,7 +6,6 @@ how they map onto the method's parameters (docs/cli.md, "gcu-async send")."""
 from __future__ import annotations
 
 import argparse
-import asyncio
 import inspect
 import itertools
 import re
@@ -16,16 +15,11 @@ from dataclasses import dataclass
 from enum import IntEnum
 from typing import Any, NamedTuple
 
-from gcu_async.client.api import CommandMethods
 from gcu_async.client.client import GcuClient
+from gcu_async.protocol import builder
 from gcu_async.protocol.catalogue import CATALOGUE, CatalogueEntry, Kind, Parameter
-from gcu_async.protocol.commands import IMAGE_SCALE, Command, ImageBox, command_code
+from gcu_async.protocol.commands import IMAGE_SCALE, ImageBox
 from gcu_async.protocol.enums import CameraMask
-from gcu_async.protocol.feedback import Feedback
-from gcu_async.protocol.gcu_frames import GcuSubFrame
-from gcu_async.protocol.host_frames import ControlValues
-from gcu_async.protocol.units import Attitude
-from gcu_async.session import ControlKind
 
 
 def _switch(text: str) -> bool:
@@ -168,7 +162,8 @@ class CliCommand:
         ``TypeError`` or :class:`~gcu_async.errors.FieldRangeError` it would, sends nothing.
         (Rate limits are checked at zoom 1x here; the method checks them again at the
         GCU's zoom.)"""
-        asyncio.run(self.call(_Unconnected(), values, **extra))
+        _, kwargs = self.build(values)
+        builder.build(self.method, **kwargs, **extra)
 
     def description(self) -> str:
         """The command's ``--help`` text: the summary and the method's own docstring."""
@@ -177,32 +172,6 @@ class CliCommand:
         doc = _plain(inspect.getdoc(method) or "")
         paragraphs = [self.summary, f"Calls GcuClient.{self.method}({names}): {doc}"]
         return "\n\n".join(textwrap.fill(p, 78) for p in paragraphs)
-
-
-class _Unconnected(CommandMethods):
-    """The client's command methods with nothing behind them: every check runs, every
-    command "succeeds" without a packet."""
-
-    @property
-    def _info(self) -> GcuSubFrame | None:
-        return None
-
-    async def _submit(
-        self,
-        command: Command,
-        *,
-        timeout: float | None = None,
-        queue_timeout: float | None = None,
-        control: ControlValues | None = None,
-        recording_target: bool | None = None,
-    ) -> Feedback | None:
-        return Feedback(command_code(command), 0)
-
-    def _set_control(self, control: ControlValues | None, kind: ControlKind) -> None:
-        pass
-
-    def _current_attitude(self) -> Attitude:
-        return Attitude(0.0, 0.0, 0.0)
 
 
 _ROLE = re.compile(r":[a-z]+:`~?([^`]+)`")

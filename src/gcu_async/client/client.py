@@ -1,10 +1,15 @@
-"""The asyncio driver of a :class:`~gcu_async.session.Session`: timers, futures, transport.
+"""The client: one GCU over one transport, as composed parts (docs/client.md, "How the
+client is built").
 
-``GcuClient`` owns one transport and one sans-I/O session (composition). It does I/O only:
-it hands received bytes and transport news to the session, sends the packet the session
-asks for at the time it asks, and turns the session's events into resolved futures,
-telemetry and link callbacks. Every rule (pacing, separation, matching, timeouts, control
-values, link health) lives in the session (docs/client.md, "The session contract").
+``GcuClient`` is the public face. It owns a :class:`~gcu_async.client.driver.Driver` (the
+sans-I/O session driven over the transport: timers, futures, the packet pump), a
+:class:`~gcu_async.client.telemetry.Telemetry` fan-out and the link-event callbacks, and a
+:class:`~gcu_async.client.waiting.Waiting` part; none of them reaches into another through
+abstract hooks. Each command method is one line: the command builder
+(:func:`gcu_async.protocol.builder.build`) checks its arguments against the command
+catalogue and the driver submits the result. Every rule (pacing, separation, matching,
+timeouts, control values, link health) lives in the session (docs/client.md, "The session
+contract").
 """
 
 from __future__ import annotations
@@ -12,7 +17,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import enum
-import inspect
 import logging
 import math
 import os
@@ -34,55 +38,38 @@ from gcu_async._checks import (
 )
 from gcu_async._lifecycle import OpenClose
 from gcu_async.capture.writer import PacketCapture
-from gcu_async.client.api import CommandMethods, check_sequence
-from gcu_async.client.telemetry import TelemetrySubscription
-from gcu_async.client.waiting import WaitingMethods
-from gcu_async.client.wirelog import WIRE_LOG, log_packet
-from gcu_async.errors import (
-    ClientStateError,
-    CommandFailed,
-    CommandLinkLost,
-    GcuError,
-    LikelyCause,
-    LinkLost,
-    Outcome,
-    UnsupportedCommandError,
+from gcu_async.client.driver import ENDED, ClientState, Driver
+from gcu_async.client.telemetry import Callbacks, Telemetry
+from gcu_async.client.waiting import (
+    ANGLE_TOLERANCE,
+    WAIT_TIMEOUT,
+    ZOOM_TOLERANCE,
+    Predicate,
+    Waiting,
 )
+from gcu_async.errors import ClientStateError, GcuError, LinkLost
+from gcu_async.protocol import commands as c
 from gcu_async.protocol.aircraft import AircraftState
-from gcu_async.protocol.catalogue import NEEDS_INS, YAW_INPUT_RANGE
-from gcu_async.protocol.commands import ZOOM_RATIO_MAX, Command, ZoomTo, command_code
-from gcu_async.protocol.enums import PodModel, opcode_name
+from gcu_async.protocol.builder import Submission, angles, build, check_sequence, rates
+from gcu_async.protocol.catalogue import YAW_INPUT_RANGE
+from gcu_async.protocol.commands import ZOOM_RATIO_MAX, Command
+from gcu_async.protocol.enums import CameraMask, NightVisionMode, OsdCoordinateSource, PodModel
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
 from gcu_async.protocol.host_frames import MS_PER_WEEK, ControlValues
 from gcu_async.protocol.packets import DEFAULT_VERSION
-from gcu_async.protocol.pods import POD_NAMES, pod_name, supports
-from gcu_async.protocol.units import (
-    Attitude,
-    GeoPosition,
-    NorthEastUp,
-    wrap_degrees_360,
-)
-from gcu_async.session import (
-    ControlKind,
-    LinkDown,
-    LinkHealth,
-    LinkUp,
-    ResetLink,
-    Session,
-    SessionState,
-    TelemetrySample,
-    Ticket,
-    TicketDone,
-    TicketState,
-)
-from gcu_async.session.session import RATE_MAX_HZ, RATE_MIN_HZ
+from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp, wrap_degrees_360
+from gcu_async.session import ControlKind, LinkHealth, Session, TelemetrySample
 from gcu_async.transport.backoff import Backoff
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 from gcu_async.transport.tap import with_capture
 
+__all__ = ["KEEP", "ClientState", "GcuClient", "Keep"]
+
 log = logging.getLogger("gcu_async.client")
-_RESOLUTION = time.get_clock_info("monotonic").resolution
+
+CAM1 = CameraMask.CAMERA_1
+CAM2 = CameraMask.CAMERA_2
 
 DEFAULT_REORDER_GUARD = 0.015
 """Seconds; the reordering guard on links that may reorder (UDP)."""
@@ -110,16 +97,7 @@ OPEN_BACKOFF = Backoff(base=0.25, factor=2.0, cap=5.0, max_attempts=None, max_to
 """Delays between the attempts of :meth:`GcuClient.open` with ``open_timeout``."""
 
 
-class ClientState(enum.Enum):
-    """The client's lifecycle (reusable, not reentrant)."""
-
-    CLOSED = "closed"
-    OPENING = "opening"
-    OPEN = "open"
-    CLOSING = "closing"
-
-
-class GcuClient(CommandMethods, WaitingMethods, OpenClose):
+class GcuClient(OpenClose):
     """An asyncio session with one GCU.
 
     ``async with GcuClient(transport) as gcu:`` opens the transport, starts the heartbeat,
@@ -182,9 +160,13 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
         if not isinstance(transport, Transport):
             raise type_error("transport", "a Transport", transport)
         transport = with_capture(transport, capture)
-        rate = check_real("rate_hz", rate_hz, RATE_MIN_HZ, RATE_MAX_HZ, "Hz")
         if reorder_guard is None:
             reorder_guard = 0.0 if transport.ordered else DEFAULT_REORDER_GUARD
+        session = Session(  # it checks its options (the one place they are checked)
+            rate_hz=rate_hz, reorder_guard=reorder_guard, command_timeout=command_timeout,
+            queue_timeout=queue_timeout, silence_timeout=silence_timeout,
+            aircraft_timeout=aircraft_timeout, version=version, name=transport.url,
+        )  # fmt: skip
         if not callable(clock):
             raise type_error("clock", "a callable returning seconds", clock)
         reading = clock()
@@ -194,47 +176,49 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
         if not math.isfinite(reading):
             raise ValueError(f"clock: {clock!r} returned {reading!r}, not finite seconds")
         self.transport = transport
-        self.session = Session(
-            rate_hz=rate_hz, reorder_guard=reorder_guard, command_timeout=command_timeout,
-            queue_timeout=queue_timeout, silence_timeout=silence_timeout,
-            aircraft_timeout=aircraft_timeout, version=check_int("version", version, 1, 2),
-            name=transport.url,
-        )  # fmt: skip
+        self.session = session
         self.connect_timeout = check_positive("connect_timeout", connect_timeout)
         self.open_timeout = (None if open_timeout is None
                              else check_positive("open_timeout", open_timeout))  # fmt: skip
         self._open_abort: asyncio.Event | None = None
         self._between_attempts = False
         self._rng = random.Random()
-        self.check_support = check_bool("check_support", check_support)
-        self._max_zoom = (None if max_zoom is None
-                          else check_real("max_zoom", max_zoom, 1.0, ZOOM_RATIO_MAX, "x"))
+        check_support = check_bool("check_support", check_support)
+        max_zoom = (None if max_zoom is None
+                    else check_real("max_zoom", max_zoom, 1.0, ZOOM_RATIO_MAX, "x"))
+        rate = session.rate_hz
         if not RATE_ADVISED[0] <= rate <= RATE_ADVISED[1]:
             warnings.warn(f"rate_hz={rate:g}: the protocol advises 30-50 Hz host packets",
                           stacklevel=_caller_stacklevel())  # fmt: skip
         self._clock = clock
-        self._state = ClientState.CLOSED
-        self._timer: asyncio.TimerHandle | None = None
-        self._timer_at = math.inf
-        self._futures: dict[Ticket, asyncio.Future[Feedback | None]] = {}
-        self._needs_ins: dict[Ticket, bool] = {}
-        """Pending commands that need INS data: True once a packet went out while one was
-        pending with INS invalid."""
-        self._subscriptions: set[TelemetrySubscription] = set()
-        self._telemetry_callbacks: list[TelemetryCallback] = []
-        self._link_callbacks: list[LinkCallback] = []
-        self._first_reply: asyncio.Future[None] | None = None
-        self._loop: asyncio.AbstractEventLoop | None = None
-        self._closed_event: asyncio.Event | None = None
-        self._datagram = transport.datagram
-        self._rx_bound: float | None = None
-        """Replies delivered from now on arrived after this time (links that reorder); None:
-        the transport cannot tell (see :meth:`_arrival_bound`)."""
-        self._bound_from_loop = False
-        self._timer_when = 0.0
-        """Event-loop time the pending timer is due."""
-        self.telemetry_dropped = 0
-        self.session.telemetry = False
+        session.telemetry = False
+        self._telemetry = Telemetry(self._consumed)
+        self._links: Callbacks[LinkEvent] = Callbacks("link")
+        self._driver = Driver(session, transport, clock, self._telemetry, self._links,
+                              check_support=check_support, max_zoom=max_zoom)  # fmt: skip
+        self._waiting = Waiting(self._driver, self._telemetry, self._links)
+
+    def _consumed(self, consumed: bool) -> None:
+        """Telemetry samples are built only while someone consumes them."""
+        self.session.telemetry = consumed
+
+    @property
+    def check_support(self) -> bool:
+        """Refuse commands the pod model does not support (the ``check_support`` option)."""
+        return self._driver.check_support
+
+    @check_support.setter
+    def check_support(self, value: bool) -> None:
+        self._driver.check_support = check_bool("check_support", value)
+
+    @property
+    def telemetry_dropped(self) -> int:
+        """Samples dropped so far by telemetry iterators that fell behind, all together."""
+        return self._telemetry.dropped
+
+    @telemetry_dropped.setter
+    def telemetry_dropped(self, value: int) -> None:
+        self._telemetry.dropped = check_int("telemetry_dropped", value, 0)
 
     # -- configuration (read-only views of the session's) ----------------------------------
     @property
@@ -259,12 +243,12 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
 
     @property
     def state(self) -> ClientState:
-        return self._state
+        return self._driver.state
 
     @property
     def max_zoom(self) -> float | None:
         """Camera 1's largest zoom ratio as given (``max_zoom=``), ``None`` if not known."""
-        return self._max_zoom
+        return self._driver.max_zoom
 
     def __await__(self) -> Generator[Any, None, GcuClient]:
         """``gcu = await connect(url)``: open the client and return it (close it yourself;
@@ -281,14 +265,15 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
         not closed. With ``open_timeout``, failed attempts are retried with backoff until
         that many seconds have passed (docs/client.md, "Lifecycle"); :meth:`close` stops
         the retries (``LinkLost``)."""
-        if self._state is not ClientState.CLOSED:
+        driver = self._driver
+        if driver.state is not ClientState.CLOSED:
             raise ClientStateError(
-                f"GcuClient is {self._state.value}: a client is reusable but not reentrant "
+                f"GcuClient is {driver.state.value}: a client is reusable but not reentrant "
                 "(close it before opening it again; `async with` does both)",
-                state=self._state.value,
+                state=driver.state.value,
             )
         if self.open_timeout is None:
-            await self._open_once()
+            await driver.open_once(self.connect_timeout)
             return
         loop = asyncio.get_running_loop()
         deadline = loop.time() + self.open_timeout
@@ -297,7 +282,7 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
         try:
             while True:
                 try:
-                    await self._open_once()
+                    await driver.open_once(self.connect_timeout)
                     return
                 except LinkLost as exc:
                     attempts += 1
@@ -312,79 +297,33 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
                         ) from exc
                     log.info("%s: attempt %d failed (%s); next in %.2f s",
                              self.transport.url, attempts, exc, delay)  # fmt: skip
-                    self._emit_link(LinkEvent(
+                    self._links.emit(LinkEvent(
                         LinkEventKind.RETRYING,
                         f"attempt {attempts} failed: {exc}; next in {delay:.2f} s"))  # fmt: skip
-                    self._state = ClientState.OPENING  # not reentrant while it waits
+                    driver.state = ClientState.OPENING  # not reentrant while it waits
                     self._between_attempts = True
                     try:
                         with contextlib.suppress(asyncio.TimeoutError):
                             await asyncio.wait_for(abort.wait(), delay)
                     finally:
                         self._between_attempts = False
-                        self._state = ClientState.CLOSED
+                        driver.state = ClientState.CLOSED
                     if abort.is_set():
                         raise LinkLost(f"{self.transport.url}: closed while opening") from exc
         finally:
             self._open_abort = None
-
-    async def _open_once(self) -> None:
-        self._state = ClientState.OPENING
-        self._loop = loop = asyncio.get_running_loop()
-        self._closed_event = asyncio.Event()
-        self._first_reply = loop.create_future()
-        self.transport.set_handlers(self._on_data, self._on_link_event)
-        log.info("opening %s", self.transport.url)
-        try:
-            await self.transport.open()
-        except BaseException:
-            self._state = ClientState.CLOSED
-            raise
-        self.session.open(self._clock())
-        self._arrival_bound(loop)
-        self._pump()
-        try:
-            await asyncio.wait_for(asyncio.shield(self._first_reply), self.connect_timeout)
-        except asyncio.TimeoutError:
-            await self._shutdown("no reply")
-            raise LinkLost(
-                f"{self.transport.url}: no reply from the GCU within {self.connect_timeout:g} s"
-            ) from None
-        except BaseException:
-            await self._shutdown("open interrupted")
-            raise
-        self._state = ClientState.OPEN
-        log.info("link to %s up", self.transport.url)
 
     async def close(self) -> None:
         """End pending commands (:class:`CommandLinkLost`), stop the heartbeat, end the
         telemetry iterators and close the transport. Idempotent."""
         if self._open_abort is not None:  # open() is retrying: stop it
             self._open_abort.set()
-        if self._state in (ClientState.CLOSED, ClientState.CLOSING):
+        if self._driver.state in ENDED:
             return
         if self._between_attempts:
             return  # open() waits between attempts: nothing is open
-        await self._shutdown("client closed")
+        await self._driver.shutdown("client closed")
 
-    async def _shutdown(self, reason: str) -> None:
-        self._state = ClientState.CLOSING
-        try:
-            self.session.close(self._clock(), reason)
-            self._dispatch()
-            if self._timer is not None:
-                self._timer.cancel()
-                self._timer, self._timer_at = None, math.inf
-            for sub in self._subscriptions:
-                sub.close()
-            await self.transport.close()
-        finally:
-            self._state = ClientState.CLOSED
-            log.info("closed %s (%s)", self.transport.url, reason)
-            if self._closed_event is not None:
-                self._closed_event.set()
-
-    # -- aircraft state and control values -------------------------------------------------
     @property
     def aircraft(self) -> AircraftState:
         """The aircraft state as last given (what goes out: :attr:`ins_valid`)."""
@@ -478,17 +417,26 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
         takes values or a value is out of range."""
         self.session.set_control(control)
 
-    def _set_control(self, control: ControlValues | None, kind: ControlKind) -> None:
-        self.session.set_control(control, kind)
+    def set_angles(self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0) -> None:
+        """New target angles (degrees, ±180) for the current angle-based mode (Euler, angle
+        control, FPV). Raises ``ValueError`` if the current mode does not take angles."""
+        self.session.set_control(angles(roll, pitch, yaw), ControlKind.ANGLES)
+
+    def set_rates(self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0) -> None:
+        """New angular rates (°/s at the current main-view zoom) for the current rate-based
+        mode. Raises ``ValueError`` if the current mode does not take rates."""
+        values = rates(self._driver.context(), roll=roll, pitch=pitch, yaw=yaw)
+        self.session.set_control(values, ControlKind.RATES)
+
+    def release_control(self) -> None:
+        """Send the control values invalid from now on: rates 0, angles held."""
+        self.session.set_control(None, ControlKind.NONE)
 
     # -- telemetry -------------------------------------------------------------------------
     @property
     def status(self) -> GcuMainFrame:
         """The latest main frame (mode, pod status, angles, rates)."""
-        status = self.session.status
-        if status is None:
-            raise GcuError("no reply from the GCU yet")
-        return status
+        return self._driver.status()
 
     @property
     def info(self) -> GcuSubFrame:
@@ -499,14 +447,9 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
         return info
 
     @property
-    def _info(self) -> GcuSubFrame | None:
-        return self.session.info
-
-    @property
     def pod_model(self) -> PodModel | None:
         """The pod model once a sub frame arrived, else ``None``."""
-        info = self.session.info
-        return None if info is None else info.pod_model
+        return self._driver.pod_model
 
     @property
     def recording(self) -> bool | None:
@@ -523,49 +466,21 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
         """Iterate over replies as they arrive. The queue holds ``maxsize`` samples; when
         the consumer falls behind the oldest are dropped (counted in
         ``telemetry_dropped``). Ends when the client closes."""
-        sub = TelemetrySubscription(check_int("maxsize", maxsize, 1, sys.maxsize))
-        self._subscriptions.add(sub)
-        self._consumers_changed()
-        if self._state in (ClientState.CLOSED, ClientState.CLOSING):
-            sub.close()
-        try:
-            while (sample := await sub.get()) is not None:
+        samples = self._telemetry.samples(check_int("maxsize", maxsize, 1, sys.maxsize),
+                                          self._driver.state in ENDED)  # fmt: skip
+        async with contextlib.aclosing(samples):
+            async for sample in samples:
                 yield sample
-        finally:
-            self._subscriptions.discard(sub)
-            self._consumers_changed()
 
     def on_telemetry(self, callback: TelemetryCallback) -> Callable[[], None]:
         """Call ``callback(sample)`` for every reply; returns a function that unsubscribes."""
-        _check_callback(callback)
-        self._telemetry_callbacks.append(callback)
-        self._consumers_changed()
-        return _unsubscriber(self._telemetry_callbacks, callback, self._consumers_changed)
-
-    def _current_attitude(self) -> Attitude:
-        status = self.session.status
-        return status.attitude if status is not None else Attitude(0.0, 0.0, 0.0)
-
-    def _latest(self) -> TelemetrySample | None:
-        return self.session.latest
-
-    def _link_up(self) -> bool:
-        return self.session.state is SessionState.UP
-
-    def _closed(self) -> asyncio.Event | None:
-        return None if self._state is ClientState.CLOSED else self._closed_event
+        return self._telemetry.callbacks.add(callback)
 
     def on_link_change(self, callback: LinkCallback) -> Callable[[], None]:
         """Call ``callback(LinkEvent)`` when the link is lost or restored, when the OS
         reports an error on it (:attr:`~gcu_async.transport.LinkEventKind.ERROR`: once per
         episode), when a new peer answers, and when :meth:`open` retries."""
-        _check_callback(callback)
-        self._link_callbacks.append(callback)
-        return _unsubscriber(self._link_callbacks, callback, None)
-
-    def _consumers_changed(self) -> None:
-        """Telemetry samples are built only while someone consumes them."""
-        self.session.telemetry = bool(self._subscriptions or self._telemetry_callbacks)
+        return self._links.add(callback)
 
     # -- commands --------------------------------------------------------------------------
     async def execute(
@@ -582,238 +497,282 @@ class GcuClient(CommandMethods, WaitingMethods, OpenClose):
         :class:`UnsupportedCommandError` with ``check_support``. Cancelling the awaiting task
         withdraws the command (it may have executed if it was already sent).
         """
-        result = await self._submit(command, timeout=timeout, queue_timeout=queue_timeout)
-        assert result is not None  # only state-checked record commands are ever skipped
-        return result
+        return await self._driver.run(Submission(command, timeout=timeout),
+                                      queue_timeout=queue_timeout)  # fmt: skip
 
-    async def _submit(
+    async def _run(self, method: str, /, **arguments: Any) -> Feedback:
+        """Build catalogue entry ``method``'s command from ``arguments`` and run it."""
+        return await self._driver.run(build(method, self._driver.context(), **arguments))
+
+    async def _send(self, method: str, /, **arguments: Any) -> Feedback | None:
+        """Like :meth:`_run`, for a command the session may skip (``None``)."""
+        return await self._driver.submit(build(method, self._driver.context(), **arguments))
+
+    # -- waiting for the physical world (docs/client.md, "Waiting for the gimbal, the zoom
+    # and the link") ----------------------------------------------------------------------
+    async def wait_for(self, predicate: Predicate, *, timeout: float = WAIT_TIMEOUT,
+                       what: str = "the condition") -> TelemetrySample:  # fmt: skip
+        """Return the first telemetry sample for which ``predicate(sample)`` is true — the
+        latest reply already, if it qualifies and the link is up. ``what`` names the
+        condition in the error.
+
+        Raises :class:`~gcu_async.errors.WaitTimeout` after ``timeout`` seconds (the last
+        sample seen is its ``last``), :class:`~gcu_async.errors.LinkLost` if the client
+        closes, and whatever ``predicate`` raises."""
+        return await self._waiting.wait_for(predicate, timeout=timeout, what=what)
+
+    async def wait_attitude(self, *, roll: float | None = None, pitch: float | None = None,
+                            yaw: float | None = None, tolerance: float = ANGLE_TOLERANCE,
+                            timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
+        """Wait until the camera's reported attitude (``status.attitude``: absolute Euler
+        angles, degrees) is within ``tolerance`` degrees of every angle given; angles left
+        ``None`` are not checked. Yaw compares the short way round (359° is 2° from 1°)."""
+        return await self._waiting.wait_attitude(roll=roll, pitch=pitch, yaw=yaw,
+                                                 tolerance=tolerance, timeout=timeout)  # fmt: skip
+
+    async def wait_zoom(self, ratio: float, *, tolerance: float = ZOOM_TOLERANCE,
+                        timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
+        """Wait until camera 1's reported zoom ratio (sub frame) is within ``tolerance`` of
+        ``ratio``."""
+        return await self._waiting.wait_zoom(ratio, tolerance=tolerance, timeout=timeout)
+
+    async def reach_attitude(self, *, roll: float | None = None, pitch: float | None = None,
+                             yaw: float | None = None, tolerance: float = ANGLE_TOLERANCE,
+                             timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
+        """Euler-angle control (:meth:`enter_euler_control`) to the angles given — omitted ones
+        keep the current attitude — then wait until the camera is within ``tolerance``
+        degrees of all three. ``timeout`` bounds the wait after the GCU confirmed the mode
+        (the command itself has its own ``command_timeout``)."""
+        return await self._waiting.reach_attitude(roll=roll, pitch=pitch, yaw=yaw,
+                                                  tolerance=tolerance, timeout=timeout)  # fmt: skip
+
+    async def reach_zoom(self, ratio: float, *, tolerance: float = ZOOM_TOLERANCE,
+                         timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
+        """:meth:`zoom_to` ``ratio`` (camera 1), then wait until the reported zoom is within
+        ``tolerance`` of it. A ratio above :attr:`max_zoom` (when given) is refused before
+        anything is sent; a timeout with the zoom short of the ratio names the ratio last
+        reported."""
+        return await self._waiting.reach_zoom(ratio, tolerance=tolerance, timeout=timeout)
+
+    async def wait_link(self, up: bool = True, *, timeout: float = WAIT_TIMEOUT) -> None:
+        """Return once the link is up (``up=False``: down); at once if it already is.
+        :class:`~gcu_async.errors.WaitTimeout` after ``timeout`` seconds,
+        :class:`~gcu_async.errors.LinkLost` if the client closes meanwhile."""
+        await self._waiting.wait_link(up, timeout=timeout)
+
+    async def link_events(self) -> AsyncGenerator[LinkEvent, None]:
+        """Iterate over link events (lost, restored, an OS error, a new peer, a retried
+        open) from now on; ends when the client closes. Up to 256 unread events are kept
+        (the oldest go first)."""
+        events = self._waiting.link_events()
+        async with contextlib.aclosing(events):
+            async for event in events:
+                yield event
+
+    # -- commands: pod modes --------------------------------------------------------------
+    async def enter_euler_control(
+        self, *, roll: float | None = None, pitch: float | None = None,
+        yaw: float | None = None,
+    ) -> Feedback:  # fmt: skip
+        """Euler-angle control mode (0x14) holding roll/pitch/yaw Euler angles in degrees;
+        an angle left out keeps the camera's current one (``status.attitude``), so
+        ``enter_euler_control(pitch=-45)`` does not swing the yaw. ``yaw`` may be given in
+        [-180, 360): [180, 360) is sent as its −180…0 equivalent. The angles go out valid
+        once the GCU confirmed the mode; :meth:`reach_attitude` also waits until the camera
+        is there."""
+        return await self._run("enter_euler_control", roll=roll, pitch=pitch, yaw=yaw)
+
+    async def enter_angle_control(
+        self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0
+    ) -> Feedback:
+        """Angle-control mode (0x10): roll/pitch Euler angles, yaw relative to the aircraft
+        (degrees, ±180)."""
+        return await self._run("enter_angle_control", roll=roll, pitch=pitch, yaw=yaw)
+
+    async def enter_fpv(
+        self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0
+    ) -> Feedback:
+        """FPV mode (0x1C): roll/pitch/yaw angles relative to the aircraft, degrees (±180)."""
+        return await self._run("enter_fpv", roll=roll, pitch=pitch, yaw=yaw)
+
+    async def enter_pointing_lock(
+        self, *, pitch_rate: float = 0.0, yaw_rate: float = 0.0
+    ) -> Feedback:
+        """Pointing-lock mode (0x11) with pitch/yaw rates in °/s at the current zoom
+        (at most 150 / zoom °/s)."""
+        return await self._run("enter_pointing_lock", pitch_rate=pitch_rate, yaw_rate=yaw_rate)
+
+    async def enter_pointing_follow(
+        self, *, pitch_rate: float = 0.0, yaw_rate: float = 0.0
+    ) -> Feedback:
+        """Pointing-follow mode (0x12); yaw rate 0 follows the aircraft's heading."""
+        return await self._run("enter_pointing_follow", pitch_rate=pitch_rate, yaw_rate=yaw_rate)
+
+    async def enter_top_down(self, *, yaw_rate: float = 0.0) -> Feedback:
+        """Top-down mode (0x13): pitch −90°, yaw rate in °/s."""
+        return await self._run("enter_top_down", yaw_rate=yaw_rate)
+
+    async def enter_gaze_lock(self, *, pitch_rate: float = 0.0, yaw_rate: float = 0.0) -> Feedback:
+        """Gaze (geographic target lock) at the image centre (0x16); needs valid INS data."""
+        return await self._run("enter_gaze_lock", pitch_rate=pitch_rate, yaw_rate=yaw_rate)
+
+    async def gaze_at(self, latitude: float, longitude: float, altitude: float) -> Feedback:
+        """Gaze at a coordinate (0x15): degrees, degrees, metres MSL; needs valid INS data.
+        Control values stay invalid (the pod locks the point) until :meth:`set_rates`."""
+        return await self._run("gaze_at", latitude=latitude, longitude=longitude, altitude=altitude)
+
+    # -- commands: pod, other --------------------------------------------------------------
+    async def calibrate(self, *, timeout: float = 15.0) -> Feedback:
+        """Calibrate (0x01); keeps waiting while the GCU answers "in progress", up to
+        ``timeout`` seconds (a finite real number > 0)."""
+        return await self._run("calibrate", timeout=timeout)
+
+    async def centre(self) -> Feedback:
+        """Centre pitch and heading (0x03). Control values go out invalid while it runs and
+        are cleared afterwards (they would steer away from the centre)."""
+        return await self._run("centre")
+
+    async def track(
+        self, box: c.ImageBox | tuple[float, float, float, float] | list[float], *,
+        cameras: int = CAM1,
+    ) -> Feedback:  # fmt: skip
+        """Track the target in ``box`` (left, top, right, bottom as image fractions; an
+        ImageBox, a tuple or a list of four). The pod steers itself while tracking: control
+        values go out invalid."""
+        return await self._run("track", box=box, cameras=cameras)
+
+    async def stop_tracking(self, *, cameras: int = CAM1) -> Feedback:
+        """Exit tracking (0x17 with TT = 0); control values stay invalid until a mode
+        command is confirmed."""
+        return await self._run("stop_tracking", cameras=cameras)
+
+    async def click_to_pan(self, x: float, y: float, *, cameras: int = CAM1) -> Feedback:
+        """Bring image point (x, y) (fractions) to the centre (0x1A). The pod ends in
+        pointing-lock; control values stay invalid until a mode command is confirmed."""
+        return await self._run("click_to_pan", x=x, y=y, cameras=cameras)
+
+    # -- commands: camera -----------------------------------------------------------------
+    async def take_photo(self, *, cameras: int = CAM1) -> Feedback:
+        """Take a photo (0x20)."""
+        return await self._run("take_photo", cameras=cameras)
+
+    async def toggle_recording(self, *, cameras: int = CAM1) -> Feedback:
+        """Start or stop recording (0x21, a toggle), unconditionally."""
+        return await self._run("toggle_recording", cameras=cameras)
+
+    async def start_recording(self, *, cameras: int = CAM1) -> Feedback | None:
+        """Start recording unless the camera already records (then ``None``, nothing sent).
+        Record commands run one at a time and the state is checked when this one's turn
+        comes, so concurrent calls start recording once (docs/client.md, "Recording")."""
+        return await self._send("start_recording", cameras=cameras)
+
+    async def stop_recording(self, *, cameras: int = CAM1) -> Feedback | None:
+        """Stop recording if the camera records (else ``None``, nothing sent)."""
+        return await self._send("stop_recording", cameras=cameras)
+
+    async def zoom_in(self, *, cameras: int = CAM1) -> Feedback:
+        """Start zooming in (0x22) until :meth:`stop_zoom`."""
+        return await self._run("zoom_in", cameras=cameras)
+
+    async def zoom_out(self, *, cameras: int = CAM1) -> Feedback:
+        """Start zooming out (0x23) until :meth:`stop_zoom`."""
+        return await self._run("zoom_out", cameras=cameras)
+
+    async def stop_zoom(self, *, cameras: int = CAM1) -> Feedback:
+        """Stop a continuous zoom (0x24)."""
+        return await self._run("stop_zoom", cameras=cameras)
+
+    async def zoom_to(self, ratio: float, *, cameras: int = CAM1) -> Feedback:
+        """Zoom to a ratio (0x25), e.g. ``10.0`` for 10×, 0.1× resolution, 1 … 3276.8, and
+        at most :attr:`max_zoom` when the client was given it (the GCU itself answers
+        success and stops at its limit)."""
+        return await self._run("zoom_to", ratio=ratio, cameras=cameras)
+
+    async def zoom_to_fraction(self, fraction: float, *, cameras: int = CAM1) -> Feedback:
+        """Zoom to a fraction (0, 1] of the maximum ratio (0x25, positive form; resolution
+        1/10000)."""
+        return await self._run("zoom_to_fraction", fraction=fraction, cameras=cameras)
+
+    async def focus(self, *, cameras: int = CAM1) -> Feedback:
+        """Trigger focus (0x26)."""
+        return await self._run("focus", cameras=cameras)
+
+    async def set_palette(self, palette: int = 0, *, cameras: int = CAM2) -> Feedback:
+        """Thermal palette 1–10, or 0 to cycle (0x2A)."""
+        return await self._run("set_palette", palette=palette, cameras=cameras)
+
+    async def set_night_vision(
+        self, mode: NightVisionMode | int = NightVisionMode.ON, *, cameras: int = CAM1
+    ) -> Feedback:
+        """Night vision off / on / auto (0x2B)."""
+        return await self._run("set_night_vision", mode=mode, cameras=cameras)
+
+    async def set_area_temperature(
         self,
-        command: Command,
+        enabled: bool = True,
+        box: c.ImageBox | tuple[float, float, float, float] | list[float] = (0.0, 0.0, 1.0, 1.0),
         *,
-        timeout: float | None = None,
-        queue_timeout: float | None = None,
-        control: ControlValues | None = None,
-        recording_target: bool | None = None,
-    ) -> Feedback | None:
-        check_instance("command", command, Command, "a Command")
-        if self._state is not ClientState.OPEN:
-            opcode = command_code(command)
-            hint = ("not opened: use `async with connect(url) as gcu:` (or `await "
-                    "gcu.open()`) first" if self._closed_event is None
-                    else f"client is {self._state.value}")  # fmt: skip
-            raise CommandLinkLost(f"{opcode_name(opcode)}: {hint}; not sent",
-                                  outcome=Outcome.NOT_SENT, opcode=opcode,
-                                  command=command)  # fmt: skip
-        self._check_support(command)
-        loop = asyncio.get_running_loop()
-        ticket = self.session.submit(
-            command, self._clock(), timeout=timeout, queue_timeout=queue_timeout,
-            control=control, recording_target=recording_target,
-        )  # fmt: skip
-        future: asyncio.Future[Feedback | None] = loop.create_future()
-        self._futures[ticket] = future
-        if ticket.opcode in NEEDS_INS:
-            self._needs_ins[ticket] = False
-        self._pump()  # goes out now if the rate allows: the heartbeat's phase moves
-        try:
-            return await future
-        except asyncio.CancelledError:
-            self._futures.pop(ticket, None)
-            self._needs_ins.pop(ticket, None)
-            if not ticket.done:
-                self.session.cancel(ticket, self._clock())
-                self._dispatch()
-                self._schedule()
-            raise
+        cameras: int = CAM2,
+    ) -> Feedback:
+        """Area temperature measurement over ``box`` (0x30)."""
+        return await self._run("set_area_temperature", enabled=enabled, box=box, cameras=cameras)
 
-    def _check_support(self, command: Command) -> None:
-        model = self.pod_model
-        if not self.check_support or model is None or model not in POD_NAMES:
-            return
-        if not supports(model, command_code(command)):
-            raise UnsupportedCommandError(opcode_name(command_code(command)), pod_name(model))
+    async def set_temperature_alarm(
+        self, enabled: bool = True, *, high: float = 0.0, low: float = 0.0, cameras: int = CAM2
+    ) -> Feedback:
+        """Temperature alarm with high/low thresholds in °C (0x31)."""
+        return await self._run("set_temperature_alarm", enabled=enabled, high=high, low=low,
+                               cameras=cameras)  # fmt: skip
 
-    # -- the pump: the only place packets are sent -----------------------------------------
-    def _arrival_bound(self, loop: asyncio.AbstractEventLoop) -> None:
-        """Choose how replies get a lower bound on their arrival (links that reorder; docs/
-        client.md, "The session contract", A4). Best, for free: on a draining transport whose
-        loop keeps this client's time (the default clock), a reply not delivered by the time
-        a timer runs arrived after that loop iteration's poll returned, which was no earlier
-        than the timer was due. Else: read the link empty before each send
-        (``read_pending``). Else none: the session assumes a responsive loop."""
-        self._rx_bound = None
-        self._bound_from_loop = False
-        transport = self.transport
-        if transport.ordered:
-            return
-        now = self._clock()
-        if (transport.drains and self._clock is time.monotonic
-                and type(loop).time is asyncio.BaseEventLoop.time):  # fmt: skip
-            self._bound_from_loop = True
-            self._rx_bound = now
-        elif transport.read_pending():
-            self._rx_bound = now
-        else:
-            log.info("%s cannot be read on demand: reply timing assumes a responsive event "
-                     "loop (docs/client.md, \"The session contract\")", transport.url)
+    async def set_isotherm(
+        self, enabled: bool = True, *, high: float = 0.0, low: float = 0.0, cameras: int = CAM2
+    ) -> Feedback:
+        """Isotherm between ``low`` and ``high`` °C (0x32)."""
+        return await self._run("set_isotherm", enabled=enabled, high=high, low=low, cameras=cameras)
 
-    def _on_timer(self) -> None:
-        if self._bound_from_loop and not self.transport.backlog:
-            # this iteration's poll returned at >= when - resolution (asyncio runs I/O
-            # callbacks before timers): later deliveries arrived after it
-            self._rx_bound = self._timer_when - _RESOLUTION
-        self._timer, self._timer_at = None, math.inf
-        self._pump()
+    async def set_spot_temperature(
+        self, enabled: bool = True, x: float = 0.5, y: float = 0.5, *, cameras: int = CAM2
+    ) -> Feedback:
+        """Spot temperature at image point (x, y) (0x33)."""
+        return await self._run("set_spot_temperature", enabled=enabled, x=x, y=y, cameras=cameras)
 
-    def _pump(self) -> None:
-        if self._timer is not None:  # called early (a command): this run replaces the timer
-            self._timer.cancel()
-            self._timer, self._timer_at = None, math.inf
-        session = self.session
-        try:
-            if self._rx_bound is not None and not self._bound_from_loop:
-                now = self._clock()  # read what waits first: replies before sends
-                if self.transport.read_pending():
-                    self._rx_bound = now
-            wire = WIRE_LOG.isEnabledFor(logging.DEBUG)  # the level may change at run time
-            session.trace = self._trace if wire else None
-            now = self._clock()
-            data = session.poll(now)
-            if data is not None and self._needs_ins and not session.ins_valid(now):
-                for ticket in self._needs_ins:  # they went out with INS invalid
-                    self._needs_ins[ticket] = True
-            if data is not None:
-                if wire:
-                    log_packet(self.transport.url, True, data)
-                try:
-                    self.transport.send(data)
-                except (LinkLost, OSError) as exc:
-                    session.send_failed()
-                    log.debug("send failed: %s", exc)
-            self._dispatch()
-        except Exception:  # the heartbeat must never stop
-            log.exception("gcu_async: heartbeat step failed")
-        self._schedule()
+    async def set_osd(self, enabled: bool = True) -> Feedback:
+        """On-screen display on/off (0x73)."""
+        return await self._run("set_osd", enabled=enabled)
 
-    def _schedule(self) -> None:
-        if self._state is ClientState.CLOSED:
-            return
-        now = self._clock()
-        when = self.session.next_wakeup(now)
-        if when == math.inf or when >= self._timer_at:
-            return
-        if self._timer is not None:
-            self._timer.cancel()
-        loop = self._loop
-        assert loop is not None
-        self._timer_when = loop.time() + (when - now)
-        self._timer = loop.call_at(self._timer_when, self._on_timer)
-        self._timer_at = when
+    async def set_osd_coordinates(
+        self, coordinates: OsdCoordinateSource | int = OsdCoordinateSource.AIRCRAFT
+    ) -> Feedback:
+        """OSD shows aircraft or target coordinates (0x06)."""
+        return await self._run("set_osd_coordinates", coordinates=coordinates)
 
-    # -- input from the transport ----------------------------------------------------------
-    def _trace(self, packet: bytes) -> None:
-        log_packet(self.transport.url, False, packet)
+    async def set_image_auto_flip(self, enabled: bool = True) -> Feedback:
+        """Image auto-flip on/off (0x07)."""
+        return await self._run("set_image_auto_flip", enabled=enabled)
 
-    def _on_data(self, data: bytes) -> None:
-        self.session.receive(data, self._clock(), datagram=self._datagram,
-                             arrived_after=self._rx_bound)  # fmt: skip
-        self._dispatch()
-        if self._timer is None:  # a reply never brings the next wake-up forward
-            self._schedule()
+    async def set_time_zone(self, offset_hours: int) -> Feedback:
+        """The pod's UTC offset in whole hours, −12 … +14 (0x08)."""
+        return await self._run("set_time_zone", offset_hours=offset_hours)
 
-    def _on_link_event(self, event: LinkEvent) -> None:
-        if event.kind is LinkEventKind.LOST:
-            self.session.connection_lost(self._clock(), event.detail or "transport lost")
-            self._dispatch()
-            self._schedule()
-        elif event.kind is LinkEventKind.PEER:
-            self._emit_link(event)
-        elif event.kind is LinkEventKind.ERROR:
-            log.warning("%s (the link stays open; link health decides whether it is up)",
-                        event.detail)  # fmt: skip
-            self._emit_link(event)
+    async def set_picture_in_picture(self, mode: int = 0) -> Feedback:
+        """Picture-in-picture mode 1–4, or 0 to cycle (0x74)."""
+        return await self._run("set_picture_in_picture", mode=mode)
 
-    # -- events ----------------------------------------------------------------------------
-    def _dispatch(self) -> None:
-        events = self.session.events()
-        if not events:
-            return
-        for event in events:
-            if isinstance(event, TelemetrySample):
-                self._telemetry(event)
-            elif isinstance(event, TicketDone):
-                self._resolve(event.ticket)
-            elif isinstance(event, LinkUp):
-                first = self._first_reply
-                if first is not None and not first.done():
-                    first.set_result(None)
-                if event.restored:
-                    log.warning("link to %s restored", self.transport.url)
-                    self._emit_link(LinkEvent(LinkEventKind.RESTORED, event.reason))
-            elif isinstance(event, LinkDown):
-                log.warning("link to %s lost: %s", self.transport.url, event.reason)
-                self._emit_link(LinkEvent(LinkEventKind.LOST, event.reason))
-            elif isinstance(event, ResetLink):
-                reset = getattr(self.transport, "reset", None)
-                if reset is not None:
-                    reset(event.reason)
+    async def set_target_detection(self, enabled: bool = True) -> Feedback:
+        """AI target detection on/off (0x75)."""
+        return await self._run("set_target_detection", enabled=enabled)
 
-    def _resolve(self, ticket: Ticket) -> None:
-        future = self._futures.pop(ticket, None)
-        ins_invalid = self._needs_ins.pop(ticket, False)
-        if future is None or future.done():
-            return
-        if ticket.state is TicketState.SUCCEEDED:
-            future.set_result(ticket.feedback)
-        elif ticket.state is TicketState.SKIPPED:
-            future.set_result(None)
-        else:
-            assert ticket.error is not None
-            if isinstance(ticket.error, CommandFailed):
-                self._explain(ticket.error, ticket.command, ins_invalid)
-            future.set_exception(ticket.error)
+    async def set_digital_zoom(self, enabled: bool = True) -> Feedback:
+        """Digital zoom on/off (0x76)."""
+        return await self._run("set_digital_zoom", enabled=enabled)
 
-    def _explain(self, error: CommandFailed, command: Command, ins_invalid: bool) -> None:
-        """Add what the client knows that explains a failure (docs/client.md, "Why a
-        command failed"): the pod model's Appendix 8 row, INS sent invalid, the zoom limit."""
-        opcode = command_code(command)
-        name = opcode_name(opcode)
-        model = self.pod_model
-        if model is not None and model in POD_NAMES and not supports(model, opcode):
-            error.explain(LikelyCause.NOT_SUPPORTED,
-                          f"protocol Appendix 8: the {pod_name(model)} does not support "
-                          f"{name}")  # fmt: skip
-        elif ins_invalid:
-            error.explain(LikelyCause.INS_INVALID,
-                          f"{name} needs valid INS data and the host packets carried INS "
-                          "invalid: give the aircraft's attitude, acceleration and velocity "
-                          "with update_aircraft(), at most aircraft_timeout "
-                          f"({self.aircraft_timeout:g} s) apart")  # fmt: skip
-        elif (isinstance(command, ZoomTo) and command.ratio is not None
-              and self._max_zoom is not None and command.ratio > self._max_zoom):  # fmt: skip
-            error.explain(LikelyCause.ZOOM_LIMIT,
-                          f"{command.ratio:g}x is beyond camera 1's maximum zoom "
-                          f"{self._max_zoom:g}x")  # fmt: skip
+    async def set_fill_light(self, brightness: int) -> Feedback:
+        """Fill light brightness 0–255, 0 = off (0x80); on also turns night vision on."""
+        return await self._run("set_fill_light", brightness=brightness)
 
-    def _telemetry(self, sample: TelemetrySample) -> None:
-        if not self._subscriptions and not self._telemetry_callbacks:
-            return
-        for sub in self._subscriptions:
-            before = sub.dropped
-            sub.put(sample)
-            self.telemetry_dropped += sub.dropped - before
-        for callback in list(self._telemetry_callbacks):
-            try:
-                callback(sample)
-            except Exception:
-                log.exception("telemetry callback failed")
-
-    def _emit_link(self, event: LinkEvent) -> None:
-        for callback in list(self._link_callbacks):
-            try:
-                callback(event)
-            except Exception:
-                log.exception("link callback failed")
+    async def set_ranging(self, enabled: bool = True) -> Feedback:
+        """Continuous laser ranging on/off (0x81)."""
+        return await self._run("set_ranging", enabled=enabled)
 
 
 S16_CENTI = (-327.68, 327.67)
@@ -859,32 +818,3 @@ def _caller_stacklevel() -> int:
             "gcu_async.client"):  # fmt: skip
         frame, level = frame.f_back, level + 1  # type: ignore[assignment]
     return level
-
-
-def _check_callback(callback: object) -> None:
-    """A callable that takes one positional argument (the sample or the event)."""
-    if not callable(callback):
-        raise type_error("callback", "a callable taking one argument", callback)
-    try:
-        signature = inspect.signature(callback)
-    except (TypeError, ValueError):  # some builtins have none: trust them
-        return
-    try:
-        signature.bind(None)
-    except TypeError:
-        raise type_error("callback", f"a callable taking one argument (not {signature})",
-                         callback) from None  # fmt: skip
-
-
-def _unsubscriber(callbacks: list[Any], callback: Any,
-                  then: Callable[[], None] | None) -> Callable[[], None]:  # fmt: skip
-    """A function that removes ``callback`` once (and calls ``then``); calling it again does
-    nothing."""
-
-    def unsubscribe() -> None:
-        if callback in callbacks:
-            callbacks.remove(callback)
-            if then is not None:
-                then()
-
-    return unsubscribe

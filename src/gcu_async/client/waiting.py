@@ -10,19 +10,19 @@ and raise :class:`~gcu_async.errors.LinkLost` when the client closes.
 
 from __future__ import annotations
 
-import abc
 import asyncio
 import contextlib
 from collections import deque
 from collections.abc import AsyncGenerator, Callable
 
 from gcu_async._checks import check_bool, check_positive, check_real, type_error
+from gcu_async.client.driver import ENDED, Driver
+from gcu_async.client.telemetry import Callbacks, Telemetry
 from gcu_async.errors import LinkLost, WaitTimeout
+from gcu_async.protocol.builder import build
 from gcu_async.protocol.catalogue import BY_METHOD
-from gcu_async.protocol.feedback import Feedback
-from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
 from gcu_async.protocol.units import wrap_degrees_180
-from gcu_async.session import TelemetrySample
+from gcu_async.session import SessionState, TelemetrySample
 from gcu_async.transport.base import LinkEvent
 
 Predicate = Callable[[TelemetrySample], bool]
@@ -59,57 +59,29 @@ def _attitude_targets(roll: float | None, pitch: float | None,
     return out
 
 
-class WaitingMethods(abc.ABC):
-    """Waits on telemetry and the link, shared by :class:`~gcu_async.client.GcuClient`."""
+class Waiting:
+    """Waits on telemetry and the link (the client's waiting part): it reads the driver's
+    session, subscribes to its telemetry and link events, and sends the closed-loop moves'
+    commands through the driver."""
 
-    # -- what the client provides ----------------------------------------------------------
-    @property
-    @abc.abstractmethod
-    def status(self) -> GcuMainFrame: ...
+    def __init__(self, driver: Driver, telemetry: Telemetry, links: Callbacks[LinkEvent]) -> None:
+        self._driver = driver
+        self._telemetry = telemetry
+        self._links = links
 
-    @property
-    @abc.abstractmethod
-    def _info(self) -> GcuSubFrame | None: ...
-
-    @abc.abstractmethod
-    def _latest(self) -> TelemetrySample | None:
-        """The latest reply as a sample (None before the first)."""
-
-    @abc.abstractmethod
-    def telemetry(self, maxsize: int = 1) -> AsyncGenerator[TelemetrySample, None]: ...
-
-    @abc.abstractmethod
-    def on_link_change(self, callback: Callable[[LinkEvent], None]) -> Callable[[], None]: ...
-
-    @abc.abstractmethod
-    def _link_up(self) -> bool:
-        """True while replies arrive (the session's link state)."""
-
-    @abc.abstractmethod
     def _closed(self) -> asyncio.Event | None:
-        """Set once the client closes; None while it is not open."""
+        return self._driver.closed()
 
-    @abc.abstractmethod
-    async def enter_euler_control(self, *, roll: float | None = None, pitch: float | None = None,
-                            yaw: float | None = None) -> Feedback: ...  # fmt: skip
+    def _latest(self) -> TelemetrySample | None:
+        return self._driver.session.latest
 
-    @abc.abstractmethod
-    async def zoom_to(self, ratio: float, *, cameras: int = ...) -> Feedback: ...
-
-    @property
-    @abc.abstractmethod
-    def max_zoom(self) -> float | None: ...
+    def _link_up(self) -> bool:
+        return self._driver.session.state is SessionState.UP
 
     # -- telemetry -------------------------------------------------------------------------
     async def wait_for(self, predicate: Predicate, *, timeout: float = WAIT_TIMEOUT,
                        what: str = "the condition") -> TelemetrySample:  # fmt: skip
-        """Return the first telemetry sample for which ``predicate(sample)`` is true — the
-        latest reply already, if it qualifies and the link is up. ``what`` names the
-        condition in the error.
-
-        Raises :class:`~gcu_async.errors.WaitTimeout` after ``timeout`` seconds (the last
-        sample seen is its ``last``), :class:`~gcu_async.errors.LinkLost` if the client
-        closes, and whatever ``predicate`` raises."""
+        """See :meth:`GcuClient.wait_for <gcu_async.client.GcuClient.wait_for>`."""
         if not callable(predicate):
             raise type_error("predicate", "a callable taking a TelemetrySample", predicate)
         timeout = check_positive("timeout", timeout)
@@ -123,7 +95,8 @@ class WaitingMethods(abc.ABC):
         last: list[TelemetrySample | None] = [latest]
 
         async def first() -> TelemetrySample:
-            async with contextlib.aclosing(self.telemetry()) as samples:
+            samples_ = self._telemetry.samples(1, self._driver.state in ENDED)
+            async with contextlib.aclosing(samples_) as samples:
                 async for sample in samples:
                     last[0] = sample
                     if predicate(sample):
@@ -138,9 +111,7 @@ class WaitingMethods(abc.ABC):
     async def wait_attitude(self, *, roll: float | None = None, pitch: float | None = None,
                             yaw: float | None = None, tolerance: float = ANGLE_TOLERANCE,
                             timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
-        """Wait until the camera's reported attitude (``status.attitude``: absolute Euler
-        angles, degrees) is within ``tolerance`` degrees of every angle given; angles left
-        ``None`` are not checked. Yaw compares the short way round (359° is 2° from 1°)."""
+        """See :meth:`GcuClient.wait_attitude <gcu_async.client.GcuClient.wait_attitude>`."""
         given = _attitude_targets(roll, pitch, yaw)
         tol = check_positive("tolerance", tolerance, unit="deg")
         if not given:
@@ -155,8 +126,7 @@ class WaitingMethods(abc.ABC):
 
     async def wait_zoom(self, ratio: float, *, tolerance: float = ZOOM_TOLERANCE,
                         timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
-        """Wait until camera 1's reported zoom ratio (sub frame) is within ``tolerance`` of
-        ``ratio``."""
+        """See :meth:`GcuClient.wait_zoom <gcu_async.client.GcuClient.wait_zoom>`."""
         target = check_real("ratio", ratio, 1.0, 6553.5, "x")
         tol = check_positive("tolerance", tolerance, unit="x")
 
@@ -171,30 +141,25 @@ class WaitingMethods(abc.ABC):
     async def reach_attitude(self, *, roll: float | None = None, pitch: float | None = None,
                              yaw: float | None = None, tolerance: float = ANGLE_TOLERANCE,
                              timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
-        """Euler-angle control (:meth:`enter_euler_control`) to the angles given — omitted ones
-        keep the current attitude — then wait until the camera is within ``tolerance``
-        degrees of all three. ``timeout`` bounds the wait after the GCU confirmed the mode
-        (the command itself has its own ``command_timeout``)."""
+        """See :meth:`GcuClient.reach_attitude <gcu_async.client.GcuClient.reach_attitude>`."""
         _attitude_targets(roll, pitch, yaw)  # all checked before anything is sent
         check_positive("timeout", timeout)
         check_positive("tolerance", tolerance, unit="deg")
-        current = self.status.attitude
+        current = self._driver.status().attitude
         r = current.roll if roll is None else roll
         p = current.pitch if pitch is None else pitch
         y = current.yaw if yaw is None else yaw
-        await self.enter_euler_control(roll=r, pitch=p, yaw=y)
+        driver = self._driver
+        await driver.run(build("enter_euler_control", driver.context(), roll=r, pitch=p, yaw=y))
         return await self.wait_attitude(roll=r, pitch=p, yaw=y, tolerance=tolerance,
                                         timeout=timeout)  # fmt: skip
 
     async def reach_zoom(self, ratio: float, *, tolerance: float = ZOOM_TOLERANCE,
                          timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
-        """:meth:`zoom_to` ``ratio`` (camera 1), then wait until the reported zoom is within
-        ``tolerance`` of it. A ratio above :attr:`max_zoom` (when given) is refused before
-        anything is sent; a timeout with the zoom short of the ratio names the ratio last
-        reported."""
+        """See :meth:`GcuClient.reach_zoom <gcu_async.client.GcuClient.reach_zoom>`."""
         check_positive("timeout", timeout)
         check_positive("tolerance", tolerance, unit="x")
-        await self.zoom_to(ratio)
+        await self._driver.run(build("zoom_to", self._driver.context(), ratio=ratio))
         try:
             return await self.wait_zoom(ratio, tolerance=tolerance, timeout=timeout)
         except WaitTimeout as exc:
@@ -208,9 +173,7 @@ class WaitingMethods(abc.ABC):
 
     # -- the link --------------------------------------------------------------------------
     async def wait_link(self, up: bool = True, *, timeout: float = WAIT_TIMEOUT) -> None:
-        """Return once the link is up (``up=False``: down); at once if it already is.
-        :class:`~gcu_async.errors.WaitTimeout` after ``timeout`` seconds,
-        :class:`~gcu_async.errors.LinkLost` if the client closes meanwhile."""
+        """See :meth:`GcuClient.wait_link <gcu_async.client.GcuClient.wait_link>`."""
         want = check_bool("up", up)
         timeout = check_positive("timeout", timeout)
         closed = self._closed()
@@ -218,7 +181,7 @@ class WaitingMethods(abc.ABC):
             raise LinkLost("the client is not open")
         what = "the link up" if want else "the link down"
         changed = asyncio.Event()
-        unsubscribe = self.on_link_change(lambda event: changed.set())
+        unsubscribe = self._links.add(lambda event: changed.set())
         loop = asyncio.get_running_loop()
         deadline = loop.time() + timeout
         try:
@@ -236,9 +199,7 @@ class WaitingMethods(abc.ABC):
             unsubscribe()
 
     async def link_events(self) -> AsyncGenerator[LinkEvent, None]:
-        """Iterate over link events (lost, restored, an OS error, a new peer, a retried
-        open) from now on; ends when the client closes. Up to 256 unread events are kept
-        (the oldest go first)."""
+        """See :meth:`GcuClient.link_events <gcu_async.client.GcuClient.link_events>`."""
         closed = self._closed()
         if closed is None or closed.is_set():
             raise LinkLost("the client is not open")
@@ -249,7 +210,7 @@ class WaitingMethods(abc.ABC):
             events.append(event)
             ready.set()
 
-        unsubscribe = self.on_link_change(put)
+        unsubscribe = self._links.add(put)
         try:
             while True:
                 while events:
@@ -272,4 +233,4 @@ async def _either(a: asyncio.Event, b: asyncio.Event, timeout: float | None) -> 
             waiter.cancel()
 
 
-__all__ = ["ANGLE_TOLERANCE", "WAIT_TIMEOUT", "ZOOM_TOLERANCE", "WaitingMethods", "angle_error"]
+__all__ = ["ANGLE_TOLERANCE", "WAIT_TIMEOUT", "ZOOM_TOLERANCE", "Waiting", "angle_error"]
