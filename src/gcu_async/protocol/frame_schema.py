@@ -21,7 +21,7 @@ from typing import Any, TypeVar
 from gcu_async._checks import check_int
 from gcu_async.protocol.anomalies import Anomaly, FieldRange, check_raw, reserved_bits_detail
 from gcu_async.protocol.fields import WireField, offsets
-from gcu_async.protocol.units import check_flags
+from gcu_async.protocol.units import check_flags, quantize
 
 _T = TypeVar("_T")
 
@@ -41,8 +41,8 @@ class FrameSchema:
     a :class:`FieldRangeError` on send, an :class:`Anomaly` on receive)."""
 
     __slots__ = (
-        "_fast_normal",
-        "_fast_valid",
+        "_anomalies",
+        "_validate",
         "by_name",
         "fields",
         "flags",
@@ -76,8 +76,10 @@ class FrameSchema:
         self.offsets = offsets(self.fields, start)
         self.ranges = tuple(FieldRange(f.name, f.raw_low, f.raw_high, f.raw_unit)
                             for f in self.fields if f.name not in self.flags)  # fmt: skip
-        self._fast_valid = self._generate(typed=True)
-        self._fast_normal = self._generate(typed=False)
+        self._validate = self._generate("validate", typed=True, ok="return",
+                                        slow=self._validate_slow)  # fmt: skip
+        self._anomalies = self._generate("anomalies", typed=False, ok="return ()",
+                                         slow=self._anomalies_slow)  # fmt: skip
 
     @property
     def format(self) -> str:
@@ -96,13 +98,31 @@ class FrameSchema:
             raise TypeError(f"{cls.__name__} fields {declared} are not the {self.name} "
                             f"schema's {self.names}")  # fmt: skip
 
+    def install(self, cls: type[tuple[Any, ...]]) -> None:
+        """Check that the NamedTuple ``cls`` declares this schema's fields, then replace its
+        ``validate`` method and ``anomalies`` property (where it defines them; docstrings
+        kept) with the fast paths generated from the table: one function call each."""
+        self.check_fields(cls)
+        old = cls.__dict__.get("validate")
+        if old is not None:
+            fast = self._generate("validate", typed=True, ok="return", slow=self._validate_slow)
+            fast.__doc__ = old.__doc__
+            setattr(cls, "validate", fast)  # noqa: B010 - mypy: no assignment to a method
+        prop = cls.__dict__.get("anomalies")
+        if isinstance(prop, property):
+            fast = self._generate("anomalies", typed=False, ok="return ()",
+                                  slow=self._anomalies_slow)  # fmt: skip
+            setattr(cls, "anomalies", property(fast, doc=prop.__doc__))  # noqa: B010
+
     # -- generated fast paths -------------------------------------------------------------
-    def _generate(self, *, typed: bool) -> Callable[[tuple[Any, ...]], bool]:
-        """A function ``frame -> bool``: True iff every field is in range (and, ``typed``, a
-        plain ``int``; a flags field may also be its ``IntFlag``), as one expression."""
+    def _generate(self, name: str, *, typed: bool, ok: str,
+                  slow: Callable[[tuple[Any, ...]], Any]) -> Callable[..., Any]:  # fmt: skip
+        """``def name(frame)``: ``ok`` when every field is in range (and, ``typed``, a plain
+        ``int``; a flags field may also be its ``IntFlag``), tested as one expression; else
+        ``slow(frame)``, which names the field."""
         args = [f"v{i}" for i in range(len(self.fields))]
-        env: dict[str, Any] = {}
-        lines = ["def check(frame):", f"    {', '.join(args)}, = frame"]
+        env: dict[str, Any] = {"slow": slow}
+        lines = [f"def {name}(frame):", f"    {', '.join(args)}, = frame"]
         conds: list[str] = []
         if typed:
             conds.append(" is ".join(["int", *(f"type({a})" for a in args)]))
@@ -115,23 +135,46 @@ class FrameSchema:
                 conds.append(f"{a} >= 0 and not {a} & {~flag_bits(flags)}")
             else:
                 conds.append(f"{f.raw_low} <= {a} <= {f.raw_high}")
-        lines.append(f"    return bool({' and '.join(conds)})")
+        lines += [f"    if {' and '.join(conds)}:", f"        {ok}", "    return slow(frame)"]
         exec("\n".join(lines), env)  # the source is built above from the field table
-        check: Callable[[tuple[Any, ...]], bool] = env["check"]
-        return check
+        function: Callable[..., Any] = env[name]
+        return function
 
     # -- send side --------------------------------------------------------------------------
     def validate(self, frame: tuple[Any, ...]) -> None:
         """Raise ``TypeError`` / :class:`FieldRangeError` for the first field of ``frame``
         (wire order) that is not an ``int`` in its range (flags: with no reserved bit)."""
-        if self._fast_valid(frame):
-            return
+        self._validate(frame)
+
+    def _validate_slow(self, frame: tuple[Any, ...]) -> None:
         for f, value in zip(self.fields, frame, strict=True):
             flags = self.flags.get(f.name)
             if flags is not None:
                 check_flags(f.name, value, flags)
             else:
                 check_int(f.name, value, f.raw_low, f.raw_high, f.raw_unit)
+
+    def quantizer(self, name: str, label: str | None = None) -> Callable[[object], int]:
+        """Send side: a function ``value -> raw`` for field ``name`` — what
+        ``WireField.to_raw(value, label)`` does (rounded, range-checked, a
+        :class:`FieldRangeError` naming ``label``), its arguments bound once and an in-range
+        ``float``/``int`` taking a short path (frames are built from units at the packet rate)."""
+        f = self.by_name[name]
+        field, scale, low, high, unit, open_ = (label or name, f.scale, f.raw_low,
+                                                f.raw_high + f.high_open, f.unit, f.high_open)
+        top = f.raw_high
+
+        def to_raw(value: object) -> int:
+            if type(value) is float or type(value) is int:
+                try:
+                    raw = round(value * scale)
+                except (OverflowError, ValueError):  # inf, nan: quantize raises the error
+                    raw = low - 1
+                if low <= raw <= top:
+                    return raw
+            return quantize(field, value, scale, low, high, unit, high_open=open_)  # type: ignore[arg-type]
+
+        return to_raw
 
     def check(self, name: str, value: object, label: str | None = None) -> int:
         """``value`` checked as field ``name``'s raw integer, errors naming ``label``."""
@@ -142,8 +185,10 @@ class FrameSchema:
     def anomalies(self, frame: tuple[Any, ...]) -> tuple[Anomaly, ...]:
         """One :class:`Anomaly` per field of a decoded ``frame`` outside its range (flags:
         with reserved bits set), in wire order; ``()`` for an ordinary frame."""
-        if self._fast_normal(frame):
-            return ()
+        found: tuple[Anomaly, ...] = self._anomalies(frame)
+        return found
+
+    def _anomalies_slow(self, frame: tuple[Any, ...]) -> tuple[Anomaly, ...]:
         found: tuple[Anomaly, ...] = ()
         for f, value in zip(self.fields, frame, strict=True):
             flags = self.flags.get(f.name)

@@ -421,8 +421,8 @@ class GcuSubFrame(NamedTuple):
         }  # fmt: skip
 
 
-GCU_MAIN_SCHEMA.check_fields(GcuMainFrame)
-GCU_SUB_SCHEMA.check_fields(GcuSubFrame)
+GCU_MAIN_SCHEMA.install(GcuMainFrame)
+GCU_SUB_SCHEMA.install(GcuSubFrame)
 
 
 def _camera_flags(value: object) -> int:

@@ -224,11 +224,9 @@ class HostMainFrame(NamedTuple):
         roll = pitch = yaw = 0
         if attitude is not None:
             a_roll, a_pitch, a_yaw = check_tuple("attitude", attitude, Attitude)
-            roll = _M["aircraft_roll_raw"].to_raw(a_roll, "aircraft roll")
-            pitch = _M["aircraft_pitch_raw"].to_raw(a_pitch, "aircraft pitch")
-            yaw = _M["aircraft_yaw_raw"].to_raw(a_yaw, "aircraft yaw")
-        an, ae, au = _neu("aircraft acceleration", "accel", acceleration)
-        vn, ve, vu = _neu("aircraft velocity", "vel", velocity)
+            roll, pitch, yaw = _ROLL(a_roll), _PITCH(a_pitch), _YAW(a_yaw)
+        an, ae, au = _neu("acceleration", acceleration)
+        vn, ve, vu = _neu("velocity", velocity)
         HOST_MAIN_SCHEMA.check("subframe_request", subframe_request)
         return cls(*c, int(flags), roll, pitch, yaw, an, ae, au, vn, ve, vu, int(subframe_request))
 
@@ -297,16 +295,22 @@ class HostMainFrame(NamedTuple):
 
 
 def _neu(
-    label: str, prefix: str, value: NorthEastUp | tuple[float, float, float] | None
+    field: str, value: NorthEastUp | tuple[float, float, float] | None
 ) -> tuple[int, int, int]:
     if value is None:
         return (0, 0, 0)
-    n, e, u = check_tuple(label.removeprefix("aircraft "), value, NorthEastUp)
-    return (
-        _M[f"{prefix}_north_raw"].to_raw(n, f"{label} north"),
-        _M[f"{prefix}_east_raw"].to_raw(e, f"{label} east"),
-        _M[f"{prefix}_up_raw"].to_raw(u, f"{label} up"),
-    )
+    n, e, u = check_tuple(field, value, NorthEastUp)
+    qn, qe, qu = _NEU[field]
+    return qn(n), qe(e), qu(u)
+
+
+_q = HOST_MAIN_SCHEMA.quantizer
+_ROLL = _q("aircraft_roll_raw", "aircraft roll")
+_PITCH = _q("aircraft_pitch_raw", "aircraft pitch")
+_YAW = _q("aircraft_yaw_raw", "aircraft yaw")
+_NEU = {field: tuple(_q(f"{prefix}_{axis}_raw", f"aircraft {field} {axis}")
+                     for axis in ("north", "east", "up"))
+        for field, prefix in (("acceleration", "accel"), ("velocity", "vel"))}  # fmt: skip
 
 
 class HostSubFrame(NamedTuple):
@@ -347,14 +351,12 @@ class HostSubFrame(NamedTuple):
         with leap seconds applied unless ``apply_leap_seconds=False`` (the document's rule);
         :meth:`gnss_time` reads it back with the same default (see
         :mod:`gcu_async.protocol.gpstime`)."""
-        lon = _S["longitude_raw"].to_raw(longitude, "longitude")
-        lat = _S["latitude_raw"].to_raw(latitude, "latitude")
-        alt = _S["altitude_raw"].to_raw(altitude, "altitude")
+        lon, lat, alt = _LONGITUDE(longitude), _LATITUDE(latitude), _ALTITUDE(altitude)
         check = HOST_SUB_SCHEMA.check
         sats = check("satellites", satellites)
         ms = check("gnss_ms", gnss_ms)
         week = check("gnss_week", gnss_week)
-        rel = _S["relative_altitude_raw"].to_raw(relative_altitude, "relative altitude")
+        rel = _RELATIVE_ALTITUDE(relative_altitude)
         check_bool("apply_leap_seconds", apply_leap_seconds)
         if gnss_time is not None:
             from gcu_async.protocol.gpstime import utc_to_gps
@@ -426,5 +428,9 @@ class HostSubFrame(NamedTuple):
         }
 
 
-HOST_MAIN_SCHEMA.check_fields(HostMainFrame)
-HOST_SUB_SCHEMA.check_fields(HostSubFrame)
+HOST_MAIN_SCHEMA.install(HostMainFrame)
+HOST_SUB_SCHEMA.install(HostSubFrame)
+_LONGITUDE = HOST_SUB_SCHEMA.quantizer("longitude_raw", "longitude")
+_LATITUDE = HOST_SUB_SCHEMA.quantizer("latitude_raw", "latitude")
+_ALTITUDE = HOST_SUB_SCHEMA.quantizer("altitude_raw", "altitude")
+_RELATIVE_ALTITUDE = HOST_SUB_SCHEMA.quantizer("relative_altitude_raw", "relative altitude")

@@ -87,7 +87,8 @@ def _body(main: FrameSchema, sub: FrameSchema) -> _Body:
                                                       SUB_START, OPCODE_OFFSET):  # fmt: skip
         raise ValueError(f"{main.name} / {sub.name} do not fill bytes {MAIN_START}-"
                          f"{OPCODE_OFFSET - 1}")  # fmt: skip
-    layout = struct.Struct(PREFIX.format + main.format + "B" + sub.format + "B")
+    # the header as one U16, so the hot paths compare ints (no bytes object per packet)
+    layout = struct.Struct("<HHB" + main.format + "B" + sub.format + "B")
     if layout.size != _PARAMS:
         raise ValueError(f"packet body is {layout.size} bytes, not {_PARAMS}")
     m = len(PREFIX.unpack(bytes(PREFIX.size)))  # header, length, version
@@ -137,7 +138,7 @@ class HostPacket(NamedTuple):
         params = command.encode_params()  # an AnomalousCommand raises here: send is strict
         if type(sub) is HostSubFrame and type(main) is HostMainFrame:  # bytes 0–69 at once
             body = _HOST_BODY_PACK(
-                HOST_HEADER, BASE_LENGTH + len(params), version,
+                _HOST_HEADER_U16, BASE_LENGTH + len(params), version,
                 *main, SUB_FRAME_HEADER, *sub,
                 command.code if isinstance(command, UnknownCommand) else command.OPCODE,
             ) + params  # fmt: skip
@@ -285,6 +286,13 @@ def _check_envelope(data: bytes, header: bytes) -> None:
 
 
 _new = tuple.__new__
+_GCU_UNPACK = _GCU_BODY.struct.unpack_from
+_GCU_MAIN, _GCU_SUB_HEADER, _GCU_SUB, _GCU_OPCODE = _GCU_BODY[1:]
+_HOST_BODY_PACK = _HOST_BODY.struct.pack
+_GCU_HEADER_U16 = int.from_bytes(GCU_HEADER, "little")
+_HOST_HEADER_U16 = int.from_bytes(HOST_HEADER, "little")
+_NO_STATUS = tuple(Feedback(opcode) for opcode in range(256))
+"""The feedback of each opcode with no execution status (S = 72), shared: immutable."""
 
 
 def decode_gcu_packet(data: bytes) -> GcuPacket:
@@ -301,7 +309,7 @@ def decode_gcu_packet(data: bytes) -> GcuPacket:
     if n < BASE_LENGTH:
         _envelope_error(data, GCU_HEADER)
     fields = _GCU_UNPACK(data)
-    if fields[0] != GCU_HEADER or fields[1] != n or crc_hqx(data, 0):
+    if fields[0] != _GCU_HEADER_U16 or fields[1] != n or crc_hqx(data, 0):
         _envelope_error(data, GCU_HEADER)
     main = _new(GcuMainFrame, fields[_GCU_MAIN])
     sub_header = fields[_GCU_SUB_HEADER]
@@ -314,17 +322,12 @@ def decode_gcu_packet(data: bytes) -> GcuPacket:
         sub = UnknownSubFrame(sub_header, bytes(data[SUB_START:OPCODE_OFFSET]))
     opcode = fields[_GCU_OPCODE]
     if n == BASE_LENGTH:
-        feedback = _new(Feedback, (opcode, None, b""))
+        feedback = _NO_STATUS[opcode]
     elif n == BASE_LENGTH + 1:
         feedback = _new(Feedback, (opcode, data[_PARAMS], b""))
     else:  # more status bytes than V2.0.6 defines: kept, flagged
         feedback = _new(Feedback, (opcode, data[_PARAMS], bytes(data[_PARAMS + 1 : -CRC_SIZE])))
     return _new(GcuPacket, (main, sub, feedback, fields[2]))
-
-
-_GCU_UNPACK = _GCU_BODY.struct.unpack_from
-_GCU_MAIN, _GCU_SUB_HEADER, _GCU_SUB, _GCU_OPCODE = _GCU_BODY[1:]
-_HOST_BODY_PACK = _HOST_BODY.struct.pack
 
 
 def decode_host_packet(data: bytes) -> HostPacket:
