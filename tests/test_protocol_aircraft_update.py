@@ -32,7 +32,8 @@ INTS: list[Any] = [-1, 0, 1, 255, 256, 32767, 32768, 604_799_999, 604_800_000, 2
 UTC = timezone.utc
 TIMES: list[Any] = [datetime(2024, 5, 1, 12, tzinfo=UTC), datetime(2024, 5, 1, 12),
                     datetime(2608, 1, 1, tzinfo=UTC), datetime(2610, 1, 1, tzinfo=UTC),
-                    datetime(9999, 1, 1, tzinfo=timezone(timedelta(hours=3))), "2024", 5]  # fmt: skip
+                    datetime(9999, 1, 1, tzinfo=timezone(timedelta(hours=3))),
+                    "2024", 5]  # fmt: skip
 
 
 def _triple() -> st.SearchStrategy[Any]:
