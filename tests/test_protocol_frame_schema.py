@@ -112,7 +112,11 @@ def _outcome(call: Any) -> Any:
 def test_generated_validate_is_the_field_by_field_check(cls: type[Any], data: Any) -> None:
     schema = FRAME_SCHEMAS[cls]
     frame = cls(*data.draw(_raw_values(schema)))
-    assert _outcome(frame.validate) == _outcome(lambda: schema._validate_slow(frame))
+    slow = _outcome(lambda: schema._validate_slow(frame))
+    assert _outcome(frame.validate) == slow
+    # the generated test itself passes exactly the frames the slow path passes
+    fast = schema._generate("fast", typed=True, ok="return True", slow=lambda f: False)
+    assert fast(frame) == (slow[0] == "ok")
 
 
 @pytest.mark.parametrize("cls", list(FRAME_SCHEMAS), ids=lambda c: c.__name__)
@@ -123,6 +127,8 @@ def test_generated_anomalies_are_the_field_by_field_ones(cls: type[Any], data: A
     values = [v if type(v) is int else 0 for v in data.draw(_raw_values(schema))]
     frame = cls(*values)
     assert schema.anomalies(frame) == schema._anomalies_slow(frame)
+    fast = schema._generate("fast", typed=False, ok="return True", slow=lambda f: False)
+    assert fast(frame) == (schema._anomalies_slow(frame) == ())
     if hasattr(cls, "anomalies"):
         assert frame.anomalies == schema._anomalies_slow(frame)
 
