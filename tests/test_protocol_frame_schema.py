@@ -158,3 +158,14 @@ def test_decode_takes_the_fields_from_the_schema_slices() -> None:
     sub = GcuSubFrame(*range(21, 34))
     assert decode_gcu_packet(GcuPacket(main, sub).encode()) == GcuPacket(main, sub)
     assert struct.calcsize("<" + FRAME_SCHEMAS[GcuMainFrame].format) == 32
+
+
+def test_a_reply_lists_its_sub_frame_anomalies(monkeypatch: pytest.MonkeyPatch) -> None:
+    """GcuPacket.anomalies includes the sub frame's (in wire order: main, sub, feedback), so
+    a sub-frame field given a range narrower than its wire type is flagged on receive."""
+    from gcu_async.protocol.anomalies import Anomaly
+
+    flagged = (Anomaly("time_zone", 99, -12, 14, "h"),)
+    monkeypatch.setattr(GcuSubFrame, "anomalies", property(lambda self: flagged))
+    assert GcuPacket(GcuMainFrame(), GcuSubFrame(), version=3).anomalies[1:] == flagged
+    assert GcuPacket(GcuMainFrame(), None).anomalies == ()

@@ -380,6 +380,12 @@ class GcuSubFrame(NamedTuple):
         """Raise :class:`FieldRangeError` for any raw field outside its wire range."""
         GCU_SUB_SCHEMA.validate(self)
 
+    @property
+    def anomalies(self) -> tuple[Anomaly, ...]:
+        """Fields of a decoded sub frame outside the ranges V2.0.6 gives them, kept raw and
+        flagged (V2.0.6 gives none narrower than its wire type: empty)."""
+        return GCU_SUB_SCHEMA.anomalies(self)
+
     def __str__(self) -> str:
         """Engineering units (``print(gcu.info)``); ``repr()`` keeps the raw fields."""
         dist = "none" if self.target_distance is None else f"{self.target_distance:g} m"

@@ -231,9 +231,12 @@ class GcuPacket(NamedTuple):
     @property
     def anomalies(self) -> tuple[Anomaly, ...]:
         """Everything V2.0.6 does not expect in this reply, in wire order: its version, its
-        main frame's fields (:attr:`GcuMainFrame.anomalies`), its feedback
-        (:attr:`Feedback.anomalies`); empty for an ordinary reply."""
-        return version_anomalies(self.version) + self.main.anomalies + self.feedback.anomalies
+        frames' fields (:attr:`GcuMainFrame.anomalies`, :attr:`GcuSubFrame.anomalies`), its
+        feedback (:attr:`Feedback.anomalies`); empty for an ordinary reply."""
+        found = version_anomalies(self.version) + self.main.anomalies
+        if isinstance(self.sub, GcuSubFrame):
+            found += self.sub.anomalies
+        return found + self.feedback.anomalies
 
 
 def _anomalies_dict(anomalies: tuple[Anomaly, ...]) -> dict[str, Any]:
