@@ -169,3 +169,16 @@ def test_a_reply_lists_its_sub_frame_anomalies(monkeypatch: pytest.MonkeyPatch) 
     monkeypatch.setattr(GcuSubFrame, "anomalies", property(lambda self: flagged))
     assert GcuPacket(GcuMainFrame(), GcuSubFrame(), version=3).anomalies[1:] == flagged
     assert GcuPacket(GcuMainFrame(), None).anomalies == ()
+
+
+def test_the_simulator_gives_every_sub_frame_field_a_value() -> None:
+    """The simulator builds its GCU sub frame positionally: a field added to the schema (and
+    so to GcuSubFrame, with default 0) must get a value there too, not 0 by omission."""
+    from gcu_async.sim import report
+
+    tree = ast.parse(inspect.getsource(report.sub_frame))
+    calls = [n for n in ast.walk(tree) if isinstance(n, ast.Call)
+             and isinstance(n.func, ast.Name) and n.func.id == "GcuSubFrame"]  # fmt: skip
+    assert len(calls) == 1
+    given_fields = len(calls[0].args) + len(calls[0].keywords)
+    assert given_fields == len(FRAME_SCHEMAS[GcuSubFrame].fields)
