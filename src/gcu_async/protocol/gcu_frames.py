@@ -106,21 +106,21 @@ class GcuMainFrame(NamedTuple):
     pod_status_raw: int = 0
     """Bytes 6–7, little-endian: pod status flags."""
     miss_x: int = 0
-    """Bytes 8–9, S16 [-1000, 1000]: horizontal miss distance, image centre = 0, right +."""
+    """Bytes 8–9, S16: horizontal miss distance, image centre = 0, right +."""
     miss_y: int = 0
-    """Bytes 10–11, S16 [-1000, 1000]: vertical miss distance, down +."""
+    """Bytes 10–11, S16: vertical miss distance, down +."""
     relative_x_raw: int = 0
-    """Bytes 12–13, S16 0.01°, [-18000, 18000): camera X angle relative to the aircraft."""
+    """Bytes 12–13, S16 0.01°: camera X angle relative to the aircraft."""
     relative_y_raw: int = 0
     """Bytes 14–15."""
     relative_z_raw: int = 0
     """Bytes 16–17."""
     roll_raw: int = 0
-    """Bytes 18–19, S16 0.01°, [-9000, 9000]: camera absolute roll."""
+    """Bytes 18–19, S16 0.01°: camera absolute roll."""
     pitch_raw: int = 0
-    """Bytes 20–21, S16 0.01°, [-18000, 18000): camera absolute pitch."""
+    """Bytes 20–21, S16 0.01°: camera absolute pitch."""
     yaw_raw: int = 0
-    """Bytes 22–23, U16 0.01°, [0, 36000): camera absolute yaw."""
+    """Bytes 22–23, U16 0.01°: camera absolute yaw."""
     rate_x_raw: int = 0
     """Bytes 24–25, S16 0.1 °/s: camera X-axis absolute angular rate."""
     rate_y_raw: int = 0

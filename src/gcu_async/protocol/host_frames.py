@@ -120,7 +120,7 @@ class ControlValues(NamedTuple):
         return control
 
     def validate(self, field: str = "control") -> None:
-        """Raise unless each raw value is an ``int`` in [-18000, 18000] (see the class)."""
+        """Raise unless each raw value is an ``int`` in the control range (see the class)."""
         r, p, y = self
         c = CONTROL_ANGLE_RAW
         if int is type(r) is type(p) is type(y) and -c <= r <= c and -c <= p <= c and -c <= y <= c:
@@ -179,11 +179,11 @@ class HostMainFrame(NamedTuple):
     flags_raw: int = 0
     """Byte 11: B2 control values valid, B0 aircraft INS valid."""
     aircraft_roll_raw: int = 0
-    """Bytes 12–13, S16, 0.01°, [-18000, 18000)."""
+    """Bytes 12–13, S16, 0.01° (range: ``HOST_MAIN_SCHEMA``)."""
     aircraft_pitch_raw: int = 0
-    """Bytes 14–15, S16, 0.01°, [-9000, 9000]."""
+    """Bytes 14–15, S16, 0.01° (range: ``HOST_MAIN_SCHEMA``)."""
     aircraft_yaw_raw: int = 0
-    """Bytes 16–17, U16, 0.01°, [0, 36000)."""
+    """Bytes 16–17, U16, 0.01° (range: ``HOST_MAIN_SCHEMA``)."""
     accel_north_raw: int = 0
     """Bytes 18–19, S16, 0.01 m/s², gravity excluded."""
     accel_east_raw: int = 0
