@@ -106,12 +106,14 @@ class FrameSchema:
         old = cls.__dict__.get("validate")
         if old is not None:
             fast = self._generate("validate", typed=True, ok="return", slow=self._validate_slow)
-            fast.__doc__ = old.__doc__
+            fast.__doc__, fast.__module__ = old.__doc__, cls.__module__
+            fast.__qualname__ = f"{cls.__qualname__}.validate"
             setattr(cls, "validate", fast)  # noqa: B010 - mypy: no assignment to a method
         prop = cls.__dict__.get("anomalies")
         if isinstance(prop, property):
             fast = self._generate("anomalies", typed=False, ok="return ()",
                                   slow=self._anomalies_slow)  # fmt: skip
+            fast.__module__, fast.__qualname__ = cls.__module__, f"{cls.__qualname__}.anomalies"
             setattr(cls, "anomalies", property(fast, doc=prop.__doc__))  # noqa: B010
 
     # -- generated fast paths -------------------------------------------------------------
@@ -122,7 +124,7 @@ class FrameSchema:
         ``slow(frame)``, which names the field."""
         args = [f"v{i}" for i in range(len(self.fields))]
         env: dict[str, Any] = {"slow": slow}
-        lines = [f"def {name}(frame):", f"    {', '.join(args)}, = frame"]
+        lines = [f"def {name}(self):", f"    {', '.join(args)}, = self"]
         conds: list[str] = []
         if typed:
             conds.append(" is ".join(["int", *(f"type({a})" for a in args)]))
@@ -135,7 +137,7 @@ class FrameSchema:
                 conds.append(f"{a} >= 0 and not {a} & {~flag_bits(flags)}")
             else:
                 conds.append(f"{f.raw_low} <= {a} <= {f.raw_high}")
-        lines += [f"    if {' and '.join(conds)}:", f"        {ok}", "    return slow(frame)"]
+        lines += [f"    if {' and '.join(conds)}:", f"        {ok}", "    return slow(self)"]
         exec("\n".join(lines), env)  # the source is built above from the field table
         function: Callable[..., Any] = env[name]
         return function
