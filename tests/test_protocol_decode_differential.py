@@ -31,12 +31,19 @@ from gcu_async.protocol import (
     decode_gcu_packet,
     decode_host_packet,
 )
+from gcu_async.protocol.gcu_frames import GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA
+from gcu_async.protocol.host_frames import HOST_MAIN_SCHEMA, HOST_SUB_SCHEMA
 from gcu_async.protocol.packets import GCU_HEADER, HOST_HEADER, _check_envelope
 
 # --- the old decoders, as they were -------------------------------------------------------
-_OLD_GCU_BODY = struct.Struct("<2sHB" "BHhhhhhhhHhhh7x" "B" "BBBHiiiiHHBHb2x" "B")
-_OLD_HOST_MAIN = struct.Struct("<hhhBhhHhhhhhhB6x")
-_OLD_HOST_SUB = struct.Struct("<iiiBIhi8x")
+# Their logic is the old one; the frames' formats come from the schemas (so a field added
+# later does not break this test: the layout itself is tests/test_protocol_frame_schema.py's).
+_OLD_GCU_BODY = struct.Struct("<2sHB" + GCU_MAIN_SCHEMA.format + "B" + GCU_SUB_SCHEMA.format
+                              + "B")  # fmt: skip
+_M = 3 + len(GCU_MAIN_SCHEMA.fields)  # the sub frame header's index
+_S = _M + 1 + len(GCU_SUB_SCHEMA.fields)  # the opcode's index
+_OLD_HOST_MAIN = HOST_MAIN_SCHEMA.struct
+_OLD_HOST_SUB = HOST_SUB_SCHEMA.struct
 _new = tuple.__new__
 
 
@@ -47,21 +54,21 @@ def old_decode_gcu_packet(data: bytes) -> GcuPacket:
     fields = _OLD_GCU_BODY.unpack_from(data)
     if fields[0] != GCU_HEADER or fields[1] != n or crc_hqx(data, 0):
         _check_envelope(data, GCU_HEADER)
-    main = _new(GcuMainFrame, fields[3:16])
-    sub_header = fields[16]
+    main = _new(GcuMainFrame, fields[3:_M])
+    sub_header = fields[_M]
     sub: Any
     if sub_header == 0x01:
-        sub = _new(GcuSubFrame, fields[17:30])
+        sub = _new(GcuSubFrame, fields[_M + 1 : _S])
     elif data[37:69] == bytes(32):
         sub = None
     else:
         sub = UnknownSubFrame(sub_header, bytes(data[38:69]))
     if n == 72:
-        feedback = _new(Feedback, (fields[30], None, b""))
+        feedback = _new(Feedback, (fields[_S], None, b""))
     elif n == 73:
-        feedback = _new(Feedback, (fields[30], data[70], b""))
+        feedback = _new(Feedback, (fields[_S], data[70], b""))
     else:
-        feedback = _new(Feedback, (fields[30], data[70], bytes(data[71:-2])))
+        feedback = _new(Feedback, (fields[_S], data[70], bytes(data[71:-2])))
     return _new(GcuPacket, (main, sub, feedback, fields[2]))
 
 
