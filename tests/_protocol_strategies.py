@@ -65,8 +65,10 @@ from gcu_async.protocol import (
     ZoomStop,
     ZoomTo,
 )
+from gcu_async.protocol.frame_schema import FrameSchema
+from gcu_async.protocol.gcu_frames import GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA
+from gcu_async.protocol.host_frames import HOST_MAIN_SCHEMA, HOST_SUB_SCHEMA
 
-MS_PER_WEEK = 604_800_000
 S16 = st.integers(-(2**15), 2**15 - 1)
 S32 = st.integers(-(2**31), 2**31 - 1)
 U8 = st.integers(0, 0xFF)
@@ -74,65 +76,26 @@ U16 = st.integers(0, 0xFFFF)
 VERSIONS = st.sampled_from([1, 2])
 
 _xmodem = crcmod.predefined.mkCrcFun("xmodem")
-S16_RANGE, S32_RANGE = (-(2**15), 2**15 - 1), (-(2**31), 2**31 - 1)
 
-# The wire range of every raw frame field, as validate() must enforce it.
+# --- frame tables: from the frame schemas ------------------------------------------------
+FRAME_SCHEMAS: dict[type[Any], FrameSchema] = {
+    HostMainFrame: HOST_MAIN_SCHEMA,
+    HostSubFrame: HOST_SUB_SCHEMA,
+    GcuMainFrame: GCU_MAIN_SCHEMA,
+    GcuSubFrame: GCU_SUB_SCHEMA,
+}
+"""Each frame class and the schema that describes it."""
+FLAGS_INT_RANGE = (0, 0xFFFF)
+"""The ``int`` range a flags field is checked in before its reserved bits (``check_flags``)."""
+
+
+def _frame_ranges(schema: FrameSchema) -> dict[str, tuple[int, int]]:
+    return {f.name: FLAGS_INT_RANGE if f.name in schema.flags else (f.raw_low, f.raw_high)
+            for f in schema.fields}  # fmt: skip
+
+
 RAW_RANGES: dict[type[Any], dict[str, tuple[int, int]]] = {
-    HostMainFrame: {
-        "control_roll_raw": (-18000, 18000),
-        "control_pitch_raw": (-18000, 18000),
-        "control_yaw_raw": (-18000, 18000),
-        "flags_raw": (0, 0xFFFF),
-        "aircraft_roll_raw": (-18000, 17999),
-        "aircraft_pitch_raw": (-9000, 9000),
-        "aircraft_yaw_raw": (0, 35999),
-        "accel_north_raw": S16_RANGE,
-        "accel_east_raw": S16_RANGE,
-        "accel_up_raw": S16_RANGE,
-        "vel_north_raw": S16_RANGE,
-        "vel_east_raw": S16_RANGE,
-        "vel_up_raw": S16_RANGE,
-        "subframe_request": (0, 255),
-    },
-    HostSubFrame: {
-        "longitude_raw": (-1_800_000_000, 1_800_000_000),
-        "latitude_raw": (-900_000_000, 900_000_000),
-        "altitude_raw": S32_RANGE,
-        "satellites": (0, 255),
-        "gnss_ms": (0, 604_799_999),
-        "gnss_week": (0, 32767),
-        "relative_altitude_raw": S32_RANGE,
-    },
-    GcuMainFrame: {
-        "mode_raw": (0, 255),
-        "pod_status_raw": (0, 0xFFFF),
-        "miss_x": (-1000, 1000),
-        "miss_y": (-1000, 1000),
-        "relative_x_raw": (-18000, 17999),
-        "relative_y_raw": (-18000, 17999),
-        "relative_z_raw": (-18000, 17999),
-        "roll_raw": (-9000, 9000),
-        "pitch_raw": (-18000, 17999),
-        "yaw_raw": (0, 35999),
-        "rate_x_raw": S16_RANGE,
-        "rate_y_raw": S16_RANGE,
-        "rate_z_raw": S16_RANGE,
-    },
-    GcuSubFrame: {
-        "hardware_version_raw": (0, 255),
-        "firmware_version_raw": (0, 255),
-        "pod_code": (0, 255),
-        "fault_raw": (0, 0xFFFF),
-        "target_distance_raw": S32_RANGE,
-        "target_longitude_raw": S32_RANGE,
-        "target_latitude_raw": S32_RANGE,
-        "target_altitude_raw": S32_RANGE,
-        "camera1_zoom_raw": (0, 0xFFFF),
-        "camera2_zoom_raw": (0, 0xFFFF),
-        "thermal_flags_raw": (0, 255),
-        "camera_flags_raw": (0, 0xFFFF),
-        "time_zone": (-128, 127),
-    },
+    cls: _frame_ranges(schema) for cls, schema in FRAME_SCHEMAS.items()
 }
 """Every raw frame field's allowed range (inclusive): what ``validate()`` / ``encode()``
 enforce (``flags_raw`` also has reserved bits)."""
@@ -147,65 +110,25 @@ def seal(header: bytes, body: bytes, version: int = 2) -> bytes:
 
 
 # --- frames ---------------------------------------------------------------------------
-host_main_frames = st.builds(
-    HostMainFrame,
-    control_roll_raw=st.integers(-18000, 18000),
-    control_pitch_raw=st.integers(-18000, 18000),
-    control_yaw_raw=st.integers(-18000, 18000),
-    flags_raw=st.sampled_from([0, 1, 4, 5]),
-    aircraft_roll_raw=st.integers(-18000, 17999),
-    aircraft_pitch_raw=st.integers(-9000, 9000),
-    aircraft_yaw_raw=st.integers(0, 35999),
-    accel_north_raw=S16,
-    accel_east_raw=S16,
-    accel_up_raw=S16,
-    vel_north_raw=S16,
-    vel_east_raw=S16,
-    vel_up_raw=S16,
-    subframe_request=U8,
-)
-host_sub_frames = st.builds(
-    HostSubFrame,
-    longitude_raw=st.integers(-1_800_000_000, 1_800_000_000),
-    latitude_raw=st.integers(-900_000_000, 900_000_000),
-    altitude_raw=S32,
-    satellites=U8,
-    gnss_ms=st.integers(0, MS_PER_WEEK - 1),
-    gnss_week=st.integers(0, 32767),
-    relative_altitude_raw=S32,
-)
-gcu_main_frames = st.builds(
-    GcuMainFrame,
-    mode_raw=U8,
-    pod_status_raw=U16,
-    miss_x=st.integers(-1000, 1000),
-    miss_y=st.integers(-1000, 1000),
-    relative_x_raw=st.integers(-18000, 17999),
-    relative_y_raw=st.integers(-18000, 17999),
-    relative_z_raw=st.integers(-18000, 17999),
-    roll_raw=st.integers(-9000, 9000),
-    pitch_raw=st.integers(-18000, 17999),
-    yaw_raw=st.integers(0, 35999),
-    rate_x_raw=S16,
-    rate_y_raw=S16,
-    rate_z_raw=S16,
-)
-gcu_sub_frames = st.builds(
-    GcuSubFrame,
-    hardware_version_raw=U8,
-    firmware_version_raw=U8,
-    pod_code=U8,
-    fault_raw=U16,
-    target_distance_raw=S32,
-    target_longitude_raw=S32,
-    target_latitude_raw=S32,
-    target_altitude_raw=S32,
-    camera1_zoom_raw=U16,
-    camera2_zoom_raw=U16,
-    thermal_flags_raw=U8,
-    camera_flags_raw=U16,
-    time_zone=st.integers(-128, 127),
-)
+def frames(cls: type[Any]) -> st.SearchStrategy[Any]:
+    """Frames of ``cls`` with every raw field drawn from its schema range (a flags field:
+    from the values its defined bits make)."""
+    schema = FRAME_SCHEMAS[cls]
+    fields: dict[str, st.SearchStrategy[int]] = {}
+    for f in schema.fields:
+        flags = schema.flags.get(f.name)
+        if flags is None:
+            fields[f.name] = st.integers(f.raw_low, f.raw_high)
+        else:
+            bits = [int(m) for m in flags]
+            fields[f.name] = st.sets(st.sampled_from(bits)).map(sum)
+    return st.builds(cls, **fields)
+
+
+host_main_frames = frames(HostMainFrame)
+host_sub_frames = frames(HostSubFrame)
+gcu_main_frames = frames(GcuMainFrame)
+gcu_sub_frames = frames(GcuSubFrame)
 unknown_sub_frames = st.builds(
     UnknownSubFrame,
     header=U8.filter(lambda h: h != 0x01),

@@ -53,6 +53,9 @@ MARKERS = {
 
 TIERS: dict[str, str | tuple[str, ...]] = {
     "test_aircraft_feed.py": FAST,
+    "test_protocol_aircraft_update.py": FAST,
+    "test_protocol_frame_schema.py": FAST,
+    "test_protocol_decode_differential.py": FAST,
     "test_aircraft_feed_sockets.py": "subprocess",
     "test_bridge_admission.py": FAST,
     "test_bridge_adversarial.py": ("subprocess", ALONE),

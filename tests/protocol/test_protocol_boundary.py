@@ -29,7 +29,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from _protocol_strategies import RAW_RANGES
+from _protocol_strategies import FRAME_SCHEMAS, RAW_RANGES
 from _scale import scaled
 from gcu_async.errors import FieldRangeError
 from gcu_async.protocol import (
@@ -90,6 +90,7 @@ from gcu_async.protocol import (
     wrap_degrees_360,
 )
 from gcu_async.protocol.commands import MAX_PARAMS
+from gcu_async.protocol.enums import PIP_MODE_MASK
 from gcu_async.protocol.gpstime import GPS_EPOCH, gps_minus_utc
 
 INF, NAN = math.inf, math.nan
@@ -298,8 +299,27 @@ for _param, _tcls in (("attitude", Attitude), ("acceleration", NorthEastUp),
     add(P(_HMB, _param, _param, lambda v, p=_param: HostMainFrame.build(**{p: v}), "tuple",
           optional=True, valid=(None, TUPLE_BASE[_tcls], _tcls(*TUPLE_BASE[_tcls])),
           wrong=_tuple_wrong(_tcls)))  # fmt: skip
-_ATT = {"roll": (-180.0, 180.0, True), "pitch": (-90.0, 90.0, False),
-        "yaw": (0.0, 360.0, True)}  # fmt: skip
+def _units(cls: type[Any], name: str) -> tuple[float, float, float, bool]:
+    """Frame field ``name``'s range in engineering units, from its schema: low, high (the
+    first value past it when open), step, open."""
+    f = FRAME_SCHEMAS[cls].by_name[name]
+    return (f.raw_low / f.scale, (f.raw_high + f.high_open) / f.scale, 1 / f.scale,
+            f.high_open)  # fmt: skip
+
+
+def _ints(cls: type[Any], name: str) -> tuple[int, int]:
+    f = FRAME_SCHEMAS[cls].by_name[name]
+    return f.raw_low, f.raw_high
+
+
+def _bounds(cls: type[Any], name: str) -> tuple[float, float, bool]:
+    low, high, _, high_open = _units(cls, name)
+    return low, high, high_open
+
+
+_ATT = {axis: _bounds(HostMainFrame, f"aircraft_{axis}_raw") for axis in ("roll", "pitch", "yaw")}
+_NEU_LOW, _NEU_HIGH = _units(HostMainFrame, "accel_north_raw")[:2]
+assert _units(HostMainFrame, "vel_north_raw")[:2] == (_NEU_LOW, _NEU_HIGH)
 for _i, (_e, (_lo, _hi, _open)) in enumerate(_ATT.items()):
     add(P(_HMB, f"attitude.{_e}", f"aircraft {_e}",
           lambda v, e=_e: HostMainFrame.build(attitude=_with(Attitude, e, v)), "real",
@@ -309,10 +329,11 @@ for _param in ("acceleration", "velocity"):
     for _i, _e in enumerate(NorthEastUp._fields):
         add(P(_HMB, f"{_param}.{_e}", f"aircraft {_param} {_e}",
               lambda v, p=_param, e=_e: HostMainFrame.build(**{p: _with(NorthEastUp, e, v)}),
-              "real", -327.68, 327.67, 0.01, valid=(-327.68, 327.67),
+              "real", _NEU_LOW, _NEU_HIGH, 0.01, valid=(_NEU_LOW, _NEU_HIGH),
               read=lambda f, p=_param, i=_i: getattr(_host_rt(f).main, p)[i]))  # fmt: skip
 add(P(_HMB, "subframe_request", "subframe_request",
-      lambda v: HostMainFrame.build(subframe_request=v), "int", 0, 255, valid=(0, 1, 255),
+      lambda v: HostMainFrame.build(subframe_request=v), "int",
+      *_ints(HostMainFrame, "subframe_request"), valid=(0, 1, 255),
       read=lambda f: _host_rt(f).main.subframe_request))  # fmt: skip
 
 _HSB = "HostSubFrame.build"
@@ -323,8 +344,9 @@ def _sub(**kw: Any) -> HostSubFrame:
 
 
 _T0 = datetime(2023, 9, 7, 1, 58, 38, tzinfo=UTC)
-_GEO_RANGES = {"latitude": (-90.0, 90.0, 1e-7), "longitude": (-180.0, 180.0, 1e-7),
-               "altitude": (-2147483.648, 2147483.647, 1e-3)}  # fmt: skip
+_GEO_RANGES = {e: _units(HostSubFrame, f"{e}_raw")[:3]
+               for e in ("latitude", "longitude", "altitude")}  # fmt: skip
+_REL_LOW, _REL_HIGH, _REL_STEP, _ = _units(HostSubFrame, "relative_altitude_raw")
 
 
 def _host_sub_read(attr: str) -> Callable[[Any], Any]:
@@ -335,14 +357,11 @@ for _e, (_lo, _hi, _st) in _GEO_RANGES.items():
     add(P(_HSB, _e, _e, lambda v, e=_e: _sub(**{e: v}), "real", _lo, _hi, _st,
           valid=(_lo, _hi), read=_host_sub_read(_e)))  # fmt: skip
 add(P(_HSB, "relative_altitude", "relative altitude", lambda v: _sub(relative_altitude=v),
-      "real", -2147483.648, 2147483.647, 1e-3, valid=(-2147483.648, 2147483.647),
+      "real", _REL_LOW, _REL_HIGH, _REL_STEP, valid=(_REL_LOW, _REL_HIGH),
       read=lambda s: _host_rt(HostMainFrame(), s).sub.relative_altitude),
-    P(_HSB, "satellites", "satellites", lambda v: _sub(satellites=v), "int", 0, 255,
-      valid=(0, 255), read=lambda s: _host_rt(HostMainFrame(), s).sub.satellites),
-    P(_HSB, "gnss_week", "gnss_week", lambda v: _sub(gnss_week=v), "int", 0, 32767,
-      valid=(0, 32767), read=lambda s: _host_rt(HostMainFrame(), s).sub.gnss_week),
-    P(_HSB, "gnss_ms", "gnss_ms", lambda v: _sub(gnss_ms=v), "int", 0, 604_799_999,
-      valid=(0, 604_799_999), read=lambda s: _host_rt(HostMainFrame(), s).sub.gnss_ms),
+    *(P(_HSB, _n, _n, lambda v, n=_n: _sub(**{n: v}), "int", *_ints(HostSubFrame, _n),
+        valid=_ints(HostSubFrame, _n), read=_host_sub_read(_n))
+      for _n in ("satellites", "gnss_week", "gnss_ms")),
     P(_HSB, "gnss_time", "gnss_time", lambda v: _sub(gnss_time=v), "datetime", optional=True,
       valid=(None, _T0, GPS_EPOCH), read=lambda s: _host_rt(HostMainFrame(), s).sub.gnss_time(),
       expected=lambda v: GPS_EPOCH if v is None else v),
@@ -356,35 +375,39 @@ add(P(_HSB, "relative_altitude", "relative altitude", lambda v: _sub(relative_al
 
 # --- GcuMainFrame.build / GcuSubFrame.build ------------------------------------------------------
 _GMB, _GSB = "GcuMainFrame.build", "GcuSubFrame.build"
-add(P(_GMB, "mode", "mode", lambda v: GcuMainFrame.build(mode=v), "int", 0, 255,
-      valid=(0, 255, Mode.POINTING_FOLLOW, Mode.FPV),
+add(P(_GMB, "mode", "mode", lambda v: GcuMainFrame.build(mode=v), "int",
+      *_ints(GcuMainFrame, "mode_raw"), valid=(*_ints(GcuMainFrame, "mode_raw"),
+                                               Mode.POINTING_FOLLOW, Mode.FPV),
       read=lambda f: _gcu_rt(f).main.mode_raw),
     P(_GMB, "pod_status", "pod_status", lambda v: GcuMainFrame.build(pod_status=v), "int",
-      0, 0xFFFF, valid=(0, 0xFFFF), read=lambda f: _gcu_rt(f).main.pod_status_raw),
+      *_ints(GcuMainFrame, "pod_status_raw"), valid=_ints(GcuMainFrame, "pod_status_raw"),
+      read=lambda f: _gcu_rt(f).main.pod_status_raw),
     P(_GMB, "miss_distance", "miss_distance", lambda v: GcuMainFrame.build(miss_distance=v),
       "tuple", valid=((0, 0), (-1000, 1000)), wrong=([0, 0], (0,), (0, 0, 0), "ab", None, 0),
       read=lambda f: (_gcu_rt(f).main.miss_x, _gcu_rt(f).main.miss_y)),
     P(_GMB, "miss_distance.x", "miss distance x",
-      lambda v: GcuMainFrame.build(miss_distance=(v, 0)), "int", -1000, 1000,
-      valid=(-1000, 1000), read=lambda f: _gcu_rt(f).main.miss_x),
+      lambda v: GcuMainFrame.build(miss_distance=(v, 0)), "int", *_ints(GcuMainFrame, "miss_x"),
+      valid=_ints(GcuMainFrame, "miss_x"), read=lambda f: _gcu_rt(f).main.miss_x),
     P(_GMB, "miss_distance.y", "miss distance y",
-      lambda v: GcuMainFrame.build(miss_distance=(0, v)), "int", -1000, 1000,
-      valid=(-1000, 1000), read=lambda f: _gcu_rt(f).main.miss_y),
+      lambda v: GcuMainFrame.build(miss_distance=(0, v)), "int", *_ints(GcuMainFrame, "miss_y"),
+      valid=_ints(GcuMainFrame, "miss_y"), read=lambda f: _gcu_rt(f).main.miss_y),
 )  # fmt: skip
 for _param, _tcls in (("relative_angles", AxisAngles), ("attitude", Attitude),
                       ("angular_rates", AxisAngles)):  # fmt: skip
     add(P(_GMB, _param, _param, lambda v, p=_param: GcuMainFrame.build(**{p: v}), "tuple",
           valid=(TUPLE_BASE[_tcls],), wrong=(None, *_tuple_wrong(_tcls))))  # fmt: skip
 for _i, _e in enumerate("xyz"):
+    _rl, _rh, _rs, _ro = _units(GcuMainFrame, f"relative_{_e}_raw")
+    _wl, _wh, _ws, _ = _units(GcuMainFrame, f"rate_{_e}_raw")
     add(P(_GMB, f"relative_angles.{_e}", f"relative {_e.upper()} angle",
           lambda v, e=_e: GcuMainFrame.build(relative_angles=_with(AxisAngles, e, v)), "real",
-          -180.0, 180.0, 0.01, True, valid=(-180.0, 179.99),
+          _rl, _rh, _rs, _ro, valid=(_rl, round(_rh - _rs, 2)),
           read=lambda f, i=_i: _gcu_rt(f).main.relative_angles[i]),
         P(_GMB, f"angular_rates.{_e}", f"{_e.upper()} angular rate",
           lambda v, e=_e: GcuMainFrame.build(angular_rates=_with(AxisAngles, e, v)), "real",
-          -3276.8, 3276.7, 0.1, valid=(-3276.8, 3276.7),
+          _wl, _wh, _ws, valid=(_wl, _wh),
           read=lambda f, i=_i: _gcu_rt(f).main.angular_rates[i]))  # fmt: skip
-_CAM = {"roll": (-90.0, 90.0, False), "pitch": (-180.0, 180.0, True), "yaw": (0.0, 360.0, True)}
+_CAM = {axis: _bounds(GcuMainFrame, f"{axis}_raw") for axis in ("roll", "pitch", "yaw")}
 for _i, (_e, (_lo, _hi, _open)) in enumerate(_CAM.items()):
     add(P(_GMB, f"attitude.{_e}", f"camera {_e}",
           lambda v, e=_e: GcuMainFrame.build(attitude=_with(Attitude, e, v)), "real",
@@ -400,23 +423,28 @@ def _gsub_read(attr: str) -> Callable[[Any], Any]:
     return lambda s: getattr(_gcu_rt(GcuMainFrame(), s).sub, attr)
 
 
-for _name, _field, _kind, _lo, _hi, _st, _attr in (
-    ("hardware_version", "hardware version", "real", 0.0, 25.5, 0.1, "hardware_version"),
-    ("firmware_version", "firmware version", "real", 0.0, 25.5, 0.1, "firmware_version"),
-    ("pod_model", "pod model", "int", 0, 255, 0.0, "pod_code"),
-    ("faults", "faults", "int", 0, 0xFFFF, 0.0, "fault_raw"),
-    ("camera1_zoom", "camera 1 zoom", "real", 0.0, 6553.5, 0.1, "camera1_zoom"),
-    ("camera2_zoom", "camera 2 zoom", "real", 0.0, 6553.5, 0.1, "camera2_zoom"),
-    ("thermal_flags", "thermal flags", "int", 0, 0xFF, 0.0, "thermal_flags_raw"),
-    ("camera_flags", "camera flags", "int", 0, 0xFFF8, 0.0, "camera_flags_raw"),
-    ("pip_mode", "pip mode", "int", 0, 7, 0.0, "pip_mode"),
-    ("time_zone", "time zone", "int", -128, 127, 0.0, "time_zone"),
-):
+_GSB_PARAMS = {"pod_code": ("pod_model", "pod model"), "fault_raw": ("faults", "faults"),
+               "camera1_zoom_raw": ("camera1_zoom", "camera 1 zoom"),
+               "camera2_zoom_raw": ("camera2_zoom", "camera 2 zoom")}  # fmt: skip
+"""GcuSubFrame.build's parameters with other names than their field's (``x_raw`` → ``x``,
+labelled ``x`` with spaces); the target's fields have rows of their own."""
+for _f in FRAME_SCHEMAS[GcuSubFrame].fields:
+    if _f.name.startswith("target_"):
+        continue
+    _name, _field = _GSB_PARAMS.get(_f.name, (_f.name.removesuffix("_raw"),
+                                              _f.name.removesuffix("_raw").replace("_", " ")))
+    _lo, _hi, _st, _ = _units(GcuSubFrame, _f.name)
+    _kind = "int" if _f.scale == 1 else "real"
+    if _kind == "int":
+        _lo, _hi, _st = int(_lo), int(_hi), 0.0
+    _attr = _f.name if _f.scale == 1 else _name
     flags = _name == "camera_flags"  # bits 2-0 carry pip_mode: never dropped silently
-    add(P(_GSB, _name, _field, lambda v, n=_name: _gsub(v, n), _kind, _lo,
-          0xFFFF if flags else _hi, _st, valid=(_lo, _hi), read=_gsub_read(_attr),
-          excluded=(lambda v: bool(v & 7)) if flags else lambda v: False,
-          bad=(1, 7, 0xFFFF) if flags else ()))  # fmt: skip
+    add(P(_GSB, _name, _field, lambda v, n=_name: _gsub(v, n), _kind, _lo, _hi, _st,
+          valid=(_lo, _hi & ~PIP_MODE_MASK if flags else _hi), read=_gsub_read(_attr),
+          excluded=(lambda v: bool(v & PIP_MODE_MASK)) if flags else lambda v: False,
+          bad=(1, PIP_MODE_MASK, _hi) if flags else ()))  # fmt: skip
+add(P(_GSB, "pip_mode", "pip mode", lambda v: _gsub(v, "pip_mode"), "int", 0, PIP_MODE_MASK,
+      valid=(0, PIP_MODE_MASK), read=_gsub_read("pip_mode")))
 add(P(_GSB, "target_distance", "target distance", lambda v: _gsub(v, "target_distance"),
       "real", 0.0, 214748364.7, 0.1, optional=True, valid=(None, 0.1, 214748364.7),
       read=_gsub_read("target_distance")),
@@ -444,7 +472,7 @@ for _param in ("acceleration", "velocity"):
     for _e in NorthEastUp._fields:
         add(P(_AS, f"{_param}.{_e}", f"aircraft {_param} {_e}",
               lambda v, p=_param, e=_e: AircraftState(**{p: _with(NorthEastUp, e, v)}), "real",
-              -327.68, 327.67, 0.01, valid=(327.67,)))  # fmt: skip
+              _NEU_LOW, _NEU_HIGH, 0.01, valid=(_NEU_HIGH,)))  # fmt: skip
 for _e, (_lo, _hi, _st) in _GEO_RANGES.items():
     add(P(_AS, f"position.{_e}", _e,
           lambda v, e=_e: AircraftState(position=_with(GeoPosition, e, v)), "real", _lo, _hi,
@@ -452,14 +480,10 @@ for _e, (_lo, _hi, _st) in _GEO_RANGES.items():
           read=lambda s, e=_e: getattr(_host_rt(s.main_frame(), s.sub_frame()).sub,
                                        e)))  # fmt: skip
 add(P(_AS, "relative_altitude", "relative altitude",
-      lambda v: AircraftState(relative_altitude=v), "real", -2147483.648, 2147483.647, 1e-3,
-      valid=(-2147483.648,)),
-    P(_AS, "satellites", "satellites", lambda v: AircraftState(satellites=v), "int", 0, 255,
-      valid=(0, 255)),
-    P(_AS, "gnss_week", "gnss_week", lambda v: AircraftState(gnss_week=v), "int", 0, 32767,
-      valid=(32767,)),
-    P(_AS, "gnss_ms", "gnss_ms", lambda v: AircraftState(gnss_ms=v), "int", 0, 604_799_999,
-      valid=(604_799_999,)),
+      lambda v: AircraftState(relative_altitude=v), "real", _REL_LOW, _REL_HIGH, _REL_STEP,
+      valid=(_REL_LOW,)),
+    *(P(_AS, _n, _n, lambda v, n=_n: AircraftState(**{n: v}), "int", *_ints(HostSubFrame, _n),
+        valid=_ints(HostSubFrame, _n)) for _n in ("satellites", "gnss_week", "gnss_ms")),
     P("AircraftState.main_frame", "control", "control",
       lambda v: AircraftState().main_frame(v), "part", optional=True,
       valid=(None, ControlValues(0, 0, 18000)), wrong=((0, 0, 0), "x", 1),

@@ -49,6 +49,7 @@ from gcu_async.protocol import (
     decode_packet,
 )
 from gcu_async.protocol.catalogue import CATALOGUE
+from gcu_async.protocol.gcu_frames import GCU_SUB_SCHEMA
 
 ALL_COMMAND_CLASSES = [*dict.fromkeys(e.command for e in CATALOGUE), NullCommand, UnknownCommand]
 """The command classes of the catalogue (a command a method sends: a new catalogue entry
@@ -240,20 +241,20 @@ def test_gcu_main_build_from_units(frame: GcuMainFrame) -> None:
     )
 )
 def test_gcu_sub_build_from_units(frame: GcuSubFrame) -> None:
-    built = GcuSubFrame.build(
-        hardware_version=frame.hardware_version,
-        firmware_version=frame.firmware_version,
-        pod_model=frame.pod_code,
-        faults=frame.fault_raw,
-        target_distance=frame.target_distance,
-        target_position=frame.target_position,
-        camera1_zoom=frame.camera1_zoom,
-        camera2_zoom=frame.camera2_zoom,
-        thermal_flags=frame.thermal_flags_raw,
-        camera_flags=frame.camera_flags_raw & ~0x07,
-        pip_mode=frame.pip_mode,
-        time_zone=frame.time_zone,
-    )
+    special = {
+        "pod_model": frame.pod_code,
+        "faults": frame.fault_raw,
+        "target_distance": frame.target_distance,
+        "target_position": frame.target_position,
+        "camera_flags": frame.camera_flags_raw & ~0x07,
+        "pip_mode": frame.pip_mode,
+    }
+    done = {"pod_code", "fault_raw", "camera_flags_raw"}
+    # every other field is the build keyword x of x_raw, in units (raw / scale)
+    plain = {f.name.removesuffix("_raw"): getattr(frame, f.name) / f.scale if f.scale != 1
+             else getattr(frame, f.name) for f in GCU_SUB_SCHEMA.fields
+             if f.name not in done and not f.name.startswith("target_")}  # fmt: skip
+    built = GcuSubFrame.build(**special, **plain)
     assert built == frame
     assert frame.camera_flags | frame.pip_mode == frame.camera_flags_raw
 

@@ -30,7 +30,6 @@ from typing import Any, Final
 
 from gcu_async._checks import (
     check_bool,
-    check_instance,
     check_int,
     check_positive,
     check_real,
@@ -49,16 +48,15 @@ from gcu_async.client.waiting import (
 )
 from gcu_async.errors import ClientStateError, GcuError, LinkLost
 from gcu_async.protocol import commands as c
-from gcu_async.protocol.aircraft import AircraftState
-from gcu_async.protocol.builder import Submission, angles, build, check_sequence, rates
-from gcu_async.protocol.catalogue import YAW_INPUT_RANGE
+from gcu_async.protocol.aircraft import AircraftState, aircraft_update
+from gcu_async.protocol.builder import Submission, angles, build, rates
 from gcu_async.protocol.commands import ZOOM_RATIO_MAX, Command
 from gcu_async.protocol.enums import CameraMask, NightVisionMode, OsdCoordinateSource, PodModel
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
-from gcu_async.protocol.host_frames import MS_PER_WEEK, ControlValues
+from gcu_async.protocol.host_frames import ControlValues
 from gcu_async.protocol.packets import DEFAULT_VERSION
-from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp, wrap_degrees_360
+from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp
 from gcu_async.session import ControlKind, LinkHealth, Session, TelemetrySample
 from gcu_async.transport.backoff import Backoff
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
@@ -368,29 +366,13 @@ class GcuClient(OpenClose):
 
         Raises ``TypeError`` or :class:`FieldRangeError` (nothing changes) for a bad value.
         """
-        changes: dict[str, Any] = {}
-        for name, value in (("attitude", attitude), ("acceleration", acceleration),
-                            ("velocity", velocity), ("position", position)):  # fmt: skip
-            if value is not KEEP:
-                changes[name] = None if value is None else _triple(name, value)
-        if relative_altitude is not KEEP:
-            changes["relative_altitude"] = check_real(
-                "relative_altitude", relative_altitude, *S32_MM, "m")
-        for name, scalar, high in (("satellites", satellites, 255),
-                                   ("gnss_week", gnss_week, GNSS_WEEK_MAX),
-                                   ("gnss_ms", gnss_ms, MS_PER_WEEK - 1)):  # fmt: skip
-            if scalar is not KEEP:
-                changes[name] = check_int(name, scalar, 0, high)
+        arguments = {"attitude": attitude, "acceleration": acceleration, "velocity": velocity,
+                     "position": position, "relative_altitude": relative_altitude,
+                     "satellites": satellites, "gnss_week": gnss_week, "gnss_ms": gnss_ms}
+        given: dict[str, object] = {k: v for k, v in arguments.items() if v is not KEEP}
         if gnss_time is not None:
-            check_instance("gnss_time", gnss_time, datetime)
-            if gnss_week is not KEEP or gnss_ms is not KEEP:
-                raise ValueError("gnss_time: give either gnss_time or gnss_week/gnss_ms, "
-                                 "not both")  # fmt: skip
-            week, ms = AircraftState.gnss_from_utc(gnss_time)
-            if week > GNSS_WEEK_MAX:
-                raise ValueError(f"gnss_time: {gnss_time.isoformat()} is after the last GNSS "
-                                 f"week the packet carries ({GNSS_WEEK_MAX})")  # fmt: skip
-            changes["gnss_week"], changes["gnss_ms"] = week, ms
+            given["gnss_time"] = gnss_time
+        changes = aircraft_update(given)
         return self.session.update_aircraft(changes, self._clock())
 
     def set_aircraft(self, state: AircraftState) -> None:
@@ -773,40 +755,6 @@ class GcuClient(OpenClose):
     async def set_ranging(self, enabled: bool = True) -> Feedback:
         """Continuous laser ranging on/off (0x81)."""
         return await self._run("set_ranging", enabled=enabled)
-
-
-S16_CENTI = (-327.68, 327.67)
-"""m/s² or m/s: an S16 field in units of 0.01."""
-S32_MM = (-2147483.648, 2147483.647)
-"""Metres: an S32 field in millimetres."""
-GNSS_WEEK_MAX = 32767
-AIRCRAFT_TUPLES: dict[str, tuple[type[Any], str, tuple[tuple[float, float, bool], ...]]] = {
-    "attitude": (Attitude, "deg", ((-180.0, 180.0, True), (-90.0, 90.0, False),
-                                   (*YAW_INPUT_RANGE, True))),
-    "acceleration": (NorthEastUp, "m/s^2", ((*S16_CENTI, False),) * 3),
-    "velocity": (NorthEastUp, "m/s", ((*S16_CENTI, False),) * 3),
-    "position": (GeoPosition, "deg, deg, m", ((-90.0, 90.0, False), (-180.0, 180.0, False),
-                                              (*S32_MM, False))),
-}  # fmt: skip
-"""The aircraft fields given as triples: type, unit, (low, high, high open) per element (the
-ranges of host bytes 12–29 and the sub frame; docs/protocol-notes.md §10 "Aircraft
-acceleration excludes gravity")."""
-
-
-def _triple(name: str, value: object) -> Any:
-    """``value`` (a NamedTuple of the field's type, a plain 3-tuple or a list of three)
-    checked element by element under the caller's names (``attitude.pitch``); the
-    attitude's yaw goes out as its [0, 360) equivalent."""
-    kind, unit, ranges = AIRCRAFT_TUPLES[name]
-    elements: tuple[Any, ...] = check_sequence(name, value, kind)
-    units = unit.split(", ") if ", " in unit else [unit] * 3
-    fields: tuple[str, ...] = kind._fields
-    checked = [check_real(f"{name}.{field}", v, low, high, u, high_open=open_)
-               for field, v, (low, high, open_), u in
-               zip(fields, elements, ranges, units, strict=True)]  # fmt: skip
-    if kind is Attitude:
-        checked[2] = wrap_degrees_360(checked[2])
-    return kind(*checked)
 
 
 def _caller_stacklevel() -> int:

@@ -11,20 +11,32 @@ position → no sub frame. How long a given state stays current is the session's
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from datetime import datetime
+from typing import Any, NamedTuple
 
-from gcu_async._checks import check_int
+from gcu_async._checks import check_instance, check_int, check_real
+from gcu_async.protocol.catalogue import YAW_INPUT_RANGE
 from gcu_async.protocol.enums import SubFrameRequest
+from gcu_async.protocol.fields import WireField
 from gcu_async.protocol.gpstime import utc_to_gps
 from gcu_async.protocol.host_frames import (
-    MS_PER_WEEK,
+    GNSS_WEEK_MAX,
+    HOST_MAIN_SCHEMA,
+    HOST_SUB_SCHEMA,
     ControlValues,
     HostMainFrame,
     HostSubFrame,
 )
-from gcu_async.protocol.layout import S32
-from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp, check_tuple, quantize
+from gcu_async.protocol.units import (
+    Attitude,
+    GeoPosition,
+    NorthEastUp,
+    check_sequence,
+    check_tuple,
+    wrap_degrees_360,
+)
 
 _ZERO_ATTITUDE = Attitude(0.0, 0.0, 0.0)
 _ZERO_NEU = NorthEastUp(0.0, 0.0, 0.0)
@@ -62,10 +74,11 @@ class AircraftState:
             velocity=_ZERO_NEU if self.velocity is None else self.velocity,
         )
         # the sub-frame fields are checked even while no position makes a sub frame
-        check_int("satellites", self.satellites, 0, 255)
-        check_int("gnss_week", self.gnss_week, 0, 32767)
-        check_int("gnss_ms", self.gnss_ms, 0, MS_PER_WEEK - 1, "ms")
-        quantize("relative altitude", self.relative_altitude, 1000, *S32, "m")
+        check = HOST_SUB_SCHEMA.check
+        check("satellites", self.satellites)
+        check("gnss_week", self.gnss_week)
+        check("gnss_ms", self.gnss_ms)
+        _S["relative_altitude_raw"].to_raw(self.relative_altitude, "relative altitude")
         self.sub_frame()
 
     @staticmethod
@@ -114,3 +127,97 @@ class AircraftState:
             gnss_ms=self.gnss_ms,
             relative_altitude=self.relative_altitude,
         )
+
+
+# -- an update's arguments, checked with no client (GcuClient.update_aircraft delegates) -----
+_M = HOST_MAIN_SCHEMA.by_name
+_S = HOST_SUB_SCHEMA.by_name
+
+
+class InputRange(NamedTuple):
+    """What an aircraft update accepts for one value, in engineering units."""
+
+    low: float
+    high: float
+    high_open: bool
+    unit: str
+
+
+def input_range(field: WireField) -> InputRange:
+    """The engineering-unit range of a host frame field (``raw / scale``)."""
+    high = field.raw_high + field.high_open
+    return InputRange(field.raw_low / field.scale, high / field.scale, field.high_open, field.unit)
+
+
+AIRCRAFT_INPUTS: dict[str, tuple[type[Any], tuple[InputRange, ...]]] = {
+    "attitude": (Attitude, (input_range(_M["aircraft_roll_raw"]),
+                            input_range(_M["aircraft_pitch_raw"]),
+                            InputRange(*YAW_INPUT_RANGE, True, "deg"))),  # sent wrapped [0, 360)
+    "acceleration": (NorthEastUp, tuple(input_range(_M[f"accel_{axis}_raw"])
+                                        for axis in ("north", "east", "up"))),
+    "velocity": (NorthEastUp, tuple(input_range(_M[f"vel_{axis}_raw"])
+                                    for axis in ("north", "east", "up"))),
+    "position": (GeoPosition, (input_range(_S["latitude_raw"]), input_range(_S["longitude_raw"]),
+                               input_range(_S["altitude_raw"]))),
+}  # fmt: skip
+"""The aircraft values given as triples: their type and each element's range, derived from
+the host frame schema (host bytes 12–29 and the sub frame); the attitude's yaw also takes
+MAVLink's ±180° (:data:`~gcu_async.protocol.catalogue.YAW_INPUT_RANGE`)."""
+RELATIVE_ALTITUDE_INPUT = input_range(_S["relative_altitude_raw"])
+AIRCRAFT_UPDATE_FIELDS = ("attitude", "acceleration", "velocity", "position",
+                          "relative_altitude", "satellites", "gnss_week", "gnss_ms",
+                          "gnss_time")  # fmt: skip
+"""The values :func:`aircraft_update` takes, in the order it checks them."""
+
+
+def _triple(name: str, value: object) -> Any:
+    kind, ranges = AIRCRAFT_INPUTS[name]
+    elements: tuple[Any, ...] = check_sequence(name, value, kind)
+    fields: tuple[str, ...] = kind._fields
+    checked = [check_real(f"{name}.{field}", v, r.low, r.high, r.unit, high_open=r.high_open)
+               for field, v, r in zip(fields, elements, ranges, strict=True)]  # fmt: skip
+    if kind is Attitude:
+        checked[2] = wrap_degrees_360(checked[2])
+    return kind(*checked)
+
+
+def aircraft_update(given: Mapping[str, object]) -> dict[str, Any]:
+    """Check the arguments of an aircraft update, with no client: ``given`` maps the names
+    of :data:`AIRCRAFT_UPDATE_FIELDS` that were given to their values (a triple: a
+    NamedTuple, a tuple or a list of three, or ``None`` to clear it; ``gnss_time``: an
+    aware UTC ``datetime``, ``None`` meaning not given). Returns the changes for
+    ``Session.update_aircraft``: the triples as their NamedTuples (the attitude's yaw in
+    [0, 360)), ``gnss_time`` as ``gnss_week`` + ``gnss_ms`` (leap seconds applied).
+
+    Raises, checking in the order of :data:`AIRCRAFT_UPDATE_FIELDS`, ``TypeError`` or
+    :class:`FieldRangeError` naming the value (``attitude.pitch``, ``gnss_week``), or
+    ``ValueError`` for ``gnss_time`` given with ``gnss_week``/``gnss_ms`` or past the last
+    GNSS week the packet carries. This is what :meth:`GcuClient.update_aircraft` checks."""
+    unknown = sorted(str(k) for k in given if k not in AIRCRAFT_UPDATE_FIELDS)
+    if unknown:
+        raise TypeError(f"aircraft update: {', '.join(unknown)}: not one of "
+                        f"{', '.join(AIRCRAFT_UPDATE_FIELDS)}")  # fmt: skip
+    changes: dict[str, Any] = {}
+    for name in ("attitude", "acceleration", "velocity", "position"):
+        if name in given:
+            value = given[name]
+            changes[name] = None if value is None else _triple(name, value)
+    if "relative_altitude" in given:
+        r = RELATIVE_ALTITUDE_INPUT
+        changes["relative_altitude"] = check_real("relative_altitude", given["relative_altitude"],
+                                                  r.low, r.high, r.unit)  # fmt: skip
+    for name in ("satellites", "gnss_week", "gnss_ms"):
+        if name in given:
+            f = _S[name]
+            changes[name] = check_int(name, given[name], f.raw_low, f.raw_high)
+    if given.get("gnss_time") is not None:
+        gnss_time = check_instance("gnss_time", given["gnss_time"], datetime)
+        if "gnss_week" in given or "gnss_ms" in given:
+            raise ValueError("gnss_time: give either gnss_time or gnss_week/gnss_ms, "
+                             "not both")  # fmt: skip
+        week, ms = AircraftState.gnss_from_utc(gnss_time)
+        if week > GNSS_WEEK_MAX:
+            raise ValueError(f"gnss_time: {gnss_time.isoformat()} is after the last GNSS "
+                             f"week the packet carries ({GNSS_WEEK_MAX})")  # fmt: skip
+        changes["gnss_week"], changes["gnss_ms"] = week, ms
+    return changes

@@ -26,13 +26,13 @@ from dataclasses import replace
 from types import MappingProxyType
 from typing import Any, NamedTuple, TypeVar
 
-from gcu_async._checks import check_bool, check_int, check_real, type_error
+from gcu_async._checks import check_bool, check_int, check_real
 from gcu_async.errors import FieldRangeError
 from gcu_async.protocol import commands as c
 from gcu_async.protocol.catalogue import BY_METHOD, CatalogueEntry, Kind, Parameter
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
 from gcu_async.protocol.host_frames import ControlValues
-from gcu_async.protocol.units import Attitude, check_member, check_tuple
+from gcu_async.protocol.units import Attitude, check_member, check_sequence
 
 __all__ = ["Context", "Submission", "angles", "build", "check_sequence", "rates"]
 
@@ -149,20 +149,6 @@ def _real(p: Parameter, value: object, context: Context) -> float:
         raise FieldRangeError(p.name, value, low, high, unit, high_open=p.high_open,
                               detail=f"must be greater than {low:g}")  # fmt: skip
     return f
-
-
-def check_sequence(field: str, value: object, cls: type[_NT]) -> _NT:
-    """``value`` as a ``cls`` (a NamedTuple of units): an instance, a plain tuple or a list
-    (JSON gives lists) of the right length, and nothing else (a ``TypeError`` naming what
-    is accepted). The elements are the caller's to check."""
-    try:
-        return check_tuple(field, tuple(value) if type(value) is list else value, cls)
-    except TypeError:
-        name = cls.__name__
-        article = "an" if name[0] in "AEIOU" else "a"
-        fields = ", ".join(cls._fields)  # type: ignore[attr-defined]
-        raise type_error(field, f"{article} {name} or a tuple or list ({fields})",
-                         value) from None  # fmt: skip
 
 
 def _box(name: str, value: object) -> c.ImageBox:

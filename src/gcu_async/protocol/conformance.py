@@ -31,8 +31,9 @@ from gcu_async.errors import RemoteProtocolError
 from gcu_async.protocol.anomalies import Anomaly
 from gcu_async.protocol.commands import AnomalousCommand, UnknownCommand, command_code
 from gcu_async.protocol.enums import Opcode, opcode_name
+from gcu_async.protocol.fields import WIRE_RANGES
 from gcu_async.protocol.gcu_frames import UnknownSubFrame
-from gcu_async.protocol.host_frames import HostMainFrame, HostSubFrame
+from gcu_async.protocol.host_frames import HOST_MAIN_SCHEMA, HostMainFrame, HostSubFrame
 from gcu_async.protocol.packets import HostPacket, decode_host_packet, version_anomalies
 
 EXAMPLES = 3
@@ -55,19 +56,28 @@ MAX_SPEED_M_S = 300.0
 """Faster than this is a position jump (e.g. the first GNSS fix), not motion."""
 MIN_VELOCITY_WINDOWS = 3
 EARTH_RADIUS_M = 6_371_000.0
-YAW_SIGNED_LOW = 65536 - 18000
+_YAW = HOST_MAIN_SCHEMA.by_name["aircraft_yaw_raw"]
+_SIGNED = HOST_MAIN_SCHEMA.by_name["aircraft_roll_raw"]
+"""A signed angle in [−180°, 180°): what a heading sent signed would be (the roll's range)."""
+_U16_SPAN = WIRE_RANGES[_YAW.fmt][1] + 1
+YAW_WRAP = _YAW.raw_high + 1
+"""The raw aircraft yaw one past the field's range: 360° (36000)."""
+YAW_SIGNED_LOW = _U16_SPAN + _SIGNED.raw_low
 """Raw aircraft yaw values from here to 65535 read as S16 −18000 … −1 (−180° … −0.01°)."""
+_SIGNED_TEXT = f"±{-_SIGNED.raw_low}"
+_YAW_TEXT = f"U16 [0, {YAW_WRAP})"
 FIXED_PARAMETER_OPCODES = frozenset({Opcode.TAKE_PHOTO, Opcode.RECORD, Opcode.FOCUS})
 """Commands whose parameter byte V2.0.6's table gives as the constant 0x01."""
 
 
 def yaw_reading(raw: int) -> str:
-    """What a raw aircraft yaw value outside [0, 35999] most likely means, one sentence."""
-    if YAW_SIGNED_LOW <= raw <= 0xFFFF:
-        return (f"reads as S16 {raw - 65536} ({(raw - 65536) / 100:.2f}°): looks like a signed "
-                "±18000 value in the U16 [0, 36000) field")  # fmt: skip
-    if 36000 <= raw < YAW_SIGNED_LOW:
-        return (f"{raw / 100:.2f}° is past 360°: looks like an angle not wrapped into "
+    """What a raw aircraft yaw value outside its range most likely means, one sentence."""
+    if YAW_SIGNED_LOW <= raw < _U16_SPAN:
+        signed = raw - _U16_SPAN
+        return (f"reads as S16 {signed} ({signed / _YAW.scale:.2f}°): looks like a signed "
+                f"{_SIGNED_TEXT} value in the {_YAW_TEXT} field")  # fmt: skip
+    if YAW_WRAP <= raw < YAW_SIGNED_LOW:
+        return (f"{raw / _YAW.scale:.2f}° is past 360°: looks like an angle not wrapped into "
                 "[0°, 360°)")  # fmt: skip
     return ""
 
@@ -468,15 +478,15 @@ class HostConformance:
         if yaw is not None:
             share = 100 * yaw.count / total
             if self._yaw_signed and not self._yaw_unwrapped:
-                yaw.diagnosis = (f"aircraft yaw ≥ 36000 in {share:.0f} % of packets, every one "
-                                 "a signed S16 −18000…−1 read as U16: looks like a signed "
-                                 "±18000 value (headings west of north, −180°…0°) in the U16 "
-                                 "[0, 36000) field")  # fmt: skip
+                yaw.diagnosis = (f"aircraft yaw ≥ {YAW_WRAP} in {share:.0f} % of packets, every "
+                                 f"one a signed S16 −{-_SIGNED.raw_low}…−1 read as U16: looks "
+                                 f"like a signed {_SIGNED_TEXT} value (headings west of north, "
+                                 f"−180°…0°) in the {_YAW_TEXT} field")  # fmt: skip
             elif self._yaw_unwrapped and not self._yaw_signed:
-                yaw.diagnosis = (f"aircraft yaw ≥ 36000 in {share:.0f} % of packets: looks like "
-                                 "an angle not wrapped into [0°, 360°)")  # fmt: skip
+                yaw.diagnosis = (f"aircraft yaw ≥ {YAW_WRAP} in {share:.0f} % of packets: looks "
+                                 "like an angle not wrapped into [0°, 360°)")  # fmt: skip
             else:
-                yaw.diagnosis = (f"aircraft yaw ≥ 36000 in {share:.0f} % of packets "
+                yaw.diagnosis = (f"aircraft yaw ≥ {YAW_WRAP} in {share:.0f} % of packets "
                                  f"({self._yaw_signed} read as signed S16 values)")  # fmt: skip
         if "version" in devs:
             devs["version"].diagnosis = "V2.0.6 defines versions 1 and 2"

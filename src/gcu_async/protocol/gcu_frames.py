@@ -5,12 +5,11 @@ Immutable ``NamedTuple``s of raw wire integers with engineering-unit properties.
 
 from __future__ import annotations
 
-import struct
 from typing import Any, NamedTuple
 
 from gcu_async._checks import check_int, type_error
 from gcu_async.errors import FieldRangeError
-from gcu_async.protocol.anomalies import Anomaly, FieldRange, check_ranges, range_anomalies
+from gcu_async.protocol.anomalies import Anomaly
 from gcu_async.protocol.enums import (
     PIP_MODE_MASK,
     CameraFlags,
@@ -20,44 +19,79 @@ from gcu_async.protocol.enums import (
     PodStatus,
     ThermalFlags,
 )
-from gcu_async.protocol.layout import S16, S32, SUB_FRAME_HEADER
+from gcu_async.protocol.fields import WireField
+from gcu_async.protocol.frame_schema import FrameSchema
+from gcu_async.protocol.host_frames import HOST_SUB_SCHEMA
+from gcu_async.protocol.layout import MAIN_SIZE, MAIN_START, SUB_FRAME_HEADER, SUB_SIZE, SUB_START
 from gcu_async.protocol.pods import pod_name
 from gcu_async.protocol.units import Attitude, AxisAngles, GeoPosition, check_tuple, quantize
 
-GCU_MAIN = struct.Struct("<BHhhhhhhhHhhh7x")
-"""Bytes 5–36 of a GCU packet."""
-GCU_SUB = struct.Struct("<BBBHiiiiHHBHb2x")
-"""Bytes 38–68 of a GCU packet when the sub frame header (byte 37) is 0x01."""
+D001 = "0.01 deg"
 
-GCU_MAIN_RANGES = (
-    FieldRange("mode_raw", 0, 255),
-    FieldRange("pod_status_raw", 0, 0xFFFF),
-    FieldRange("miss_x", -1000, 1000),
-    FieldRange("miss_y", -1000, 1000),
-    *(FieldRange(f"relative_{axis}_raw", -18000, 17999, "0.01 deg") for axis in "xyz"),
-    FieldRange("roll_raw", -9000, 9000, "0.01 deg"),
-    FieldRange("pitch_raw", -18000, 17999, "0.01 deg"),
-    FieldRange("yaw_raw", 0, 35999, "0.01 deg"),
-    *(FieldRange(f"rate_{axis}_raw", *S16, "0.1 deg/s") for axis in "xyz"),
-)
+GCU_MAIN_SCHEMA = FrameSchema("GCU main frame", MAIN_START, MAIN_SIZE, (
+    WireField("mode_raw", "B", "pod working mode (see Mode)"),
+    WireField("pod_status_raw", "H", "pod status flags (PodStatus)"),
+    WireField("miss_x", "h", "horizontal miss distance, image centre = 0, right +", -1000, 1000),
+    WireField("miss_y", "h", "vertical miss distance, down +", -1000, 1000),
+    *(WireField(f"relative_{axis}_raw", "h", f"camera {axis.upper()} angle relative to the "
+                "aircraft", -18000, 18000, 100, "deg", D001, high_open=True) for axis in "xyz"),
+    WireField("roll_raw", "h", "camera absolute roll", -9000, 9000, 100, "deg", D001),
+    WireField("pitch_raw", "h", "camera absolute pitch", -18000, 18000, 100, "deg", D001,
+              high_open=True),
+    WireField("yaw_raw", "H", "camera absolute yaw", 0, 36000, 100, "deg", D001, high_open=True),
+    *(WireField(f"rate_{axis}_raw", "h", f"camera {axis.upper()}-axis absolute angular rate",
+                scale=10, unit="deg/s", raw_unit="0.1 deg/s") for axis in "xyz"),
+))  # fmt: skip
+"""Bytes 5–36 of a GCU packet: the one table of the main frame's fields."""
+GCU_SUB_SCHEMA = FrameSchema("GCU sub frame", SUB_START, SUB_SIZE, (
+    WireField("hardware_version_raw", "B", "hardware version, 0.1 resolution (0x1F: 3.1)",
+              scale=10),
+    WireField("firmware_version_raw", "B", "firmware version, 0.1 resolution", scale=10),
+    WireField("pod_code", "B", "pod model code (Appendix 7)"),
+    WireField("fault_raw", "H", "fault flags (FaultFlags)"),
+    WireField("target_distance_raw", "i", "laser-ranged distance; <= 0: no measurement",
+              scale=10, unit="m", raw_unit="0.1 m"),
+    WireField("target_longitude_raw", "i", "ranged target longitude", scale=1e7, unit="deg",
+              raw_unit="1e-7 deg"),
+    WireField("target_latitude_raw", "i", "ranged target latitude", scale=1e7, unit="deg",
+              raw_unit="1e-7 deg"),
+    WireField("target_altitude_raw", "i", "ranged target altitude", scale=1000, unit="m",
+              raw_unit="mm"),
+    WireField("camera1_zoom_raw", "H", "camera 1 zoom (visible / zoom by default)", scale=10,
+              unit="x", raw_unit="0.1x"),
+    WireField("camera2_zoom_raw", "H", "camera 2 zoom (thermal by default)", scale=10,
+              unit="x", raw_unit="0.1x"),
+    WireField("thermal_flags_raw", "B", "thermal camera flags (ThermalFlags)"),
+    WireField("camera_flags_raw", "H", "camera flags (CameraFlags); bits 2-0: pip mode"),
+    WireField("time_zone", "b", "UTC offset in hours", raw_unit="h"),
+))  # fmt: skip
+"""Bytes 38–68 of a GCU packet when the sub frame header (byte 37) is 0x01: no range
+narrower than its wire type, so a decoded sub frame has no anomalies."""
+
+GCU_MAIN = GCU_MAIN_SCHEMA.struct
+"""Bytes 5–36 of a GCU packet."""
+GCU_SUB = GCU_SUB_SCHEMA.struct
+"""Bytes 38–68 of a GCU packet when the sub frame header (byte 37) is 0x01."""
+GCU_MAIN_RANGES = GCU_MAIN_SCHEMA.ranges
 """Each main-frame field's raw range, in wire order (:class:`FieldRange`)."""
-GCU_SUB_RANGES = (
-    FieldRange("hardware_version_raw", 0, 255),
-    FieldRange("firmware_version_raw", 0, 255),
-    FieldRange("pod_code", 0, 255),
-    FieldRange("fault_raw", 0, 0xFFFF),
-    FieldRange("target_distance_raw", *S32, "0.1 m"),
-    FieldRange("target_longitude_raw", *S32, "1e-7 deg"),
-    FieldRange("target_latitude_raw", *S32, "1e-7 deg"),
-    FieldRange("target_altitude_raw", *S32, "mm"),
-    FieldRange("camera1_zoom_raw", 0, 0xFFFF, "0.1x"),
-    FieldRange("camera2_zoom_raw", 0, 0xFFFF, "0.1x"),
-    FieldRange("thermal_flags_raw", 0, 0xFF),
-    FieldRange("camera_flags_raw", 0, 0xFFFF),
-    FieldRange("time_zone", -128, 127, "h"),
-)
-"""Each sub-frame field's raw range, in wire order (:class:`FieldRange`): none narrower
-than its wire type, so a decoded sub frame has no anomalies."""
+GCU_SUB_RANGES = GCU_SUB_SCHEMA.ranges
+"""Each sub-frame field's raw range, in wire order (:class:`FieldRange`)."""
+
+_M = GCU_MAIN_SCHEMA.by_name
+_S = GCU_SUB_SCHEMA.by_name
+_relative = GCU_MAIN_SCHEMA.view(AxisAngles, "relative_x_raw", "relative_y_raw", "relative_z_raw")
+_attitude = GCU_MAIN_SCHEMA.view(Attitude, "roll_raw", "pitch_raw", "yaw_raw")
+_rates = GCU_MAIN_SCHEMA.view(AxisAngles, "rate_x_raw", "rate_y_raw", "rate_z_raw")
+_target = GCU_SUB_SCHEMA.view(GeoPosition, "target_latitude_raw", "target_longitude_raw",
+                              "target_altitude_raw")  # fmt: skip
+_MAIN_SHOWN = ("mode_raw", "pod_status_raw", "miss_x", "miss_y", "relative_x_raw",
+               "relative_y_raw", "relative_z_raw", "roll_raw", "pitch_raw", "yaw_raw",
+               "rate_x_raw", "rate_y_raw", "rate_z_raw")  # fmt: skip
+"""Main-frame fields ``as_dict`` presents its own way (the rest: ``FrameSchema.plain_dict``)."""
+_SUB_SHOWN = ("hardware_version_raw", "firmware_version_raw", "pod_code", "fault_raw",
+              "target_distance_raw", "target_longitude_raw", "target_latitude_raw",
+              "target_altitude_raw", "camera1_zoom_raw", "camera2_zoom_raw", "thermal_flags_raw",
+              "camera_flags_raw", "time_zone")  # fmt: skip
 
 
 def _flag_names(flags: Any) -> list[str]:
@@ -72,21 +106,21 @@ class GcuMainFrame(NamedTuple):
     pod_status_raw: int = 0
     """Bytes 6–7, little-endian: pod status flags."""
     miss_x: int = 0
-    """Bytes 8–9, S16 [-1000, 1000]: horizontal miss distance, image centre = 0, right +."""
+    """Bytes 8–9, S16: horizontal miss distance, image centre = 0, right +."""
     miss_y: int = 0
-    """Bytes 10–11, S16 [-1000, 1000]: vertical miss distance, down +."""
+    """Bytes 10–11, S16: vertical miss distance, down +."""
     relative_x_raw: int = 0
-    """Bytes 12–13, S16 0.01°, [-18000, 18000): camera X angle relative to the aircraft."""
+    """Bytes 12–13, S16 0.01°: camera X angle relative to the aircraft."""
     relative_y_raw: int = 0
     """Bytes 14–15."""
     relative_z_raw: int = 0
     """Bytes 16–17."""
     roll_raw: int = 0
-    """Bytes 18–19, S16 0.01°, [-9000, 9000]: camera absolute roll."""
+    """Bytes 18–19, S16 0.01°: camera absolute roll."""
     pitch_raw: int = 0
-    """Bytes 20–21, S16 0.01°, [-18000, 18000): camera absolute pitch."""
+    """Bytes 20–21, S16 0.01°: camera absolute pitch."""
     yaw_raw: int = 0
-    """Bytes 22–23, U16 0.01°, [0, 36000): camera absolute yaw."""
+    """Bytes 22–23, U16 0.01°: camera absolute yaw."""
     rate_x_raw: int = 0
     """Bytes 24–25, S16 0.1 °/s: camera X-axis absolute angular rate."""
     rate_y_raw: int = 0
@@ -111,33 +145,33 @@ class GcuMainFrame(NamedTuple):
         element by element (``relative X angle``, ``camera roll``, ``miss distance x``, …)."""
         relative = check_tuple("relative_angles", relative_angles, AxisAngles)
         rx, ry, rz = (
-            quantize(f"relative {axis} angle", v, 100, -18000, 18000, "deg", high_open=True)
+            _M[f"relative_{axis.lower()}_raw"].to_raw(v, f"relative {axis} angle")
             for axis, v in zip("XYZ", relative, strict=True)
         )
         roll, pitch, yaw = check_tuple("attitude", attitude, Attitude)
         rates = check_tuple("angular_rates", angular_rates, AxisAngles)
         wx, wy, wz = (
-            quantize(f"{axis} angular rate", v, 10, *S16, "deg/s")
+            _M[f"rate_{axis.lower()}_raw"].to_raw(v, f"{axis} angular rate")
             for axis, v in zip("XYZ", rates, strict=True)
         )
         if not isinstance(miss_distance, tuple) or len(miss_distance) != 2:
             raise type_error("miss_distance", "a tuple (x, y) of ints", miss_distance)
-        frame = cls(
-            check_int("mode", mode, 0, 255),
-            check_int("pod_status", pod_status, 0, 0xFFFF),
-            check_int("miss distance x", miss_distance[0], -1000, 1000),
-            check_int("miss distance y", miss_distance[1], -1000, 1000),
+        check = GCU_MAIN_SCHEMA.check
+        return cls(
+            check("mode_raw", mode, "mode"),
+            check("pod_status_raw", pod_status, "pod_status"),
+            check("miss_x", miss_distance[0], "miss distance x"),
+            check("miss_y", miss_distance[1], "miss distance y"),
             rx,
             ry,
             rz,
-            quantize("camera roll", roll, 100, -9000, 9000, "deg"),
-            quantize("camera pitch", pitch, 100, -18000, 18000, "deg", high_open=True),
-            quantize("camera yaw", yaw, 100, 0, 36000, "deg", high_open=True),
+            _M["roll_raw"].to_raw(roll, "camera roll"),
+            _M["pitch_raw"].to_raw(pitch, "camera pitch"),
+            _M["yaw_raw"].to_raw(yaw, "camera yaw"),
             wx,
             wy,
             wz,
         )
-        return frame
 
     @property
     def mode(self) -> Mode:
@@ -156,42 +190,28 @@ class GcuMainFrame(NamedTuple):
     @property
     def relative_angles(self) -> AxisAngles:
         """Camera X/Y/Z angles relative to the aircraft, degrees (encoder based)."""
-        return AxisAngles(
-            self.relative_x_raw / 100, self.relative_y_raw / 100, self.relative_z_raw / 100
-        )
+        return _relative(self)
 
     @property
     def attitude(self) -> Attitude:
         """Camera absolute roll/pitch/yaw, degrees (needs valid aircraft INS data)."""
-        return Attitude(self.roll_raw / 100, self.pitch_raw / 100, self.yaw_raw / 100)
+        return _attitude(self)
 
     @property
     def angular_rates(self) -> AxisAngles:
         """Camera X/Y/Z absolute angular rates, °/s."""
-        return AxisAngles(self.rate_x_raw / 10, self.rate_y_raw / 10, self.rate_z_raw / 10)
+        return _rates(self)
 
     def validate(self) -> None:
-        """Raise :class:`FieldRangeError` for any raw field outside its wire range."""
-        # Fast path: plain ints inside the very ranges checked below (see HostMainFrame).
-        mo, ps, mx, my, rx, ry, rz, ro, pi, ya, wx, wy, wz = self
-        if (
-            int is type(mo) is type(ps) is type(mx) is type(my) is type(rx) is type(ry)
-            is type(rz) is type(ro) is type(pi) is type(ya) is type(wx) is type(wy)
-            is type(wz)
-            and 0 <= mo <= 255 and 0 <= ps <= 0xFFFF
-            and -1000 <= mx <= 1000 and -1000 <= my <= 1000
-            and -18000 <= rx <= 17999 and -18000 <= ry <= 17999 and -18000 <= rz <= 17999
-            and -18000 <= pi <= 17999 and -9000 <= ro <= 9000 and 0 <= ya <= 35999
-            and -32768 <= wx <= 32767 and -32768 <= wy <= 32767 and -32768 <= wz <= 32767
-        ):  # fmt: skip
-            return
-        check_ranges(self, GCU_MAIN_RANGES)
+        """Raise :class:`FieldRangeError` for any raw field outside its range (the
+        schema's)."""
+        GCU_MAIN_SCHEMA.validate(self)
 
     @property
     def anomalies(self) -> tuple[Anomaly, ...]:
         """Fields of a decoded frame outside the ranges V2.0.6 gives them (miss distances,
         angles), kept raw and flagged (docs/client.md, "Liberal receive, strict send")."""
-        return range_anomalies(self, GCU_MAIN_RANGES)
+        return GCU_MAIN_SCHEMA.anomalies(self)
 
     def __str__(self) -> str:
         """Engineering units (``print(gcu.status)``); ``repr()`` keeps the raw fields."""
@@ -215,6 +235,7 @@ class GcuMainFrame(NamedTuple):
             "attitude_raw": [self.roll_raw, self.pitch_raw, self.yaw_raw],
             "angular_rates_deg_s": self.angular_rates._asdict(),
             "angular_rates_raw": [self.rate_x_raw, self.rate_y_raw, self.rate_z_raw],
+            **GCU_MAIN_SCHEMA.plain_dict(self, _MAIN_SHOWN),
         }
 
 
@@ -276,31 +297,34 @@ class GcuSubFrame(NamedTuple):
             if target_position is None
             else check_tuple("target_position", target_position, GeoPosition)
         )
+        check = GCU_SUB_SCHEMA.check
+        distance = _S["target_distance_raw"]
         return cls(
-            quantize("hardware version", hardware_version, 10, 0, 255),
-            quantize("firmware version", firmware_version, 10, 0, 255),
-            check_int("pod model", pod_model, 0, 255),
-            check_int("faults", faults, 0, 0xFFFF),
-            0 if target_distance is None else quantize(
-                "target distance", target_distance, 10, 0, S32[1], "m"
-            ),
-            quantize("target longitude", pos.longitude, 1e7, -1_800_000_000, 1_800_000_000, "deg"),
-            quantize("target latitude", pos.latitude, 1e7, -900_000_000, 900_000_000, "deg"),
-            quantize("target altitude", pos.altitude, 1000, *S32, "m"),
-            quantize("camera 1 zoom", camera1_zoom, 10, 0, 0xFFFF, "x"),
-            quantize("camera 2 zoom", camera2_zoom, 10, 0, 0xFFFF, "x"),
-            check_int("thermal flags", thermal_flags, 0, 0xFF),
+            _S["hardware_version_raw"].to_raw(hardware_version, "hardware version"),
+            _S["firmware_version_raw"].to_raw(firmware_version, "firmware version"),
+            check("pod_code", pod_model, "pod model"),
+            check("fault_raw", faults, "faults"),
+            0 if target_distance is None else quantize(  # a distance is never negative
+                "target distance", target_distance, distance.scale, 0, distance.raw_high,
+                distance.unit),
+            # the target's position takes the ranges of a position the host sends
+            HOST_SUB_SCHEMA.by_name["longitude_raw"].to_raw(pos.longitude, "target longitude"),
+            HOST_SUB_SCHEMA.by_name["latitude_raw"].to_raw(pos.latitude, "target latitude"),
+            _S["target_altitude_raw"].to_raw(pos.altitude, "target altitude"),
+            _S["camera1_zoom_raw"].to_raw(camera1_zoom, "camera 1 zoom"),
+            _S["camera2_zoom_raw"].to_raw(camera2_zoom, "camera 2 zoom"),
+            check("thermal_flags_raw", thermal_flags, "thermal flags"),
             _camera_flags(camera_flags) | check_int("pip mode", pip_mode, 0, PIP_MODE_MASK),
-            check_int("time zone", time_zone, -128, 127, "h"),
+            check("time_zone", time_zone, "time zone"),
         )  # fmt: skip
 
     @property
     def hardware_version(self) -> float:
-        return self.hardware_version_raw / 10
+        return self.hardware_version_raw / _S["hardware_version_raw"].scale
 
     @property
     def firmware_version(self) -> float:
-        return self.firmware_version_raw / 10
+        return self.firmware_version_raw / _S["firmware_version_raw"].scale
 
     @property
     def pod_model(self) -> PodModel:
@@ -314,24 +338,21 @@ class GcuSubFrame(NamedTuple):
     @property
     def target_distance(self) -> float | None:
         """Laser-ranged distance in metres, or ``None`` when there is no measurement (raw ≤ 0)."""
-        return self.target_distance_raw / 10 if self.target_distance_raw > 0 else None
+        raw = self.target_distance_raw
+        return raw / _S["target_distance_raw"].scale if raw > 0 else None
 
     @property
     def target_position(self) -> GeoPosition:
         """Ranged target position (valid when ``PodStatus.RANGE_VALID`` is set)."""
-        return GeoPosition(
-            self.target_latitude_raw / 1e7,
-            self.target_longitude_raw / 1e7,
-            self.target_altitude_raw / 1000,
-        )
+        return _target(self)
 
     @property
     def camera1_zoom(self) -> float:
-        return self.camera1_zoom_raw / 10
+        return self.camera1_zoom_raw / _S["camera1_zoom_raw"].scale
 
     @property
     def camera2_zoom(self) -> float:
-        return self.camera2_zoom_raw / 10
+        return self.camera2_zoom_raw / _S["camera2_zoom_raw"].scale
 
     @property
     def thermal_flags(self) -> ThermalFlags:
@@ -357,20 +378,13 @@ class GcuSubFrame(NamedTuple):
 
     def validate(self) -> None:
         """Raise :class:`FieldRangeError` for any raw field outside its wire range."""
-        # Fast path: plain ints inside the very ranges checked below (see HostMainFrame).
-        hw, fw, pod, fault, dist, lon, lat, alt, z1, z2, th, cam, tz = self
-        lo, hi = S32
-        if (
-            int is type(hw) is type(fw) is type(pod) is type(fault) is type(dist)
-            is type(lon) is type(lat) is type(alt) is type(z1) is type(z2) is type(th)
-            is type(cam) is type(tz)
-            and 0 <= hw <= 255 and 0 <= fw <= 255 and 0 <= pod <= 255 and 0 <= fault <= 0xFFFF
-            and lo <= dist <= hi and lo <= lon <= hi and lo <= lat <= hi and lo <= alt <= hi
-            and 0 <= z1 <= 0xFFFF and 0 <= z2 <= 0xFFFF and 0 <= th <= 0xFF
-            and 0 <= cam <= 0xFFFF and -128 <= tz <= 127
-        ):  # fmt: skip
-            return
-        check_ranges(self, GCU_SUB_RANGES)
+        GCU_SUB_SCHEMA.validate(self)
+
+    @property
+    def anomalies(self) -> tuple[Anomaly, ...]:
+        """Fields of a decoded sub frame outside the ranges V2.0.6 gives them, kept raw and
+        flagged (V2.0.6 gives none narrower than its wire type: empty)."""
+        return GCU_SUB_SCHEMA.anomalies(self)
 
     def __str__(self) -> str:
         """Engineering units (``print(gcu.info)``); ``repr()`` keeps the raw fields."""
@@ -409,13 +423,19 @@ class GcuSubFrame(NamedTuple):
             "pip_mode": self.pip_mode,
             "camera_flags_raw": self.camera_flags_raw,
             "time_zone": self.time_zone,
+            **GCU_SUB_SCHEMA.plain_dict(self, _SUB_SHOWN),
         }  # fmt: skip
 
 
+GCU_MAIN_SCHEMA.install(GcuMainFrame)
+GCU_SUB_SCHEMA.install(GcuSubFrame)
+
+
 def _camera_flags(value: object) -> int:
-    flags = check_int("camera flags", value, 0, 0xFFFF)
+    f = _S["camera_flags_raw"]
+    flags = check_int("camera flags", value, f.raw_low, f.raw_high)
     if flags & PIP_MODE_MASK:
-        raise FieldRangeError("camera flags", value, 0, 0xFFFF,
+        raise FieldRangeError("camera flags", value, f.raw_low, f.raw_high,
                               detail="bits 2-0 hold the pip mode: pass pip_mode=")  # fmt: skip
     return flags
 
@@ -435,9 +455,9 @@ class UnknownSubFrame(NamedTuple):
             raise ValueError("sub frame header: 0x01 is the standard sub frame; build a "
                              "GcuSubFrame or HostSubFrame, not an UnknownSubFrame")  # fmt: skip
         if not isinstance(self.data, (bytes, bytearray)):
-            raise type_error("sub frame data", "31 bytes", self.data)
-        if len(self.data) != 31:
-            raise ValueError(f"sub frame data: expected 31 bytes, got {len(self.data)}")
+            raise type_error("sub frame data", f"{SUB_SIZE} bytes", self.data)
+        if len(self.data) != SUB_SIZE:
+            raise ValueError(f"sub frame data: expected {SUB_SIZE} bytes, got {len(self.data)}")
 
     def as_dict(self) -> dict[str, Any]:
         return {"header": self.header, "data_hex": self.data.hex(" ")}

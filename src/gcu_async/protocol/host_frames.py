@@ -6,68 +6,93 @@ Frames are immutable ``NamedTuple``s of the raw wire integers (cheap to build fr
 
 from __future__ import annotations
 
-import struct
 from datetime import datetime
 from typing import Any, NamedTuple
 
 from gcu_async._checks import check_bool, check_instance, check_int, check_real
-from gcu_async.protocol.anomalies import (
-    Anomaly,
-    FieldRange,
-    check_ranges,
-    range_anomalies,
-    reserved_bits_detail,
-)
+from gcu_async.protocol.anomalies import Anomaly
 from gcu_async.protocol.enums import HostFlags, SubFrameRequest
-from gcu_async.protocol.layout import S16, S32
+from gcu_async.protocol.fields import WireField
+from gcu_async.protocol.frame_schema import FrameSchema, flag_bits
+from gcu_async.protocol.layout import MAIN_SIZE, MAIN_START, SUB_SIZE, SUB_START
 from gcu_async.protocol.layout import SUB_FRAME_HEADER as SUB_FRAME_HEADER  # re-exported
 from gcu_async.protocol.units import (
     Attitude,
     GeoPosition,
     NorthEastUp,
-    check_flags,
     check_tuple,
     quantize,
 )
 
-HOST_MAIN = struct.Struct("<hhhBhhHhhhhhhB6x")
-"""Bytes 5–36 of a host packet."""
-HOST_SUB = struct.Struct("<iiiBIhi8x")
-"""Bytes 38–68 of a host packet when the sub frame header (byte 37) is 0x01."""
+MS_PER_WEEK = 604_800_000
+D001 = "0.01 deg"
 
-CONTROL_ANGLE_RAW = 18000  # 0.01°
+HOST_MAIN_SCHEMA = FrameSchema("host main frame", MAIN_START, MAIN_SIZE, (
+    *(WireField(f"control_{axis}_raw", "h", "control value (rate or angle, per mode)",
+                -18000, 18000) for axis in ("roll", "pitch", "yaw")),
+    WireField("flags_raw", "B", "B2 control values valid, B0 aircraft INS valid"),
+    WireField("aircraft_roll_raw", "h", "aircraft roll", -18000, 18000, 100, "deg", D001,
+              high_open=True),
+    WireField("aircraft_pitch_raw", "h", "aircraft pitch", -9000, 9000, 100, "deg", D001),
+    WireField("aircraft_yaw_raw", "H", "aircraft yaw", 0, 36000, 100, "deg", D001,
+              high_open=True),
+    *(WireField(f"accel_{axis}_raw", "h", f"aircraft acceleration {axis}, gravity excluded "
+                "(0.01 m/s^2)", scale=100, unit="m/s^2") for axis in ("north", "east", "up")),
+    *(WireField(f"vel_{axis}_raw", "h", f"aircraft velocity {axis} (0.01 m/s)", scale=100,
+                unit="m/s") for axis in ("north", "east", "up")),
+    WireField("subframe_request", "B", "GCU sub-frame request code (0x01 standard, 0x00 none)"),
+), flags={"flags_raw": HostFlags})  # fmt: skip
+"""Bytes 5–36 of a host packet: the one table of the main frame's fields."""
+HOST_SUB_SCHEMA = FrameSchema("host sub frame", SUB_START, SUB_SIZE, (
+    WireField("longitude_raw", "i", "aircraft longitude", -1_800_000_000, 1_800_000_000, 1e7,
+              "deg", "1e-7 deg"),
+    WireField("latitude_raw", "i", "aircraft latitude", -900_000_000, 900_000_000, 1e7, "deg",
+              "1e-7 deg"),
+    WireField("altitude_raw", "i", "altitude above mean sea level", scale=1000, unit="m",
+              raw_unit="mm"),
+    WireField("satellites", "B", "satellites used"),
+    WireField("gnss_ms", "I", "milliseconds of the GNSS week", 0, MS_PER_WEEK, unit="ms",
+              raw_unit="ms", high_open=True),
+    WireField("gnss_week", "h", "GNSS week number", 0),
+    WireField("relative_altitude_raw", "i", "altitude relative to take-off (0 if not needed)",
+              scale=1000, unit="m", raw_unit="mm"),
+))  # fmt: skip
+"""Bytes 38–68 of a host packet when the sub frame header (byte 37) is 0x01: the aircraft's
+GNSS data (the ranges of :meth:`GcuClient.update_aircraft` and :class:`AircraftState`)."""
+
+HOST_MAIN = HOST_MAIN_SCHEMA.struct
+"""Bytes 5–36 of a host packet."""
+HOST_SUB = HOST_SUB_SCHEMA.struct
+"""Bytes 38–68 of a host packet when the sub frame header (byte 37) is 0x01."""
+_M = HOST_MAIN_SCHEMA.by_name
+_S = HOST_SUB_SCHEMA.by_name
+
+CONTROL_ANGLE_RAW = _M["control_roll_raw"].raw_high  # 0.01°
 CONTROL_RATE_RAW = 1500  # 0.1 °/s ÷ zoom
 ZOOM_MAX = 6553.5
 """Largest zoom ratio the GCU can report (sub frame camera zoom: U16, 0.1×)."""
-MS_PER_WEEK = 604_800_000
-_FLAG_BITS = 0
-for _flag in HostFlags:
-    _FLAG_BITS |= int(_flag)
-_NOT_FLAG_BITS = ~_FLAG_BITS
-"""Reserved bits of byte 11 (what ``check_flags(..., HostFlags)`` rejects)."""
+GNSS_WEEK_MAX = _S["gnss_week"].raw_high
+"""The last GNSS week the host sub frame carries (S16)."""
+_FLAG_BITS = flag_bits(HostFlags)
 
-HOST_MAIN_RANGES = (
-    *(FieldRange(f"control_{axis}_raw", -CONTROL_ANGLE_RAW, CONTROL_ANGLE_RAW)
-      for axis in ("roll", "pitch", "yaw")),
-    FieldRange("aircraft_roll_raw", -18000, 17999, "0.01 deg"),
-    FieldRange("aircraft_pitch_raw", -9000, 9000, "0.01 deg"),
-    FieldRange("aircraft_yaw_raw", 0, 35999, "0.01 deg"),
-    *(FieldRange(f"{kind}_{axis}_raw", *S16)
-      for kind in ("accel", "vel") for axis in ("north", "east", "up")),
-    FieldRange("subframe_request", 0, 255),
-)  # fmt: skip
+HOST_MAIN_RANGES = HOST_MAIN_SCHEMA.ranges
 """Each main-frame field's raw range but ``flags_raw`` (reserved bits: ``check_flags``),
 in wire order (:class:`FieldRange`): the control values, then the rest."""
-HOST_SUB_RANGES = (
-    FieldRange("longitude_raw", -1_800_000_000, 1_800_000_000, "1e-7 deg"),
-    FieldRange("latitude_raw", -900_000_000, 900_000_000, "1e-7 deg"),
-    FieldRange("altitude_raw", *S32, "mm"),
-    FieldRange("satellites", 0, 255),
-    FieldRange("gnss_ms", 0, MS_PER_WEEK - 1, "ms"),
-    FieldRange("gnss_week", 0, 32767),
-    FieldRange("relative_altitude_raw", *S32, "mm"),
-)
+HOST_SUB_RANGES = HOST_SUB_SCHEMA.ranges
 """Each sub-frame field's raw range, in wire order (:class:`FieldRange`)."""
+_aircraft_attitude = HOST_MAIN_SCHEMA.view(Attitude, "aircraft_roll_raw", "aircraft_pitch_raw",
+                                           "aircraft_yaw_raw")  # fmt: skip
+_acceleration = HOST_MAIN_SCHEMA.view(NorthEastUp, "accel_north_raw", "accel_east_raw",
+                                      "accel_up_raw")  # fmt: skip
+_velocity = HOST_MAIN_SCHEMA.view(NorthEastUp, "vel_north_raw", "vel_east_raw", "vel_up_raw")
+_position = HOST_SUB_SCHEMA.view(GeoPosition, "latitude_raw", "longitude_raw", "altitude_raw")
+_MAIN_SHOWN = ("control_roll_raw", "control_pitch_raw", "control_yaw_raw", "flags_raw",
+               "aircraft_roll_raw", "aircraft_pitch_raw", "aircraft_yaw_raw", "accel_north_raw",
+               "accel_east_raw", "accel_up_raw", "vel_north_raw", "vel_east_raw", "vel_up_raw",
+               "subframe_request")  # fmt: skip
+"""Main-frame fields ``as_dict`` presents its own way (the rest: ``FrameSchema.plain_dict``)."""
+_SUB_SHOWN = ("longitude_raw", "latitude_raw", "altitude_raw", "satellites", "gnss_ms",
+              "gnss_week", "relative_altitude_raw")  # fmt: skip
 
 
 class ControlValues(NamedTuple):
@@ -95,7 +120,7 @@ class ControlValues(NamedTuple):
         return control
 
     def validate(self, field: str = "control") -> None:
-        """Raise unless each raw value is an ``int`` in [-18000, 18000] (see the class)."""
+        """Raise unless each raw value is an ``int`` in the control range (see the class)."""
         r, p, y = self
         c = CONTROL_ANGLE_RAW
         if int is type(r) is type(p) is type(y) and -c <= r <= c and -c <= p <= c and -c <= y <= c:
@@ -154,11 +179,11 @@ class HostMainFrame(NamedTuple):
     flags_raw: int = 0
     """Byte 11: B2 control values valid, B0 aircraft INS valid."""
     aircraft_roll_raw: int = 0
-    """Bytes 12–13, S16, 0.01°, [-18000, 18000)."""
+    """Bytes 12–13, S16, 0.01° (range: ``HOST_MAIN_SCHEMA``)."""
     aircraft_pitch_raw: int = 0
-    """Bytes 14–15, S16, 0.01°, [-9000, 9000]."""
+    """Bytes 14–15, S16, 0.01° (range: ``HOST_MAIN_SCHEMA``)."""
     aircraft_yaw_raw: int = 0
-    """Bytes 16–17, U16, 0.01°, [0, 36000)."""
+    """Bytes 16–17, U16, 0.01° (range: ``HOST_MAIN_SCHEMA``)."""
     accel_north_raw: int = 0
     """Bytes 18–19, S16, 0.01 m/s², gravity excluded."""
     accel_east_raw: int = 0
@@ -199,12 +224,10 @@ class HostMainFrame(NamedTuple):
         roll = pitch = yaw = 0
         if attitude is not None:
             a_roll, a_pitch, a_yaw = check_tuple("attitude", attitude, Attitude)
-            roll = quantize("aircraft roll", a_roll, 100, -18000, 18000, "deg", high_open=True)
-            pitch = quantize("aircraft pitch", a_pitch, 100, -9000, 9000, "deg")
-            yaw = quantize("aircraft yaw", a_yaw, 100, 0, 36000, "deg", high_open=True)
-        an, ae, au = _neu("aircraft acceleration", acceleration, "m/s^2")
-        vn, ve, vu = _neu("aircraft velocity", velocity, "m/s")
-        check_int("subframe_request", subframe_request, 0, 255)
+            roll, pitch, yaw = _ROLL(a_roll), _PITCH(a_pitch), _YAW(a_yaw)
+        an, ae, au = _neu("acceleration", acceleration)
+        vn, ve, vu = _neu("velocity", velocity)
+        HOST_MAIN_SCHEMA.check("subframe_request", subframe_request)
         return cls(*c, int(flags), roll, pitch, yaw, an, ae, au, vn, ve, vu, int(subframe_request))
 
     # -- unit views --------------------------------------------------------------------
@@ -227,58 +250,28 @@ class HostMainFrame(NamedTuple):
     @property
     def aircraft_attitude(self) -> Attitude:
         """Aircraft absolute roll, pitch, yaw in degrees."""
-        return Attitude(
-            self.aircraft_roll_raw / 100, self.aircraft_pitch_raw / 100, self.aircraft_yaw_raw / 100
-        )
+        return _aircraft_attitude(self)
 
     @property
     def acceleration(self) -> NorthEastUp:
         """Aircraft acceleration north/east/up in m/s², gravity excluded."""
-        return NorthEastUp(
-            self.accel_north_raw / 100, self.accel_east_raw / 100, self.accel_up_raw / 100
-        )
+        return _acceleration(self)
 
     @property
     def velocity(self) -> NorthEastUp:
         """Aircraft velocity north/east/up in m/s."""
-        return NorthEastUp(self.vel_north_raw / 100, self.vel_east_raw / 100, self.vel_up_raw / 100)
+        return _velocity(self)
 
     def validate(self) -> None:
         """Raise :class:`FieldRangeError` for any raw field outside its wire range."""
-        # Fast path (encode is hot): plain ints inside the very ranges checked below.
-        # Anything else (bools, other int subclasses, wrong types, out of range) takes
-        # the field-by-field checks, which raise the error naming the field.
-        c1, c2, c3, fl, ar, ap, ay, a1, a2, a3, v1, v2, v3, req = self
-        if type(fl) is HostFlags:  # what build() stores
-            fl = int(fl)
-        c = CONTROL_ANGLE_RAW
-        if (
-            int is type(c1) is type(c2) is type(c3) is type(fl) is type(ar) is type(ap)
-            is type(ay) is type(a1) is type(a2) is type(a3) is type(v1) is type(v2)
-            is type(v3) is type(req)
-            and -c <= c1 <= c and -c <= c2 <= c and -c <= c3 <= c
-            and fl >= 0 and not fl & _NOT_FLAG_BITS
-            and -18000 <= ar <= 17999 and -9000 <= ap <= 9000 and 0 <= ay <= 35999
-            and -32768 <= a1 <= 32767 and -32768 <= a2 <= 32767 and -32768 <= a3 <= 32767
-            and -32768 <= v1 <= 32767 and -32768 <= v2 <= 32767 and -32768 <= v3 <= 32767
-            and 0 <= req <= 255
-        ):  # fmt: skip
-            return
-        check_ranges(self, HOST_MAIN_RANGES[:3])
-        check_flags("flags_raw", self.flags_raw, HostFlags)
-        check_ranges(self, HOST_MAIN_RANGES[3:])
+        HOST_MAIN_SCHEMA.validate(self)
 
     @property
     def anomalies(self) -> tuple[Anomaly, ...]:
         """Fields of a decoded frame outside the ranges V2.0.6 gives them (control values,
         aircraft attitude) and reserved flag bits, kept raw and flagged (docs/client.md,
         "Liberal receive, strict send")."""
-        found = range_anomalies(self, HOST_MAIN_RANGES[:3])
-        reserved = self.flags_raw & _NOT_FLAG_BITS
-        if reserved:
-            detail = reserved_bits_detail(reserved)
-            found += (Anomaly("flags_raw", self.flags_raw, 0, _FLAG_BITS, "", detail),)
-        return found + range_anomalies(self, HOST_MAIN_RANGES[3:])
+        return HOST_MAIN_SCHEMA.anomalies(self)
 
     def as_dict(self) -> dict[str, Any]:
         """Every field, in units and raw, for JSON output."""
@@ -297,21 +290,27 @@ class HostMainFrame(NamedTuple):
             "velocity_m_s": self.velocity._asdict(),
             "velocity_raw": [self.vel_north_raw, self.vel_east_raw, self.vel_up_raw],
             "subframe_request": self.subframe_request,
+            **HOST_MAIN_SCHEMA.plain_dict(self, _MAIN_SHOWN),
         }  # fmt: skip
 
 
 def _neu(
-    field: str, value: NorthEastUp | tuple[float, float, float] | None, unit: str
+    field: str, value: NorthEastUp | tuple[float, float, float] | None
 ) -> tuple[int, int, int]:
     if value is None:
         return (0, 0, 0)
-    n, e, u = check_tuple(field.removeprefix("aircraft "), value, NorthEastUp)
-    lo, hi = S16
-    return (
-        quantize(f"{field} north", n, 100, lo, hi, unit),
-        quantize(f"{field} east", e, 100, lo, hi, unit),
-        quantize(f"{field} up", u, 100, lo, hi, unit),
-    )
+    n, e, u = check_tuple(field, value, NorthEastUp)
+    qn, qe, qu = _NEU[field]
+    return qn(n), qe(e), qu(u)
+
+
+_q = HOST_MAIN_SCHEMA.quantizer
+_ROLL = _q("aircraft_roll_raw", "aircraft roll")
+_PITCH = _q("aircraft_pitch_raw", "aircraft pitch")
+_YAW = _q("aircraft_yaw_raw", "aircraft yaw")
+_NEU = {field: tuple(_q(f"{prefix}_{axis}_raw", f"aircraft {field} {axis}")
+                     for axis in ("north", "east", "up"))
+        for field, prefix in (("acceleration", "accel"), ("velocity", "vel"))}  # fmt: skip
 
 
 class HostSubFrame(NamedTuple):
@@ -352,13 +351,12 @@ class HostSubFrame(NamedTuple):
         with leap seconds applied unless ``apply_leap_seconds=False`` (the document's rule);
         :meth:`gnss_time` reads it back with the same default (see
         :mod:`gcu_async.protocol.gpstime`)."""
-        lon = quantize("longitude", longitude, 1e7, -1_800_000_000, 1_800_000_000, "deg")
-        lat = quantize("latitude", latitude, 1e7, -900_000_000, 900_000_000, "deg")
-        alt = quantize("altitude", altitude, 1000, *S32, "m")
-        sats = check_int("satellites", satellites, 0, 255)
-        ms = check_int("gnss_ms", gnss_ms, 0, MS_PER_WEEK - 1, "ms")
-        week = check_int("gnss_week", gnss_week, 0, 32767)
-        rel = quantize("relative altitude", relative_altitude, 1000, *S32, "m")
+        lon, lat, alt = _LONGITUDE(longitude), _LATITUDE(latitude), _ALTITUDE(altitude)
+        check = HOST_SUB_SCHEMA.check
+        sats = check("satellites", satellites)
+        ms = check("gnss_ms", gnss_ms)
+        week = check("gnss_week", gnss_week)
+        rel = _RELATIVE_ALTITUDE(relative_altitude)
         check_bool("apply_leap_seconds", apply_leap_seconds)
         if gnss_time is not None:
             from gcu_async.protocol.gpstime import utc_to_gps
@@ -367,29 +365,29 @@ class HostSubFrame(NamedTuple):
                 raise ValueError("gnss_time: give gnss_time or gnss_week/gnss_ms, not both "
                                  f"(got gnss_week={week}, gnss_ms={ms})")  # fmt: skip
             week, ms = utc_to_gps(gnss_time, apply_leap_seconds=apply_leap_seconds)
-            check_int("gnss_week (of gnss_time)", week, 0, 32767)  # after the year 2608
+            check("gnss_week", week, "gnss_week (of gnss_time)")  # after the year 2608
         return cls(lon, lat, alt, sats, ms, week, rel)
 
     @property
     def latitude(self) -> float:
-        return self.latitude_raw / 1e7
+        return self.latitude_raw / _S["latitude_raw"].scale
 
     @property
     def longitude(self) -> float:
-        return self.longitude_raw / 1e7
+        return self.longitude_raw / _S["longitude_raw"].scale
 
     @property
     def altitude(self) -> float:
         """Metres above mean sea level."""
-        return self.altitude_raw / 1000
+        return self.altitude_raw / _S["altitude_raw"].scale
 
     @property
     def relative_altitude(self) -> float:
-        return self.relative_altitude_raw / 1000
+        return self.relative_altitude_raw / _S["relative_altitude_raw"].scale
 
     @property
     def position(self) -> GeoPosition:
-        return GeoPosition(self.latitude, self.longitude, self.altitude)
+        return _position(self)
 
     def gnss_time(self, *, apply_leap_seconds: bool = True) -> datetime:
         """GNSS week + ms (GPS time) as a UTC datetime: leap seconds removed, as
@@ -401,25 +399,14 @@ class HostSubFrame(NamedTuple):
 
     def validate(self) -> None:
         """Raise :class:`FieldRangeError` for any raw field outside its wire range."""
-        # Fast path: plain ints inside the very ranges checked below (see HostMainFrame).
-        lon, lat, alt, sats, ms, week, rel = self
-        if (
-            int is type(lon) is type(lat) is type(alt) is type(sats) is type(ms)
-            is type(week) is type(rel)
-            and -1_800_000_000 <= lon <= 1_800_000_000 and -900_000_000 <= lat <= 900_000_000
-            and -(2**31) <= alt <= 2**31 - 1 and 0 <= sats <= 255
-            and 0 <= ms <= MS_PER_WEEK - 1 and 0 <= week <= 32767
-            and -(2**31) <= rel <= 2**31 - 1
-        ):  # fmt: skip
-            return
-        check_ranges(self, HOST_SUB_RANGES)
+        HOST_SUB_SCHEMA.validate(self)
 
     @property
     def anomalies(self) -> tuple[Anomaly, ...]:
         """Fields of a decoded frame outside the ranges V2.0.6 gives them (longitude,
         latitude, GNSS time), kept raw and flagged (docs/client.md, "Liberal receive,
         strict send")."""
-        return range_anomalies(self, HOST_SUB_RANGES)
+        return HOST_SUB_SCHEMA.anomalies(self)
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -437,4 +424,13 @@ class HostSubFrame(NamedTuple):
             "gnss_time_document_rule": self.gnss_time(apply_leap_seconds=False).isoformat(),
             "relative_altitude_m": self.relative_altitude,
             "relative_altitude_raw": self.relative_altitude_raw,
+            **HOST_SUB_SCHEMA.plain_dict(self, _SUB_SHOWN),
         }
+
+
+HOST_MAIN_SCHEMA.install(HostMainFrame)
+HOST_SUB_SCHEMA.install(HostSubFrame)
+_LONGITUDE = HOST_SUB_SCHEMA.quantizer("longitude_raw", "longitude")
+_LATITUDE = HOST_SUB_SCHEMA.quantizer("latitude_raw", "latitude")
+_ALTITUDE = HOST_SUB_SCHEMA.quantizer("altitude_raw", "altitude")
+_RELATIVE_ALTITUDE = HOST_SUB_SCHEMA.quantizer("relative_altitude_raw", "relative altitude")

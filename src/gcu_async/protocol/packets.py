@@ -29,19 +29,28 @@ from gcu_async.protocol.commands import (
 )
 from gcu_async.protocol.crc import crc16_xmodem
 from gcu_async.protocol.feedback import Feedback
+from gcu_async.protocol.frame_schema import FrameSchema
 from gcu_async.protocol.gcu_frames import (
-    GCU_MAIN,
-    GCU_SUB,
+    GCU_MAIN_SCHEMA,
+    GCU_SUB_SCHEMA,
     GcuMainFrame,
     GcuSubFrame,
     UnknownSubFrame,
 )
 from gcu_async.protocol.host_frames import (
-    HOST_MAIN,
-    HOST_SUB,
+    HOST_MAIN_SCHEMA,
+    HOST_SUB_SCHEMA,
     SUB_FRAME_HEADER,
     HostMainFrame,
     HostSubFrame,
+)
+from gcu_async.protocol.layout import (
+    CRC_SIZE,
+    MAIN_START,
+    OPCODE_OFFSET,
+    SUB_HEADER_OFFSET,
+    SUB_SIZE,
+    SUB_START,
 )
 
 HOST_HEADER = b"\xa8\xe5"
@@ -49,21 +58,47 @@ GCU_HEADER = b"\x8a\x5e"
 PREFIX = struct.Struct("<2sHB")
 """Bytes 0–4: header, length S, version."""
 CRC_STRUCT = struct.Struct(">H")
-BASE_LENGTH = 72
-"""S of a packet with no parameters / no execution status."""
+BASE_LENGTH = OPCODE_OFFSET + 1 + CRC_SIZE
+"""S of a packet with no parameters / no execution status (72)."""
 MAX_LENGTH = 256
 """Longest packet ``Deframer(header)`` accepts by default (V2.0.6's longest is 84 bytes;
 the streaming deframers of each direction accept less: see :mod:`~gcu_async.protocol.deframer`)."""
 SUPPORTED_VERSIONS = frozenset({1, 2})
 """Versions V2.0.6 defines; others decode with its layout, flagged (:func:`version_anomalies`)."""
 DEFAULT_VERSION = 2
-_ZERO_SUB = bytes(32)
-_OFFSET_SUB = 37
-_OFFSET_OPCODE = 69
-# Bytes 0–69 in one struct (prefix, main frame, sub frame header + standard sub frame,
-# opcode): the hot paths pack / unpack a packet with one call.
-_GCU_BODY = struct.Struct("<2sHB" + GCU_MAIN.format[1:] + "B" + GCU_SUB.format[1:] + "B")
-_HOST_BODY = struct.Struct("<2sHB" + HOST_MAIN.format[1:] + "B" + HOST_SUB.format[1:] + "B")
+_ZERO_SUB = bytes(1 + SUB_SIZE)
+_PARAMS = OPCODE_OFFSET + 1
+
+
+class _Body(NamedTuple):
+    """Bytes 0–69 in one struct (prefix, main frame, sub frame header + standard sub frame,
+    opcode), so the hot paths pack / unpack a packet with one call; and where each part's
+    values sit in the unpacked tuple, from the frame schemas."""
+
+    struct: struct.Struct
+    main: slice
+    sub_header: int
+    sub: slice
+    opcode: int
+
+
+def _body(main: FrameSchema, sub: FrameSchema) -> _Body:
+    if (main.start, main.end, sub.start, sub.end) != (MAIN_START, SUB_HEADER_OFFSET,
+                                                      SUB_START, OPCODE_OFFSET):  # fmt: skip
+        raise ValueError(f"{main.name} / {sub.name} do not fill bytes {MAIN_START}-"
+                         f"{OPCODE_OFFSET - 1}")  # fmt: skip
+    # the header as one U16, so the hot paths compare ints (no bytes object per packet)
+    layout = struct.Struct("<HHB" + main.format + "B" + sub.format + "B")
+    if layout.size != _PARAMS:
+        raise ValueError(f"packet body is {layout.size} bytes, not {_PARAMS}")
+    m = len(PREFIX.unpack(bytes(PREFIX.size)))  # header, length, version
+    s = m + len(main.fields) + 1
+    return _Body(layout, slice(m, m + len(main.fields)), s - 1, slice(s, s + len(sub.fields)),
+                 s + len(sub.fields))  # fmt: skip
+
+
+_GCU_BODY = _body(GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA)
+_HOST_BODY = _body(HOST_MAIN_SCHEMA, HOST_SUB_SCHEMA)
 
 HostSub = HostSubFrame | UnknownSubFrame | None
 GcuSub = GcuSubFrame | UnknownSubFrame | None
@@ -102,8 +137,8 @@ class HostPacket(NamedTuple):
             check_int("version", version, 0, 255)
         params = command.encode_params()  # an AnomalousCommand raises here: send is strict
         if type(sub) is HostSubFrame and type(main) is HostMainFrame:  # bytes 0–69 at once
-            body = _HOST_BODY.pack(
-                HOST_HEADER, BASE_LENGTH + len(params), version,
+            body = _HOST_BODY_PACK(
+                _HOST_HEADER_U16, BASE_LENGTH + len(params), version,
                 *main, SUB_FRAME_HEADER, *sub,
                 command.code if isinstance(command, UnknownCommand) else command.OPCODE,
             ) + params  # fmt: skip
@@ -111,10 +146,10 @@ class HostPacket(NamedTuple):
             return body + CRC_STRUCT.pack(crc_hqx(body, 0))
         buf = bytearray(BASE_LENGTH + len(params))
         PREFIX.pack_into(buf, 0, HOST_HEADER, len(buf), self.version)
-        HOST_MAIN.pack_into(buf, 5, *self.main)
-        _pack_sub(buf, self.sub, HOST_SUB)
-        buf[_OFFSET_OPCODE] = command_code(self.command)
-        buf[70 : 70 + len(params)] = params
+        HOST_MAIN_SCHEMA.struct.pack_into(buf, MAIN_START, *self.main)
+        _pack_sub(buf, self.sub, HOST_SUB_SCHEMA)
+        buf[OPCODE_OFFSET] = command_code(self.command)
+        buf[_PARAMS : _PARAMS + len(params)] = params
         return _seal(buf)
 
     def as_dict(self) -> dict[str, Any]:
@@ -175,12 +210,12 @@ class GcuPacket(NamedTuple):
         n = BASE_LENGTH if status is None else BASE_LENGTH + 1 + len(extra)
         buf = bytearray(n)
         PREFIX.pack_into(buf, 0, GCU_HEADER, n, self.version)
-        GCU_MAIN.pack_into(buf, 5, *self.main)
-        _pack_sub(buf, self.sub, GCU_SUB)
-        buf[_OFFSET_OPCODE] = self.feedback.opcode
+        GCU_MAIN_SCHEMA.struct.pack_into(buf, MAIN_START, *self.main)
+        _pack_sub(buf, self.sub, GCU_SUB_SCHEMA)
+        buf[OPCODE_OFFSET] = self.feedback.opcode
         if status is not None:
-            buf[70] = check_int("feedback status", status, 0, 255)
-            buf[71 : 71 + len(extra)] = extra
+            buf[_PARAMS] = check_int("feedback status", status, 0, 255)
+            buf[_PARAMS + 1 : _PARAMS + 1 + len(extra)] = extra
         return _seal(buf)
 
     def as_dict(self) -> dict[str, Any]:
@@ -196,24 +231,27 @@ class GcuPacket(NamedTuple):
     @property
     def anomalies(self) -> tuple[Anomaly, ...]:
         """Everything V2.0.6 does not expect in this reply, in wire order: its version, its
-        main frame's fields (:attr:`GcuMainFrame.anomalies`), its feedback
-        (:attr:`Feedback.anomalies`); empty for an ordinary reply."""
-        return version_anomalies(self.version) + self.main.anomalies + self.feedback.anomalies
+        frames' fields (:attr:`GcuMainFrame.anomalies`, :attr:`GcuSubFrame.anomalies`), its
+        feedback (:attr:`Feedback.anomalies`); empty for an ordinary reply."""
+        found = version_anomalies(self.version) + self.main.anomalies
+        if isinstance(self.sub, GcuSubFrame):
+            found += self.sub.anomalies
+        return found + self.feedback.anomalies
 
 
 def _anomalies_dict(anomalies: tuple[Anomaly, ...]) -> dict[str, Any]:
     return {"anomalies": [a.as_dict() for a in anomalies]} if anomalies else {}
 
 
-def _pack_sub(buf: bytearray, sub: Any, layout: struct.Struct) -> None:
+def _pack_sub(buf: bytearray, sub: Any, schema: FrameSchema) -> None:
     if sub is None:
         return
     if isinstance(sub, UnknownSubFrame):
-        buf[_OFFSET_SUB] = sub.header
-        buf[38:69] = sub.data
+        buf[SUB_HEADER_OFFSET] = sub.header
+        buf[SUB_START:OPCODE_OFFSET] = sub.data
     else:
-        buf[_OFFSET_SUB] = SUB_FRAME_HEADER
-        layout.pack_into(buf, 38, *sub)
+        buf[SUB_HEADER_OFFSET] = SUB_FRAME_HEADER
+        schema.struct.pack_into(buf, SUB_START, *sub)
 
 
 def _seal(buf: bytearray) -> bytes:
@@ -251,6 +289,13 @@ def _check_envelope(data: bytes, header: bytes) -> None:
 
 
 _new = tuple.__new__
+_GCU_UNPACK = _GCU_BODY.struct.unpack_from
+_GCU_MAIN, _GCU_SUB_HEADER, _GCU_SUB, _GCU_OPCODE = _GCU_BODY[1:]
+_HOST_BODY_PACK = _HOST_BODY.struct.pack
+_GCU_HEADER_U16 = int.from_bytes(GCU_HEADER, "little")
+_HOST_HEADER_U16 = int.from_bytes(HOST_HEADER, "little")
+_NO_STATUS = tuple(Feedback(opcode) for opcode in range(256))
+"""The feedback of each opcode with no execution status (S = 72), shared: immutable."""
 
 
 def decode_gcu_packet(data: bytes) -> GcuPacket:
@@ -266,24 +311,25 @@ def decode_gcu_packet(data: bytes) -> GcuPacket:
     n = len(data)
     if n < BASE_LENGTH:
         _envelope_error(data, GCU_HEADER)
-    fields = _GCU_BODY.unpack_from(data)
-    if fields[0] != GCU_HEADER or fields[1] != n or crc_hqx(data, 0):
+    fields = _GCU_UNPACK(data)
+    if fields[0] != _GCU_HEADER_U16 or fields[1] != n or crc_hqx(data, 0):
         _envelope_error(data, GCU_HEADER)
-    main = _new(GcuMainFrame, fields[3:16])
-    sub_header = fields[16]
+    main = _new(GcuMainFrame, fields[_GCU_MAIN])
+    sub_header = fields[_GCU_SUB_HEADER]
     sub: GcuSub
     if sub_header == SUB_FRAME_HEADER:
-        sub = _new(GcuSubFrame, fields[17:30])
-    elif data[37:69] == _ZERO_SUB:
+        sub = _new(GcuSubFrame, fields[_GCU_SUB])
+    elif data[SUB_HEADER_OFFSET:OPCODE_OFFSET] == _ZERO_SUB:
         sub = None
     else:
-        sub = UnknownSubFrame(sub_header, bytes(data[38:69]))
+        sub = UnknownSubFrame(sub_header, bytes(data[SUB_START:OPCODE_OFFSET]))
+    opcode = fields[_GCU_OPCODE]
     if n == BASE_LENGTH:
-        feedback = _new(Feedback, (fields[30], None, b""))
+        feedback = _NO_STATUS[opcode]
     elif n == BASE_LENGTH + 1:
-        feedback = _new(Feedback, (fields[30], data[70], b""))
+        feedback = _new(Feedback, (opcode, data[_PARAMS], b""))
     else:  # more status bytes than V2.0.6 defines: kept, flagged
-        feedback = _new(Feedback, (fields[30], data[70], bytes(data[71:-2])))
+        feedback = _new(Feedback, (opcode, data[_PARAMS], bytes(data[_PARAMS + 1 : -CRC_SIZE])))
     return _new(GcuPacket, (main, sub, feedback, fields[2]))
 
 
@@ -295,18 +341,18 @@ def decode_host_packet(data: bytes) -> HostPacket:
     (:attr:`HostPacket.anomalies`, :class:`AnomalousCommand`).
     """
     _check_envelope(data, HOST_HEADER)
-    version = data[4]
-    main = _new(HostMainFrame, HOST_MAIN.unpack_from(data, 5))
-    sub_header = data[_OFFSET_SUB]
+    fields = _HOST_BODY.struct.unpack_from(data)
+    main = _new(HostMainFrame, fields[_HOST_BODY.main])
+    sub_header = fields[_HOST_BODY.sub_header]
     sub: HostSub
     if sub_header == SUB_FRAME_HEADER:
-        sub = _new(HostSubFrame, HOST_SUB.unpack_from(data, 38))
-    elif data[37:69] == _ZERO_SUB:
+        sub = _new(HostSubFrame, fields[_HOST_BODY.sub])
+    elif data[SUB_HEADER_OFFSET:OPCODE_OFFSET] == _ZERO_SUB:
         sub = None
     else:
-        sub = UnknownSubFrame(sub_header, bytes(data[38:69]))
-    command = decode_command(data[_OFFSET_OPCODE], bytes(data[70:-2]))
-    return _new(HostPacket, (main, sub, command, version))
+        sub = UnknownSubFrame(sub_header, bytes(data[SUB_START:OPCODE_OFFSET]))
+    command = decode_command(fields[_HOST_BODY.opcode], bytes(data[_PARAMS:-CRC_SIZE]))
+    return _new(HostPacket, (main, sub, command, fields[2]))
 
 
 def decode_packet(data: bytes) -> HostPacket | GcuPacket:

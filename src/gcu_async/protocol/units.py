@@ -144,6 +144,20 @@ def check_tuple(field: str, value: object, cls: type[_NT]) -> _NT:
     raise type_error(field, expected, value)
 
 
+def check_sequence(field: str, value: object, cls: type[_NT]) -> _NT:
+    """``value`` as a ``cls`` (a NamedTuple of units): an instance, a plain tuple or a list
+    (JSON gives lists) of the right length, and nothing else (a ``TypeError`` naming what
+    is accepted). The elements are the caller's to check."""
+    try:
+        return check_tuple(field, tuple(value) if type(value) is list else value, cls)
+    except TypeError:
+        name = cls.__name__
+        article = "an" if name[0] in "AEIOU" else "a"
+        fields = ", ".join(cls._fields)  # type: ignore[attr-defined]
+        raise type_error(field, f"{article} {name} or a tuple or list ({fields})",
+                         value) from None  # fmt: skip
+
+
 def check_member(field: str, value: object, enum: type[_IE]) -> _IE:
     """A member of the integer enum ``enum`` from a member or its exact ``int`` value
     (:func:`~gcu_async._checks.check_enum`); an ``int`` that names no member is a
