@@ -48,6 +48,7 @@ from gcu_async.bridge.commands import (
 from gcu_async.bridge.geometry import euler_from_quaternion, quaternion_from_euler
 from gcu_async.bridge.view import Control, GcuView
 from gcu_async.protocol.enums import FaultFlags, Mode
+from gcu_async.protocol.gcu_frames import GCU_MAIN_SCHEMA
 from gcu_async.protocol.pods import pod_name
 from gcu_async.protocol.units import wrap_degrees_180
 
@@ -81,9 +82,12 @@ follow), neutral (the GCU's centre command), pointing at a global location (gaze
 DEVICE_CAP_FLAGS = CAP_FLAGS & 0xFFFF
 """GIMBAL_DEVICE_INFORMATION's 16-bit cap_flags (the same bits)."""
 
-ANGLE_LIMITS_DEG = ((-90.0, 90.0), (-180.0, 180.0), (-180.0, 180.0))
+_YAW_SPAN = GCU_MAIN_SCHEMA.by_name["yaw_raw"].limits[1]
+ANGLE_LIMITS_DEG = (GCU_MAIN_SCHEMA.by_name["roll_raw"].limits,
+                    GCU_MAIN_SCHEMA.by_name["pitch_raw"].limits,
+                    (-_YAW_SPAN / 2, _YAW_SPAN / 2))  # fmt: skip
 """Roll, pitch, yaw limits reported: the ranges of the GCU's attitude fields (V2.0.6 gives
-no mechanical limits per pod)."""
+no mechanical limits per pod), yaw as MAVLink's signed equivalent of the full turn."""
 
 YAW_LOCKED_MODES = frozenset({Mode.POINTING_LOCK, Mode.EULER_CONTROL, Mode.GAZE, Mode.TRACK})
 """Modes whose yaw holds an earth-fixed direction (the others follow the aircraft)."""

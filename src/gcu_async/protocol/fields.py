@@ -71,6 +71,13 @@ class WireField:
         high = WIRE_RANGES[self.fmt][1] if self.high is None else self.high
         return high - 1 if self.high_open else high
 
+    @property
+    def limits(self) -> tuple[float, float]:
+        """The range in engineering units as the document writes it (``high`` itself
+        excluded when ``high_open``)."""
+        high = WIRE_RANGES[self.fmt][1] if self.high is None else self.high
+        return self.raw_low / self.scale, high / self.scale
+
     def anomalies(self, raw: int) -> tuple[Anomaly, ...]:
         """Receive side: ``()`` if ``raw`` is in range, else the one :class:`Anomaly`."""
         return check_raw(self.name, raw, self.raw_low, self.raw_high, self.raw_unit)
