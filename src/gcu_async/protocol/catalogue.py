@@ -20,7 +20,7 @@ same-opcode rule").
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, fields
+from dataclasses import MISSING, dataclass, fields, replace
 from types import MappingProxyType
 
 from gcu_async.protocol import commands as c
@@ -82,40 +82,26 @@ TEMPERATURE_RANGE = (TEMPERATURE_RAW[0] / 10, TEMPERATURE_RAW[1] / 10)
 
 
 def _parameters(command: type[c.Command], method: Method) -> tuple[Parameter, ...]:
-    """The method's parameters: each named command attribute's kind gives its range, unit
-    and doc, the class its default (``method.required`` overrides it)."""
-    defaults: dict[str, object] = {}
-    for f in fields(command):  # type: ignore[arg-type]
-        default = f.default
-        defaults[f.name] = REQUIRED if default is f.default_factory else default  # MISSING
-    derived: dict[str, Parameter] = {}
-    owner: dict[str, str] = {}
+    """The method's parameters: each named command attribute's kind gives its name(s), range,
+    unit and doc, the class its default (``method.required`` drops it)."""
+    defaults = {f.name: REQUIRED if f.default is MISSING else f.default for f in fields(command)}
+    by_attr: dict[str, tuple[Parameter, ...]] = {}
     for kind in command.SCHEMA.params:
-        given = {a: defaults[a] for a in kind.attrs}
-        for name, p in kind.parameters(given).items():
-            derived[name] = p
-            owner.setdefault(kind.attrs[0] if len(kind.attrs) == 1 else name, name)
-    names = method.params if method.params is not None else tuple(defaults)
+        derived = kind.parameters({a: defaults[a] for a in kind.attrs})
+        if len(kind.attrs) == 1:  # a point gives x and y
+            by_attr[kind.attrs[0]] = tuple(derived.values())
+        else:  # thresholds, zoom value: one parameter per attribute
+            by_attr.update((a, (derived[a],)) for a in kind.attrs)
     found: list[Parameter] = []
-    for item in names:
+    for item in method.params if method.params is not None else tuple(defaults):
         if isinstance(item, Parameter):
             found.append(item)
             continue
-        kind_params = [p for n, p in derived.items() if n == item or _attr_of(command, n) == item]
-        for p in kind_params:
+        for p in by_attr[item]:
             if p.name in method.required:
-                p = Parameter(p.name, p.kind, p.doc, p.unit, p.low, p.high, p.low_open,
-                              p.high_open, REQUIRED, p.choices)  # fmt: skip
+                p = replace(p, default=REQUIRED)
             found.append(p)
     return tuple(found)
-
-
-def _attr_of(command: type[c.Command], parameter: str) -> str | None:
-    """The attribute a derived parameter comes from (``x`` → ``point``)."""
-    for kind in command.SCHEMA.params:
-        if len(kind.attrs) == 1 and parameter in kind.parameters({kind.attrs[0]: REQUIRED}):
-            return kind.attrs[0]
-    return None
 
 
 CATALOGUE: tuple[CatalogueEntry, ...] = tuple(

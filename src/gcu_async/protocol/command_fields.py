@@ -227,7 +227,7 @@ class Cameras(ParamKind):
     def encode(self, value: Any) -> int:
         return check_int("cameras", value, 1, 0xFF, "camera mask")
 
-    def decode(self, raw: int) -> Any:
+    def decode(self, raw: int) -> Any:  # type: ignore[override]
         from gcu_async.protocol.enums import CameraMask
 
         return CameraMask(_in_range(self.wire[0], raw))
@@ -262,7 +262,7 @@ class Switch(ParamKind):
     def encode(self, value: Any) -> int:
         return self.on if check_bool(self.name, value) else self.off
 
-    def decode(self, raw: int) -> bool:
+    def decode(self, raw: int) -> bool:  # type: ignore[override]
         if raw == self.on:
             return True
         if raw == self.off:
@@ -295,7 +295,7 @@ class Integer(ParamKind):
         w = self.field_
         return check_int(w.name, value, w.raw_low, w.raw_high, w.unit)
 
-    def decode(self, raw: int) -> int:
+    def decode(self, raw: int) -> int:  # type: ignore[override]
         return _in_range(self.field_, raw)
 
     def anomalies(self, raw: int) -> tuple[Anomaly, ...]:  # type: ignore[override]
@@ -328,7 +328,7 @@ class Choice(ParamKind):
     def encode(self, value: Any) -> int:
         return int(value)
 
-    def decode(self, raw: int) -> Any:
+    def decode(self, raw: int) -> Any:  # type: ignore[override]
         return self.enum(_in_range(self.wire[0], raw))
 
     def anomalies(self, raw: int) -> tuple[Anomaly, ...]:  # type: ignore[override]
@@ -356,7 +356,7 @@ class Real(ParamKind):
         w = self.field_
         return quantize(w.name, value, w.scale, w.raw_low, w.raw_high, w.unit)
 
-    def decode(self, raw: int) -> float:
+    def decode(self, raw: int) -> float:  # type: ignore[override]
         return _in_range(self.field_, raw) / self.field_.scale
 
     def parameters(self, defaults: dict[str, object]) -> dict[str, Parameter]:
@@ -434,8 +434,9 @@ class Box(ParamKind):
         x0, y0, x1, y1 = (w.to_raw(v) for w, v in zip(self.wire, box, strict=True))
         n = self.name
         if x1 < x0:
+            detail = "right edge must not be left of the left edge"
             raise FieldRangeError(f"{n}.right", box.right, box.left, 1.0, "image fraction",
-                                  detail="right edge must not be left of the left edge")  # fmt: skip
+                                  detail=detail)  # fmt: skip
         if y1 < y0:
             raise FieldRangeError(f"{n}.bottom", box.bottom, box.top, 1.0, "image fraction",
                                   detail="bottom edge must not be above the top edge")  # fmt: skip
@@ -465,7 +466,7 @@ class Box(ParamKind):
     def parameters(self, defaults: dict[str, object]) -> dict[str, Parameter]:
         default = defaults[self.name]
         if default is not REQUIRED:
-            default = tuple(default)  # type: ignore[call-overload]
+            default = tuple(default)  # type: ignore[arg-type]
         return {self.name: Parameter(self.name, Kind.BOX, self.doc, default=default)}
 
 

@@ -40,7 +40,6 @@ from gcu_async.protocol.command_fields import (
     IMAGE_UNIT as IMAGE_UNIT,
 )
 from gcu_async.protocol.command_fields import (
-    REQUIRED,
     TEMPERATURE,
     ZOOM_FRACTION,
     ZOOM_RATIO,
@@ -51,7 +50,6 @@ from gcu_async.protocol.command_fields import (
     Method,
     ModeSpec,
     Parameter,
-    ParamKind,
     Point,
     StatusRule,
     Switch,
@@ -235,7 +233,7 @@ def _compile(cls: type[_C]) -> type[_C]:
     ``raw_params``, ``from_raw_params`` and ``_normalize`` as straight-line functions (the hot
     path runs no loop over the schema)."""
     kinds = cls.SCHEMA.params
-    attrs = [f.name for f in fields(cls)]  # type: ignore[arg-type]
+    attrs = [f.name for f in fields(cls)]
     owned = [a for k in kinds for a in k.attrs]
     if sorted(owned) != sorted(attrs):
         raise TypeError(f"{cls.__name__}: attributes {attrs} but schema parameters {owned}")
@@ -261,7 +259,7 @@ def _compile(cls: type[_C]) -> type[_C]:
            + "".join(line + "\n" for line in unpack)
            + f"    return cls({', '.join(dec)})\n"
            f"def _normalize(self):\n" + ("\n".join(norm) or "    pass") + "\n")  # fmt: skip
-    exec(compile(src, f"<codec of {cls.__name__}>", "exec"), env)  # noqa: S102 - our own text
+    exec(compile(src, f"<codec of {cls.__name__}>", "exec"), env)  # our own text, from the schema
     cls.LAYOUT = struct_of(cls.SCHEMA.wire)
     cls.raw_params = env["raw_params"]  # type: ignore[method-assign]
     cls.from_raw_params = classmethod(env["from_raw_params"])  # type: ignore[method-assign,assignment]
