@@ -62,7 +62,7 @@ def table_rows(text: str) -> list[Row]:
     return rows
 
 
-ROWS = table_rows(client_table())
+ROWS = table_rows("\n".join([START, hooks.command_table(), END]))
 
 
 class Recorder(CommandMethods):

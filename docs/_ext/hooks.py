@@ -51,7 +51,8 @@ def command_table() -> str:
     """The client's command table, one row per catalogue entry."""
     from gcu_async.protocol.catalogue import CATALOGUE
 
-    lines = ["| Method | Opcode | Parameters: range unit; what (default) | Notes |", "|---|---|---|---|"]
+    lines = ["| Method | Opcode | Parameters: range unit; what (default) | Notes |",
+             "|---|---|---|---|"]  # fmt: skip
     for e in CATALOGUE:
         params = "<br>".join(_param_cell(p) for p in e.parameters) or "—"
         rule = e.status.value

@@ -184,6 +184,10 @@ class ParamKind:
     def normalize(self, value: Any) -> Any:
         return value
 
+    def encoder(self) -> Callable[..., Any]:
+        """``encode`` with this parameter's constants bound (the compiled codec calls it)."""
+        return self.encode
+
     def encode(self, *values: Any) -> Any:
         """Send side: the raw integer(s), checked (``TypeError`` / ``FieldRangeError``)."""
         raise NotImplementedError
@@ -226,6 +230,14 @@ class Cameras(ParamKind):
 
     def encode(self, value: Any) -> int:
         return check_int("cameras", value, 1, 0xFF, "camera mask")
+
+    def encoder(self) -> Callable[[Any], int]:
+        def encode(value: Any) -> int:
+            if type(value) is int and 0 < value <= 0xFF:  # the common case, one test
+                return value
+            return check_int("cameras", value, 1, 0xFF, "camera mask")
+
+        return encode
 
     def decode(self, raw: int) -> Any:  # type: ignore[override]
         from gcu_async.protocol.enums import CameraMask
@@ -355,6 +367,15 @@ class Real(ParamKind):
     def encode(self, value: Any) -> int:
         w = self.field_
         return quantize(w.name, value, w.scale, w.raw_low, w.raw_high, w.unit)
+
+    def encoder(self) -> Callable[[Any], int]:
+        w = self.field_
+        name, scale, low, high, unit = w.name, w.scale, w.raw_low, w.raw_high, w.unit
+
+        def encode(value: Any) -> int:
+            return quantize(name, value, scale, low, high, unit)
+
+        return encode
 
     def decode(self, raw: int) -> float:  # type: ignore[override]
         return _in_range(self.field_, raw) / self.field_.scale
@@ -529,6 +550,22 @@ class ZoomValue(ParamKind):
         low = -ZOOM_RATIO.raw_high
         self._set(("ratio", "fraction"), (WireField("raw_value", "h", "", low,
                                                     ZOOM_FRACTION.raw_high),))  # fmt: skip
+
+    def encoder(self) -> Callable[[Any, Any], tuple[int]]:
+        r, f = ZOOM_RATIO, ZOOM_FRACTION
+        r_args = (r.name, r.scale, r.raw_low, r.raw_high, r.unit)
+        f_args = (f.name, f.scale, f.raw_low, f.raw_high, f.unit)
+
+        def encode(ratio: Any, fraction: Any) -> tuple[int]:
+            if fraction is None and ratio is not None:
+                name, scale, low, high, unit = r_args
+                return (-quantize(name, ratio, scale, low, high, unit),)
+            if ratio is None and fraction is not None:
+                name, scale, low, high, unit = f_args
+                return (quantize(name, fraction, scale, low, high, unit),)
+            raise ValueError("ZoomTo: give exactly one of ratio= or fraction=")
+
+        return encode
 
     def encode(self, ratio: Any, fraction: Any) -> tuple[int]:
         if (ratio is None) == (fraction is None):

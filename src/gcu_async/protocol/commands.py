@@ -241,7 +241,7 @@ def _compile(cls: type[_C]) -> type[_C]:
     enc, dec, norm, unpack = [], [], [], []
     at = 0
     for i, k in enumerate(kinds):
-        env[f"e{i}"], env[f"d{i}"], env[f"n{i}"] = k.encode, k.decode, k.normalize
+        env[f"e{i}"], env[f"d{i}"], env[f"n{i}"] = k.encoder(), k.decode, k.normalize
         args = ", ".join(f"self.{a}" for a in k.attrs)
         raw = ", ".join(f"r{j}" for j in range(at, at + len(k.wire)))
         at += len(k.wire)
