@@ -128,3 +128,29 @@ def test_a_schema_that_misses_an_attribute_is_refused() -> None:
             enabled: bool = True
 
     assert [cls.__name__ for cls in c._DEFINED].count("Broken") == 0
+
+
+
+def test_every_command_family_runs_on_the_simulator() -> None:
+    """tests/_sim_helpers.FAMILIES (the simulator's command sequence, with the status each
+    answers) lists every command: a command added to the schema needs its row there."""
+    from _sim_helpers import FAMILIES
+
+    listed = {type(command) for command, _ in FAMILIES}
+    assert listed == set(CLASSES) - {c.NullCommand}, "add the command to _sim_helpers.FAMILIES"
+
+
+def test_the_simulator_keeps_the_last_accepted_command_of_each_opcode() -> None:
+    from _sim_helpers import FAMILIES, host_bytes
+    from gcu_async.protocol.packets import decode_gcu_packet
+    from gcu_async.sim import SimulatorModel
+
+    model = SimulatorModel()
+    accepted: dict[int, Command] = {}
+    for command, _ in FAMILIES:
+        (reply,) = model.receive(host_bytes(command))
+        if decode_gcu_packet(reply).feedback.status == 0:
+            accepted[int(command.OPCODE)] = command
+        model.receive(host_bytes())  # the null command: the next may repeat the opcode
+    assert model.state.accepted == accepted
+    assert accepted  # most do succeed on the default pod

@@ -124,7 +124,10 @@ class Executor:
         handler = handler_for(type(command))
         if handler is None:  # the null command (tests check every other command has one)
             return FAILED
-        return handler(self, command, main, now)
+        status = handler(self, command, main, now)
+        if status == SUCCESS:
+            self.state.accepted[opcode] = command
+        return status
 
     def calibration_status(self, now: float) -> int:
         """0x02 while a calibration runs, 0x00 once it has finished."""
