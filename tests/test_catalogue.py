@@ -22,6 +22,7 @@ from typing import Any
 
 import pytest
 
+from _catalogue_samples import required_samples
 from gcu_async import GcuSubFrame
 from gcu_async.client.api import CommandMethods
 from gcu_async.errors import FieldRangeError
@@ -58,11 +59,6 @@ VERBS = frozenset({
 LEADING_ONLY = frozenset({"enter", "set", "start", "stop", "toggle"})
 """Verbs that lead: ``zoom_stop`` is a noun phrase (the verb is ``stop``, so ``stop_zoom``)."""
 
-SAMPLES: dict[str, Any] = {
-    "latitude": 47.39, "longitude": 8.54, "altitude": 420.0, "box": (0.4, 0.4, 0.6, 0.6),
-    "x": 0.5, "y": 0.5, "ratio": 10.0, "fraction": 0.5, "offset_hours": 1, "brightness": 128,
-}  # fmt: skip
-"""Values for the parameters without a default, in range for every method."""
 
 
 class Recorder(CommandMethods):
@@ -113,7 +109,7 @@ def camel(name: str) -> str:
 
 
 def required_kwargs(entry: CatalogueEntry) -> dict[str, Any]:
-    return {p.name: SAMPLES[p.name] for p in entry.parameters if p.required}
+    return required_samples(entry)
 
 
 async def sent(entry: CatalogueEntry, **kwargs: Any) -> list[Command]:

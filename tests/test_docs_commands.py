@@ -20,6 +20,7 @@ from typing import Any, NamedTuple
 
 import pytest
 
+from _catalogue_samples import sample
 from gcu_async import GcuClient, GcuSubFrame
 from gcu_async.client.api import CommandMethods
 from gcu_async.protocol import Attitude, CameraFlags, Command, ControlValues, Feedback, command_code
@@ -35,11 +36,6 @@ CLIENT_DOC = ROOT / "docs" / "client.md"
 START = "<!-- --8<-- [start:commands] -->"
 END = "<!-- --8<-- [end:commands] -->"
 PARAM_NAME = re.compile(r"`([a-z_][a-z0-9_]*)`")
-# Values for the parameters without a default (by name), in range for every method.
-SAMPLES: dict[str, Any] = {
-    "latitude": 47.39, "longitude": 8.54, "altitude": 420.0, "box": (0.4, 0.4, 0.6, 0.6),
-    "x": 0.5, "y": 0.5, "ratio": 10.0, "fraction": 0.5, "offset_hours": 1, "brightness": 128,
-}  # fmt: skip
 
 
 class Row(NamedTuple):
@@ -130,8 +126,9 @@ def test_row_matches_the_client(row: Row) -> None:
 @pytest.mark.parametrize("row", ROWS, ids=lambda r: r.method)
 async def test_row_sends_its_opcode(row: Row) -> None:
     signature = inspect.signature(getattr(CommandMethods, row.method))
+    entry = next(e for e in CATALOGUE if e.method == row.method)
     kwargs = {
-        p.name: SAMPLES[p.name]
+        p.name: sample(entry.parameter(p.name))
         for p in signature.parameters.values()
         if p.name != "self" and p.default is inspect.Parameter.empty
     }
