@@ -13,6 +13,7 @@ from typing import Any
 
 import pytest
 
+from _catalogue_samples import required_samples
 from gcu_async import CommandFailed, GcuClient, LinkLost, Mode, Opcode
 from gcu_async.protocol import (
     CameraFlags,
@@ -21,7 +22,10 @@ from gcu_async.protocol import (
     PodStatus,
     ThermalFlags,
 )
+from gcu_async.protocol.catalogue import CATALOGUE
+from gcu_async.protocol.pods import supports
 from gcu_async.pytest_plugin import TRANSPORTS, SimHandle
+from gcu_async.sim import DEFAULT_POD
 
 
 @pytest.fixture(params=TRANSPORTS)
@@ -48,43 +52,55 @@ Call = Callable[[GcuClient], Awaitable[Any]]
 # (call, opcode) for every command the default pod (D-90Pro(TA)) supports
 ROUND_TRIPS: list[tuple[str, Call, Opcode]] = [
     ("centre", lambda g: g.centre(), Opcode.CENTRE),
-    ("euler", lambda g: g.enter_euler_control(pitch=-10.0, yaw=20.0), Opcode.EULER_CONTROL),
-    ("angle", lambda g: g.enter_angle_control(pitch=-5.0, yaw=5.0), Opcode.ANGLE_CONTROL),
-    ("fpv", lambda g: g.enter_fpv(pitch=-5.0), Opcode.FPV),
-    ("lock", lambda g: g.enter_pointing_lock(yaw_rate=2.0), Opcode.POINTING_LOCK),
-    ("follow", lambda g: g.enter_pointing_follow(), Opcode.POINTING_FOLLOW),
-    ("top-down", lambda g: g.enter_top_down(), Opcode.TOP_DOWN),
-    ("gaze-lock", lambda g: g.enter_gaze_lock(), Opcode.GAZE_LOCK),
-    ("gaze-at", lambda g: g.gaze_at(47.39, 8.54, 420.0), Opcode.GAZE_AT_COORDINATES),
+    ("enter_euler_control", lambda g: g.enter_euler_control(pitch=-10.0, yaw=20.0),
+     Opcode.EULER_CONTROL),
+    ("enter_angle_control", lambda g: g.enter_angle_control(pitch=-5.0, yaw=5.0),
+     Opcode.ANGLE_CONTROL),
+    ("enter_fpv", lambda g: g.enter_fpv(pitch=-5.0), Opcode.FPV),
+    ("enter_pointing_lock", lambda g: g.enter_pointing_lock(yaw_rate=2.0), Opcode.POINTING_LOCK),
+    ("enter_pointing_follow", lambda g: g.enter_pointing_follow(), Opcode.POINTING_FOLLOW),
+    ("enter_top_down", lambda g: g.enter_top_down(), Opcode.TOP_DOWN),
+    ("enter_gaze_lock", lambda g: g.enter_gaze_lock(), Opcode.GAZE_LOCK),
+    ("gaze_at", lambda g: g.gaze_at(47.39, 8.54, 420.0), Opcode.GAZE_AT_COORDINATES),
     ("track", lambda g: g.track((0.4, 0.4, 0.6, 0.6)), Opcode.TRACK),
-    ("stop-track", lambda g: g.stop_tracking(), Opcode.TRACK),
-    ("click", lambda g: g.click_to_pan(0.7, 0.3), Opcode.CLICK_TO_PAN),
-    ("photo", lambda g: g.take_photo(), Opcode.TAKE_PHOTO),
-    ("record", lambda g: g.toggle_recording(), Opcode.RECORD),
-    ("zoom-in", lambda g: g.zoom_in(), Opcode.ZOOM_IN),
-    ("zoom-stop", lambda g: g.stop_zoom(), Opcode.ZOOM_STOP),
-    ("zoom-out", lambda g: g.zoom_out(), Opcode.ZOOM_OUT),
-    ("zoom-to", lambda g: g.zoom_to(4.0), Opcode.ZOOM_TO),
-    ("zoom-fraction", lambda g: g.zoom_to_fraction(0.5), Opcode.ZOOM_TO),
+    ("stop_tracking", lambda g: g.stop_tracking(), Opcode.TRACK),
+    ("click_to_pan", lambda g: g.click_to_pan(0.7, 0.3), Opcode.CLICK_TO_PAN),
+    ("take_photo", lambda g: g.take_photo(), Opcode.TAKE_PHOTO),
+    ("toggle_recording", lambda g: g.toggle_recording(), Opcode.RECORD),
+    ("zoom_in", lambda g: g.zoom_in(), Opcode.ZOOM_IN),
+    ("stop_zoom", lambda g: g.stop_zoom(), Opcode.ZOOM_STOP),
+    ("zoom_out", lambda g: g.zoom_out(), Opcode.ZOOM_OUT),
+    ("zoom_to", lambda g: g.zoom_to(4.0), Opcode.ZOOM_TO),
+    ("zoom_to_fraction", lambda g: g.zoom_to_fraction(0.5), Opcode.ZOOM_TO),
     ("focus", lambda g: g.focus(), Opcode.FOCUS),
-    ("palette", lambda g: g.set_palette(3), Opcode.PALETTE),
-    ("night", lambda g: g.set_night_vision(NightVisionMode.AUTO), Opcode.NIGHT_VISION),
-    ("area-t", lambda g: g.set_area_temperature(True, (0.1, 0.1, 0.5, 0.5)),
+    ("set_palette", lambda g: g.set_palette(3), Opcode.PALETTE),
+    ("set_night_vision", lambda g: g.set_night_vision(NightVisionMode.AUTO), Opcode.NIGHT_VISION),
+    ("set_area_temperature", lambda g: g.set_area_temperature(True, (0.1, 0.1, 0.5, 0.5)),
      Opcode.AREA_TEMPERATURE),
-    ("alarm", lambda g: g.set_temperature_alarm(True, high=80.0, low=-10.0),
+    ("set_temperature_alarm", lambda g: g.set_temperature_alarm(True, high=80.0, low=-10.0),
      Opcode.TEMPERATURE_ALARM),
-    ("isotherm", lambda g: g.set_isotherm(True, high=60.0, low=20.0), Opcode.ISOTHERM),
-    ("spot-t", lambda g: g.set_spot_temperature(True, 0.5, 0.5), Opcode.SPOT_TEMPERATURE),
-    ("osd", lambda g: g.set_osd(True), Opcode.OSD),
-    ("osd-coords", lambda g: g.set_osd_coordinates(1), Opcode.OSD_COORDINATES),
-    ("auto-flip", lambda g: g.set_image_auto_flip(False), Opcode.IMAGE_AUTO_FLIP),
-    ("time-zone", lambda g: g.set_time_zone(-5), Opcode.TIME_ZONE),
-    ("pip", lambda g: g.set_picture_in_picture(2), Opcode.PICTURE_IN_PICTURE),
-    ("detect", lambda g: g.set_target_detection(True), Opcode.TARGET_DETECTION),
-    ("digital", lambda g: g.set_digital_zoom(True), Opcode.DIGITAL_ZOOM),
-    ("ranging", lambda g: g.set_ranging(True), Opcode.RANGING),
+    ("set_isotherm", lambda g: g.set_isotherm(True, high=60.0, low=20.0), Opcode.ISOTHERM),
+    ("set_spot_temperature", lambda g: g.set_spot_temperature(True, 0.5, 0.5),
+     Opcode.SPOT_TEMPERATURE),
+    ("set_osd", lambda g: g.set_osd(True), Opcode.OSD),
+    ("set_osd_coordinates", lambda g: g.set_osd_coordinates(1), Opcode.OSD_COORDINATES),
+    ("set_image_auto_flip", lambda g: g.set_image_auto_flip(False), Opcode.IMAGE_AUTO_FLIP),
+    ("set_time_zone", lambda g: g.set_time_zone(-5), Opcode.TIME_ZONE),
+    ("set_picture_in_picture", lambda g: g.set_picture_in_picture(2), Opcode.PICTURE_IN_PICTURE),
+    ("set_target_detection", lambda g: g.set_target_detection(True), Opcode.TARGET_DETECTION),
+    ("set_digital_zoom", lambda g: g.set_digital_zoom(True), Opcode.DIGITAL_ZOOM),
+    ("set_ranging", lambda g: g.set_ranging(True), Opcode.RANGING),
     ("calibrate", lambda g: g.calibrate(timeout=10.0), Opcode.CALIBRATION),
 ]
+STATE_CHECKED = {"start_recording", "stop_recording"}
+"""Sent or not by the recording flag: tests/test_client_waiting.py and the web example's."""
+ROUND_TRIPS += [  # the rest of the catalogue with its samples: a new command runs here unlisted
+    (e.method, lambda g, e=e: getattr(g, e.method)(**required_samples(e)), e.opcode)
+    for e in CATALOGUE
+    if e.method not in {name for name, _, _ in ROUND_TRIPS} | STATE_CHECKED
+    and supports(DEFAULT_POD, e.opcode)
+]
+"""(method, call, opcode) for every command method the default pod (D-90Pro(TA)) supports."""
 
 
 async def hover(gcu: GcuClient, period: float = 0.1) -> None:
@@ -110,6 +126,9 @@ async def test_every_command_round_trip(gcu_sim: SimHandle, gcu_client: GcuClien
         feed.cancel()
     # every command ran exactly once on the GCU (nothing twice, nothing skipped)
     assert {op: model.executions[op] for op in expected} == expected
+    assert {name for name, _, _ in ROUND_TRIPS} | STATE_CHECKED == {
+        e.method for e in CATALOGUE if supports(DEFAULT_POD, e.opcode)
+    }
     # the one Appendix 8 command this pod lacks answers with the failure status
     with pytest.raises(CommandFailed) as info:
         await gcu_client.set_fill_light(100)
