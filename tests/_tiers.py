@@ -133,6 +133,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_protocol_pods.py": FAST,
     "test_protocol_ranges.py": FAST,
     "test_protocol_roundtrip.py": (FAST, HEAVY),
+    "test_protocol_schema.py": FAST,
     "test_protocol_vectors.py": FAST,
     "test_public_surface.py": FAST,
     "test_pytest_plugin_without_asyncio.py": "subprocess",

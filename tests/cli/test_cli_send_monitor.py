@@ -13,7 +13,11 @@ from collections.abc import Iterator
 
 import pytest
 
+from _catalogue_samples import required_samples
 from gcu_async import Mode
+from gcu_async.protocol.catalogue import CATALOGUE
+from gcu_async.protocol.pods import supports
+from gcu_async.sim import DEFAULT_POD
 
 CLI = [sys.executable, "-m", "gcu_async.cli"]
 
@@ -50,9 +54,27 @@ def sim_url() -> Iterator[str]:
                 proc.stdout.close()
 
 
+def _derived_sends() -> list[tuple[list[str], int]]:
+    """``send`` of every other command the simulated pod executes, with the catalogue's
+    samples as its arguments (a new command is sent here without a row of its own)."""
+    listed = {"take-photo", "zoom-to", "enter-euler-control", "enter-pointing-lock", "track",
+              "set-night-vision", "set-ranging", "set-area-temperature"}  # fmt: skip
+    cases = []
+    for e in CATALOGUE:
+        if (e.cli_name in listed or e.needs_ins or not supports(DEFAULT_POD, e.opcode)
+                or e.method in ("start_recording", "stop_recording")):  # fmt: skip
+            continue  # by the recording flag: tests/test_client_waiting.py
+        args = []
+        for value in required_samples(e).values():
+            args += [str(v) for v in value] if isinstance(value, tuple) else [str(value)]
+        cases.append(([e.cli_name, *args], int(e.opcode)))
+    return cases
+
+
 @pytest.mark.parametrize(
     ("command", "opcode"),
     [
+        *_derived_sends(),
         (["take-photo"], 0x20),
         (["zoom-to", "12.5"], 0x25),
         (["enter-euler-control", "0", "-30", "45"], 0x14),

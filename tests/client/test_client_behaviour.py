@@ -14,6 +14,7 @@ from typing import Any
 
 import pytest
 
+from _catalogue_samples import required_samples
 from gcu_async import CommandFailed, GcuClient, LinkLost, Mode
 from gcu_async.protocol import (
     CameraFlags,
@@ -47,11 +48,6 @@ async def wait_for(
         await asyncio.sleep(0.01)
 
 
-SAMPLES: dict[str, Any] = {
-    "latitude": 47.39, "longitude": 8.54, "altitude": 420.0, "box": (0.4, 0.4, 0.6, 0.6),
-    "x": 0.7, "y": 0.3, "ratio": 4.0, "fraction": 0.5, "offset_hours": -5, "brightness": 100,
-}  # fmt: skip
-"""Values for the parameters without a default, by name (a new one fails the test)."""
 ARGUMENTS: dict[str, dict[str, Any]] = {
     "enter_euler_control": {"pitch": -10.0, "yaw": 20.0},
     "enter_angle_control": {"pitch": -5.0, "yaw": 5.0},
@@ -77,7 +73,7 @@ ORDER = sorted(CATALOGUE, key=lambda e: (e.method not in FIRST, e.method in LAST
 
 
 def arguments(entry: CatalogueEntry) -> dict[str, Any]:
-    given = {p.name: SAMPLES[p.name] for p in entry.parameters if p.required}
+    given = required_samples(entry)
     return {**given, **ARGUMENTS.get(entry.method, {})}
 
 

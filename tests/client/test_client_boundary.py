@@ -71,6 +71,7 @@ from gcu_async.protocol import (
     TakePhoto,
     ZoomTo,
 )
+from gcu_async.protocol.catalogue import CATALOGUE, Kind
 from gcu_async.protocol.gpstime import GPS_EPOCH
 from gcu_async.session import TelemetrySample
 from gcu_async.sim import GcuSimulator, SimulatorModel
@@ -364,6 +365,15 @@ method("set_time_zone", "offset_hours", "int", low=-12, high=14, valid=(-12, 0, 
 method("set_picture_in_picture", "mode", "int", low=0, high=4, valid=(0, 4), read=cmd("mode"))
 method("set_fill_light", "brightness", "int", low=0, high=255, valid=(0, 255),
        read=cmd("brightness"))  # fmt: skip
+
+# the integer parameters no row above names (a new command's): from the catalogue's range
+for _entry in CATALOGUE:
+    for _p in _entry.parameters:
+        _listed = {q.param for q in PARAMS if q.owner == _entry.method}
+        if _p.kind is Kind.INTEGER and _p.name not in _listed:
+            assert _p.low is not None and _p.high is not None
+            method(_entry.method, _p.name, "int", low=int(_p.low), high=int(_p.high),
+                   valid=(int(_p.low), int(_p.high)), read=cmd(_p.name))  # fmt: skip
 
 # -- execute()
 _CMD_WRONG = ("photo", None, 0x20, Opcode.TAKE_PHOTO, TakePhoto, Feedback(0x20),

@@ -12,7 +12,6 @@ must have a row, so the table cannot silently drift.
 
 from __future__ import annotations
 
-import enum
 import inspect
 import re
 import sys
@@ -22,22 +21,21 @@ from typing import Any, NamedTuple
 import pytest
 
 import _client_methods
+from _catalogue_samples import sample
 from gcu_async import GcuClient
 from gcu_async.protocol import command_code
 from gcu_async.protocol.builder import build
-from gcu_async.protocol.catalogue import CATALOGUE, REQUIRED, CatalogueEntry, Kind, Parameter
+from gcu_async.protocol.catalogue import CATALOGUE
 
 ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "docs" / "_ext"))
+import hooks  # noqa: E402 - the docs build's hook, from its folder
+
 README = ROOT / "README.md"
 CLIENT_DOC = ROOT / "docs" / "client.md"
 START = "<!-- --8<-- [start:commands] -->"
 END = "<!-- --8<-- [end:commands] -->"
 PARAM_NAME = re.compile(r"`([a-z_][a-z0-9_]*)`")
-# Values for the parameters without a default (by name), in range for every method.
-SAMPLES: dict[str, Any] = {
-    "latitude": 47.39, "longitude": 8.54, "altitude": 420.0, "box": (0.4, 0.4, 0.6, 0.6),
-    "x": 0.5, "y": 0.5, "ratio": 10.0, "fraction": 0.5, "offset_hours": 1, "brightness": 128,
-}  # fmt: skip
 
 
 class Row(NamedTuple):
@@ -60,7 +58,7 @@ def table_rows(text: str) -> list[Row]:
     return rows
 
 
-ROWS = table_rows(CLIENT_DOC.read_text(encoding="utf-8"))
+ROWS = table_rows("\n".join([START, hooks.command_table(), END]))
 
 
 def command_methods() -> set[str]:
@@ -90,8 +88,9 @@ def test_row_matches_the_client(row: Row) -> None:
 @pytest.mark.parametrize("row", ROWS, ids=lambda r: r.method)
 async def test_row_sends_its_opcode(row: Row) -> None:
     signature = inspect.signature(getattr(GcuClient, row.method))
+    entry = next(e for e in CATALOGUE if e.method == row.method)
     kwargs = {
-        p.name: SAMPLES[p.name]
+        p.name: sample(entry.parameter(p.name))
         for p in signature.parameters.values()
         if p.name != "self" and p.default is inspect.Parameter.empty
     }
@@ -147,7 +146,7 @@ class Spy:
 def test_cli_send_table_matches_the_cli() -> None:
     from gcu_async.cli.send_commands import COMMANDS
 
-    rows = cli_rows(CLI_DOC.read_text(encoding="utf-8"))
+    rows = cli_rows(rendered(CLI_DOC))
     assert [r.command for r in rows] == list(COMMANDS)
     for row in rows:
         spec = COMMANDS[row.command]
@@ -158,67 +157,37 @@ def test_cli_send_table_matches_the_cli() -> None:
         assert hasattr(GcuClient, row.method)
 
 
-# -- the tables, generated from the catalogue ---------------------------------------------
-def _value(value: object) -> str:
-    if isinstance(value, enum.Enum):
-        return value.name
-    return f"{value:g}" if isinstance(value, float) else str(value)
-
-
-def _param_cell(p: Parameter) -> str:
-    """``name``: range unit (default), the doc."""
-    text = f"`{p.name}`"
-    bounds = " ".join(part for part in (p.range_text(), p.unit) if part)
-    if p.choices is not None:
-        bounds = f"`{p.choices.__name__}` {p.range_text()}"
-    detail = "; ".join(part for part in (bounds, p.doc) if part)
-    if p.default is None:
-        detail += " (default: the current one)"
-    elif p.default is not REQUIRED:
-        detail += f" (default {_value(p.default)})"
-    return f"{text}: {detail}" if p.kind is not Kind.CAMERAS else f"{text} ({_value(p.default)})"
-
-
-def _notes(entry: CatalogueEntry) -> str:
-    rule = entry.status.value
-    return f"{entry.doc} Status: {rule}." if entry.status.name != "STANDARD" else entry.doc
-
-
+# -- the tables, generated from the catalogue by the docs build's hook --------------------
 def client_table() -> str:
-    """The command table of docs/client.md, from the catalogue."""
-    lines = [START, "| Method | Opcode | Parameters: range unit; what (default) | Notes |",
-             "|---|---|---|---|"]  # fmt: skip
-    for e in CATALOGUE:
-        params = "<br>".join(_param_cell(p) for p in e.parameters) or "—"
-        lines.append(f"| `{e.method}` | 0x{e.opcode:02X} | {params} | {_notes(e)} |")
-    return "\n".join([*lines, END])
+    """The command section of docs/client.md as the docs build renders it."""
+    return "\n".join([START, hooks.command_table(), END])
 
 
 def cli_table() -> str:
-    """The ``send`` table of docs/cli.md, from the commands (made from the catalogue)."""
-    from gcu_async.cli.send_commands import COMMANDS
+    """The ``send`` section of docs/cli.md as the docs build renders it."""
+    return "\n".join([CLI_START, hooks.send_table(), CLI_END])
 
-    lines = [CLI_START, "| Command | Arguments | Client method |", "|---|---|---|"]
-    for name, spec in COMMANDS.items():
-        args = " ".join(f"[`{p.name}`]" if p.optional else f"`{p.name}`" for p in spec.params)
-        lines.append(f"| `{name}` | {args or '—'} | `{spec.method}` |")
-    return "\n".join([*lines, CLI_END])
+
+def rendered(path: Path) -> str:
+    """``path`` as the docs build renders it (the hook fills in the tables)."""
+    return str(hooks.on_page_markdown(path.read_text(encoding="utf-8")))
 
 
 def _section(text: str, start: str, end: str) -> str:
     return text[text.index(start) : text.index(end) + len(end)]
 
 
-def test_client_table_is_the_catalogue() -> None:
+def test_client_table_is_generated_not_pasted() -> None:
     text = CLIENT_DOC.read_text(encoding="utf-8")
-    assert _section(text, START, END) == client_table(), (
-        "run tests/docs/test_docs_commands.py --write"
-    )
+    assert _section(text, START, END) == "\n".join([START, hooks.COMMANDS, END])
+    assert _section(rendered(CLIENT_DOC), START, END) == client_table()
 
 
-def test_cli_table_is_the_catalogue() -> None:
+def test_cli_table_is_generated_not_pasted() -> None:
     text = CLI_DOC.read_text(encoding="utf-8")
-    assert _section(text, CLI_START, CLI_END) == cli_table(), "run with --write"
+    placeholder = "\n".join([CLI_START, hooks.SEND_COMMANDS, CLI_END])
+    assert _section(text, CLI_START, CLI_END) == placeholder
+    assert _section(rendered(CLI_DOC), CLI_START, CLI_END) == cli_table()
 
 
 def test_readme_table_if_any_is_the_docs_one() -> None:
@@ -235,15 +204,5 @@ def test_generated_table_parses_back() -> None:
         assert row.params == {p.name for p in entry.parameters}, entry.method
 
 
-def _write() -> None:
-    for path, start, end, table in ((CLIENT_DOC, START, END, client_table()),
-                                    (CLI_DOC, CLI_START, CLI_END, cli_table())):  # fmt: skip
-        text = path.read_text(encoding="utf-8")
-        path.write_text(text.replace(_section(text, start, end), table), encoding="utf-8")
-
-
 if __name__ == "__main__":
-    if sys.argv[1:] == ["--write"]:
-        _write()
-    else:
-        print(client_table())
+    print(client_table())

@@ -18,11 +18,14 @@ from typing import Any
 
 import pytest
 
+from _catalogue_samples import required_samples
 from _web_deps import require_web
 from gcu_async import GcuClient, Opcode
 from gcu_async.client import ClientState
+from gcu_async.protocol.catalogue import CATALOGUE
+from gcu_async.protocol.pods import supports
 from gcu_async.pytest_plugin import SimHandle
-from gcu_async.sim import GcuSimulator
+from gcu_async.sim import DEFAULT_POD, GcuSimulator
 
 require_web()
 from websockets.asyncio.client import ClientConnection  # noqa: E402
@@ -178,18 +181,26 @@ EVERY_COMMAND: dict[str, tuple[dict[str, Any], Opcode]] = {
     "set_image_auto_flip": ({"enabled": False}, Opcode.IMAGE_AUTO_FLIP),
     "set_time_zone": ({"offset_hours": 2}, Opcode.TIME_ZONE),
 }
-FAILS_ON_D90PRO_TA = {"set_fill_light": ({"brightness": 100}, Opcode.FILL_LIGHT)}
-FAIL_WITHOUT_INS: dict[str, tuple[dict[str, Any], Opcode]] = {
-    "enter_gaze_lock": ({}, Opcode.GAZE_LOCK),
-    "gaze_at": ({"latitude": 47.39, "longitude": 8.54, "altitude": 420.0},
-                Opcode.GAZE_AT_COORDINATES),
+EVERY_COMMAND.update({  # the rest of the catalogue (a new command runs here unlisted)
+    e.method: (required_samples(e), e.opcode) for e in CATALOGUE
+    if e.method not in EVERY_COMMAND and not e.needs_ins and supports(DEFAULT_POD, e.opcode)
+})  # fmt: skip
+FAILS_ON_D90PRO_TA = {
+    e.method: (required_samples(e), e.opcode)
+    for e in CATALOGUE if not supports(DEFAULT_POD, e.opcode)
 }  # fmt: skip
+"""Appendix 8: the default simulated pod lacks these."""
+FAIL_WITHOUT_INS: dict[str, tuple[dict[str, Any], Opcode]] = {
+    e.method: (required_samples(e), e.opcode) for e in CATALOGUE if e.needs_ins
+}
 """The web app sends no aircraft INS data: the simulated GCU refuses the gaze commands."""
 
 
 def test_every_exposed_command_is_covered() -> None:
     covered = set(EVERY_COMMAND) | set(FAILS_ON_D90PRO_TA) | set(FAIL_WITHOUT_INS)
-    assert covered == set(COMMANDS)
+    assert covered == set(COMMANDS) == {e.method for e in CATALOGUE}
+    assert not set(EVERY_COMMAND) & (set(FAILS_ON_D90PRO_TA) | set(FAIL_WITHOUT_INS))
+    assert FAILS_ON_D90PRO_TA and FAIL_WITHOUT_INS
 
 
 async def test_gaze_commands_reach_the_gcu_and_fail_without_ins(web: Web) -> None:

@@ -23,6 +23,7 @@ from typing import Any
 import pytest
 
 import _client_methods
+from _catalogue_samples import required_samples
 from gcu_async import GcuClient
 from gcu_async.errors import FieldRangeError
 from gcu_async.protocol import (
@@ -54,11 +55,6 @@ VERBS = frozenset({
 LEADING_ONLY = frozenset({"enter", "set", "start", "stop", "toggle"})
 """Verbs that lead: ``zoom_stop`` is a noun phrase (the verb is ``stop``, so ``stop_zoom``)."""
 
-SAMPLES: dict[str, Any] = {
-    "latitude": 47.39, "longitude": 8.54, "altitude": 420.0, "box": (0.4, 0.4, 0.6, 0.6),
-    "x": 0.5, "y": 0.5, "ratio": 10.0, "fraction": 0.5, "offset_hours": 1, "brightness": 128,
-}  # fmt: skip
-"""Values for the parameters without a default, in range for every method."""
 
 
 def command_methods() -> set[str]:
@@ -71,7 +67,7 @@ def camel(name: str) -> str:
 
 
 def required_kwargs(entry: CatalogueEntry) -> dict[str, Any]:
-    return {p.name: SAMPLES[p.name] for p in entry.parameters if p.required}
+    return required_samples(entry)
 
 
 async def sent(entry: CatalogueEntry, **kwargs: Any) -> list[Command]:

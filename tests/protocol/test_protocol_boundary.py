@@ -29,6 +29,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from _catalogue_samples import required_samples
 from _protocol_strategies import FRAME_SCHEMAS, RAW_RANGES
 from _scale import scaled
 from gcu_async.errors import FieldRangeError
@@ -38,11 +39,9 @@ from gcu_async.protocol import (
     Attitude,
     AxisAngles,
     CameraMask,
-    ClickToPan,
     Command,
     ControlValues,
     Feedback,
-    GazeAtCoordinates,
     GcuMainFrame,
     GcuPacket,
     GcuSubFrame,
@@ -52,7 +51,6 @@ from gcu_async.protocol import (
     HostSubFrame,
     ImageBox,
     ImagePoint,
-    Isotherm,
     Mode,
     NightVision,
     NightVisionMode,
@@ -65,11 +63,9 @@ from gcu_async.protocol import (
     PodModel,
     SpotTemperature,
     TakePhoto,
-    TemperatureAlarm,
     Track,
     UnknownCommand,
     UnknownSubFrame,
-    ZoomTo,
     axes_to_euler,
     command_code,
     crc16_xmodem,
@@ -88,6 +84,20 @@ from gcu_async.protocol import (
     utc_to_gps,
     wrap_degrees_180,
     wrap_degrees_360,
+)
+from gcu_async.protocol.catalogue import CATALOGUE as COMMAND_CATALOGUE
+from gcu_async.protocol.command_fields import (
+    ZOOM_FRACTION,
+    ZOOM_RATIO,
+    Box,
+    Cameras,
+    Choice,
+    Integer,
+    Point,
+    Real,
+    Switch,
+    Thresholds,
+    ZoomValue,
 )
 from gcu_async.protocol.commands import MAX_PARAMS
 from gcu_async.protocol.enums import PIP_MODE_MASK
@@ -150,10 +160,13 @@ def _gcu_rt(main: GcuMainFrame, sub: GcuSubFrame | None = None) -> Any:
 # --- the table ---------------------------------------------------------------------------------
 PARAMS: list[P] = []
 REQUIRED: dict[type[Command], dict[str, Any]] = {
-    GazeAtCoordinates: {"latitude": 0.0, "longitude": 0.0, "altitude": 0.0},
-    ClickToPan: {"point": ImagePoint(0.5, 0.5)},
-    ZoomTo: {"ratio": 2.0},
-}
+    cls: {f.name: required_samples(e)[f.name] for e in COMMAND_CATALOGUE if e.command is cls
+          for f in dataclasses.fields(cls) if f.name in required_samples(e)}
+    for cls in COMMAND_TYPES.values()
+}  # fmt: skip
+"""In-range values of the attributes without a default (from the catalogue's samples)."""
+REQUIRED[COMMAND_TYPES[Opcode.CLICK_TO_PAN]] = {"point": ImagePoint(0.5, 0.5)}
+REQUIRED[COMMAND_TYPES[Opcode.ZOOM_TO]] = {"ratio": 2.0}
 TUPLE_BASE: dict[type[Any], tuple[float, ...]] = {
     ImageBox: (0.0, 0.0, 1.0, 1.0),
     ImagePoint: (0.5, 0.5),
@@ -206,45 +219,51 @@ def add_command_tuple(cls: type[Command], param: str, tcls: type[Any], step: flo
 
 
 BOOL_VALID = (True, False)
+
+
+def _add_kind(cls: type[Command], kind: Any) -> None:
+    """The boundary rows of one schema parameter of ``cls``: its range, step and types."""
+    if isinstance(kind, Cameras):
+        add_command(cls, "cameras", "int", low=1, high=255, valid=MASKS)
+    elif isinstance(kind, Switch):
+        add_command(cls, kind.name, "bool", valid=BOOL_VALID)
+    elif isinstance(kind, (Box, Point)):
+        add_command_tuple(cls, kind.name, ImageBox if isinstance(kind, Box) else ImagePoint, 1e-4)
+    elif isinstance(kind, Integer):
+        w = kind.field_
+        zero = (0,) if w.raw_low < 0 < w.raw_high else ()
+        add_command(cls, w.name, "int", low=w.raw_low, high=w.raw_high,
+                    valid=(w.raw_low, *zero, w.raw_high))  # fmt: skip
+    elif isinstance(kind, Choice):
+        w = kind.wire[0]
+        add_command(cls, w.name, "enum", low=w.raw_low, high=w.raw_high,
+                    valid=(*kind.enum, w.raw_low, w.raw_high))  # fmt: skip
+    elif isinstance(kind, Real):
+        w = kind.field_
+        low, high = w.raw_low / w.scale, w.raw_high / w.scale
+        step = (1 / w.scale,) if low < 1 / w.scale < high else ()  # one wire step above 0
+        add_command(cls, w.name, "real", low=low, high=high, step=1 / w.scale,
+                    valid=(low, high, *step))  # fmt: skip
+    elif isinstance(kind, Thresholds):
+        h, lo = kind.wire
+        low, high = h.raw_low / h.scale, h.raw_high / h.scale
+        # high with low at its minimum, low with high at its maximum: only one bound moves
+        add(P(cls.__name__, "high", "high", lambda v, c=cls: c(high=v, low=low), "real",
+              low, high, 1 / h.scale, valid=(low, high), read=lambda c: _cmd_rt(c).high))
+        add(P(cls.__name__, "low", "low", lambda v, c=cls: c(high=high, low=v), "real",
+              low, high, 1 / lo.scale, valid=(low, high), read=lambda c: _cmd_rt(c).low))
+    elif isinstance(kind, ZoomValue):
+        for w, base in ((ZOOM_RATIO, {"ratio": 2.0}), (ZOOM_FRACTION, {})):
+            low, high = w.raw_low / w.scale, w.raw_high / w.scale
+            add_command(cls, w.name, "real", low=low, high=high, step=1 / w.scale,
+                        optional=True, valid=(low, high), base=base)  # fmt: skip
+    else:  # pragma: no cover - a new kind needs its rows here
+        raise AssertionError(f"{cls.__name__}: no boundary rows for {type(kind).__name__}")
+
+
 for _cls in COMMAND_TYPES.values():
-    _names = {f.name for f in dataclasses.fields(_cls)}
-    if "cameras" in _names:
-        add_command(_cls, "cameras", "int", low=1, high=255, valid=MASKS)
-    if "enabled" in _names:
-        add_command(_cls, "enabled", "bool", valid=BOOL_VALID)
-    if "box" in _names:
-        add_command_tuple(_cls, "box", ImageBox, 1e-4)
-    if "point" in _names:
-        add_command_tuple(_cls, "point", ImagePoint, 1e-4)
-add_command(Track, "enter", "bool", valid=BOOL_VALID)
-add_command(GazeAtCoordinates, "latitude", "real", low=-90.0, high=90.0, step=1e-7,
-            valid=(-90.0, 90.0, 1e-7))  # fmt: skip
-add_command(GazeAtCoordinates, "longitude", "real", low=-180.0, high=180.0, step=1e-7,
-            valid=(-180.0, 180.0))  # fmt: skip
-add_command(GazeAtCoordinates, "altitude", "real", low=-2147483.648, high=2147483.647,
-            step=1e-3, valid=(-2147483.648, 2147483.647))  # fmt: skip
-add_command(OsdCoordinates, "coordinates", "enum", low=0, high=1,
-            valid=(*OsdCoordinateSource, 0, 1))  # fmt: skip
-add_command(NightVision, "mode", "enum", low=0, high=2, valid=(*NightVisionMode, 0, 2))
-add_command(COMMAND_TYPES[Opcode.TIME_ZONE], "offset_hours", "int", low=-12, high=14,
-            valid=(-12, 0, 14))  # fmt: skip
-add_command(ZoomTo, "ratio", "real", low=1.0, high=3276.8, step=0.1, optional=True,
-            valid=(1.0, 3276.8))  # fmt: skip
-add_command(ZoomTo, "fraction", "real", low=1e-4, high=1.0, step=1e-4, optional=True,
-            valid=(1e-4, 1.0), base={})  # fmt: skip
-add_command(COMMAND_TYPES[Opcode.PALETTE], "palette", "int", low=0, high=10, valid=(0, 10))
-add_command(COMMAND_TYPES[Opcode.PICTURE_IN_PICTURE], "mode", "int", low=0, high=4,
-            valid=(0, 4))  # fmt: skip
-add_command(COMMAND_TYPES[Opcode.FILL_LIGHT], "brightness", "int", low=0, high=255,
-            valid=(0, 255))  # fmt: skip
-for _cls in (TemperatureAlarm, Isotherm):
-    # high with low at its minimum, low with high at its maximum: only one bound moves
-    add(P(_cls.__name__, "high", "high", lambda v, c=_cls: c(high=v, low=-3276.8), "real",
-          -3276.8, 3276.7, 0.1, valid=(-3276.8, 3276.7),
-          read=lambda c: _cmd_rt(c).high))  # fmt: skip
-    add(P(_cls.__name__, "low", "low", lambda v, c=_cls: c(high=3276.7, low=v), "real",
-          -3276.8, 3276.7, 0.1, valid=(-3276.8, 3276.7),
-          read=lambda c: _cmd_rt(c).low))  # fmt: skip
+    for _kind in _cls.SCHEMA.params:
+        _add_kind(_cls, _kind)
 _KNOWN = frozenset(COMMAND_TYPES)
 add(P("UnknownCommand", "code", "opcode", lambda v: UnknownCommand(code=v), "int", 0, 255,
       valid=(0x02, 0xFF), excluded=_KNOWN.__contains__, bad=(0x00, 0x20, Opcode.TRACK),

@@ -37,8 +37,6 @@ from gcu_async.protocol import (
     ImageBox,
     NullCommand,
     Opcode,
-    Palette,
-    PictureInPicture,
     TakePhoto,
     TemperatureAlarm,
     TimeZone,
@@ -49,6 +47,7 @@ from gcu_async.protocol import (
     decode_gcu_packet,
     decode_host_packet,
 )
+from gcu_async.protocol.command_fields import Cameras, Integer
 from gcu_async.protocol.deframer import GCU_MAX_LENGTH, HOST_MAX_LENGTH
 from gcu_async.session.session import Session
 from gcu_async.sim import ManualClock, SimulatorModel
@@ -203,25 +202,28 @@ def test_anomalous_command_checks_what_it_is_given() -> None:
 
 REQUIRED: dict[type[Command], dict[str, Any]] = {ClickToPan: {"point": (0.5, 0.5)},
                                                  ZoomTo: {"ratio": 2.0}}  # fmt: skip
-MASKED = [cls for cls in COMMAND_TYPES.values() if "cameras" in cls.__dataclass_fields__]
+INTEGER_FIELDS = [
+    (cls, w.name, w.raw_low, w.raw_high)
+    for cls in COMMAND_TYPES.values()
+    for kind in cls.SCHEMA.params if isinstance(kind, (Cameras, Integer))
+    for w in kind.wire
+]  # fmt: skip
+"""Every integer parameter of every command, with its range (from the command schema)."""
 
 
-@given(
-    build=st.sampled_from([
-        *((cls, "cameras") for cls in MASKED),
-        (TimeZone, "offset_hours"),
-        (Palette, "palette"),
-        (PictureInPicture, "mode"),
-    ]),
-    value=st.integers(),
-    data=st.data(),
-)  # fmt: skip
+def test_the_integer_fields_include_the_known_ones() -> None:
+    found = {(cls.__name__, name): (low, high) for cls, name, low, high in INTEGER_FIELDS}
+    assert found[("TimeZone", "offset_hours")] == (-12, 14)
+    assert found[("Palette", "palette")] == (0, 10)
+    assert found[("PictureInPicture", "mode")] == (0, 4)
+    assert found[("TakePhoto", "cameras")] == (1, 255)
+
+
+@given(build=st.sampled_from(INTEGER_FIELDS), value=st.integers(), data=st.data())
 def test_send_side_any_out_of_range_value_raises_naming_the_field(
-    build: tuple[type[Command], str], value: int, data: st.DataObject
+    build: tuple[type[Command], str, int, int], value: int, data: st.DataObject
 ) -> None:
-    cls, field = build
-    ranges = {"cameras": (1, 255), "offset_hours": (-12, 14), "palette": (0, 10), "mode": (0, 4)}
-    low, high = ranges[field]
+    cls, field, low, high = build
     assume(not low <= value <= high)
     kwargs: dict[str, Any] = {**REQUIRED.get(cls, {}), field: value}
     with pytest.raises(FieldRangeError) as info:

@@ -1,17 +1,25 @@
-"""Every command of V2.0.6 (byte 69 + parameters, bytes 70..S-3) as a typed value.
+"""The command schema: every command of V2.0.6 (byte 69 + parameters, bytes 70..S-3), once.
 
-Each command is a frozen dataclass in engineering units, validated when it is built (so a
-bad argument raises before anything is sent) under the package rule
-(:mod:`gcu_async.protocol`): ``bool`` fields take only ``True``/``False``, integer fields
-only ``int`` (camera masks 1–255, ``CameraMask`` members welcome), real fields finite
-``int``/``float`` inside the wire range, enum fields a member or its exact value,
-``box``/``point`` an :class:`ImageBox` / :class:`ImagePoint` (or a plain tuple, stored as
-the NamedTuple) checked element by element. ``encode_params()`` gives the parameter bytes;
-:func:`decode_command` turns opcode + parameter bytes back into the typed command — or, when
-they hold a value outside its range or have the wrong length, into an
+This module is the one place a command is written: its :class:`Opcode` member, and its class
+— a frozen dataclass in engineering units whose ``SCHEMA`` (:class:`CommandSchema`) lists
+its parameters in wire order as kinds (:mod:`gcu_async.protocol.command_fields`: wire type,
+scale, unit, range, doc), its status rule, its mode, its Appendix 8 row, whether it needs INS
+data and the client methods that send it (names and docs). The codec is compiled from the
+schema when this module loads; the catalogue, the mode tables, the feedback sets, the support
+matrix, the dissector's tables (:func:`wire_rows`) and the docs' and tests' tables derive from
+it (docs/architecture.md, "Changing the protocol").
+
+A command is validated when it is built (so a bad argument raises before anything is sent)
+under the package rule (:mod:`gcu_async.protocol`): ``bool`` fields take only
+``True``/``False``, integer fields only ``int`` (camera masks 1–255, ``CameraMask`` members
+welcome), real fields finite ``int``/``float`` inside the wire range, enum fields a member or
+its exact value, ``box``/``point`` an :class:`ImageBox` / :class:`ImagePoint` (or a plain
+tuple, stored as the NamedTuple) checked element by element. ``encode_params()`` gives the
+parameter bytes; :func:`decode_command` turns opcode + parameter bytes back into the typed
+command — or, when they hold a value outside its range or have the wrong length, into an
 :class:`AnomalousCommand` that keeps the bytes and lists the :class:`Anomaly` of each field
-(receive is liberal, send is strict: docs/client.md, "Liberal receive, strict send").
-The first parameter byte of many commands is a camera mask (docs/protocol-notes.md §3 "Camera
+(receive is liberal, send is strict: docs/client.md, "Liberal receive, strict send"). The
+first parameter byte of many commands is a camera mask (docs/protocol-notes.md §3 "Camera
 masks"): it is the ``cameras`` field, defaulting to the value the document shows.
 """
 
@@ -19,27 +27,102 @@ from __future__ import annotations
 
 import struct
 from dataclasses import dataclass, field, fields
+from enum import IntEnum
 from typing import Any, ClassVar, NamedTuple, TypeVar
 
-from gcu_async._checks import check_bool, check_int, type_error
+from gcu_async._checks import check_int, type_error
 from gcu_async.errors import FieldRangeError
-from gcu_async.protocol.anomalies import Anomaly, check_raw
-from gcu_async.protocol.enums import (
-    CameraMask,
-    NightVisionMode,
-    Opcode,
-    OsdCoordinateSource,
-    opcode_name,
+from gcu_async.protocol.anomalies import Anomaly
+from gcu_async.protocol.command_fields import (
+    IMAGE_SCALE as IMAGE_SCALE,
 )
-from gcu_async.protocol.layout import S16, S32
-from gcu_async.protocol.units import check_member, check_tuple, quantize
+from gcu_async.protocol.command_fields import (
+    IMAGE_UNIT as IMAGE_UNIT,
+)
+from gcu_async.protocol.command_fields import (
+    TEMPERATURE,
+    ZOOM_FRACTION,
+    ZOOM_RATIO,
+    Box,
+    Cameras,
+    CommandSchema,
+    Kind,
+    Method,
+    ModeSpec,
+    Parameter,
+    Point,
+    StatusRule,
+    Switch,
+    Thresholds,
+    ZoomValue,
+    choice,
+    integer,
+    real,
+)
+from gcu_async.protocol.enums import CameraMask, Mode, NightVisionMode, OsdCoordinateSource
+from gcu_async.protocol.fields import WIRE_RANGES, struct_of
+from gcu_async.protocol.host_frames import CONTROL_ANGLE_RAW, CONTROL_RATE_RAW
+
+
+class Opcode(IntEnum):
+    """Command opcodes of V2.0.6 (byte 69 of both directions)."""
+
+    NULL = 0x00
+    CALIBRATION = 0x01
+    CENTRE = 0x03
+    OSD_COORDINATES = 0x06
+    IMAGE_AUTO_FLIP = 0x07
+    TIME_ZONE = 0x08
+    ANGLE_CONTROL = 0x10
+    POINTING_LOCK = 0x11
+    POINTING_FOLLOW = 0x12
+    TOP_DOWN = 0x13
+    EULER_CONTROL = 0x14
+    GAZE_AT_COORDINATES = 0x15
+    GAZE_LOCK = 0x16
+    TRACK = 0x17
+    CLICK_TO_PAN = 0x1A
+    FPV = 0x1C
+    TAKE_PHOTO = 0x20
+    RECORD = 0x21
+    ZOOM_IN = 0x22
+    ZOOM_OUT = 0x23
+    ZOOM_STOP = 0x24
+    ZOOM_TO = 0x25
+    FOCUS = 0x26
+    PALETTE = 0x2A
+    NIGHT_VISION = 0x2B
+    AREA_TEMPERATURE = 0x30
+    TEMPERATURE_ALARM = 0x31
+    ISOTHERM = 0x32
+    SPOT_TEMPERATURE = 0x33
+    OSD = 0x73
+    PICTURE_IN_PICTURE = 0x74
+    TARGET_DETECTION = 0x75
+    DIGITAL_ZOOM = 0x76
+    FILL_LIGHT = 0x80
+    RANGING = 0x81
+
+
+_OPCODE_VALUES = frozenset(int(o) for o in Opcode)
+
+
+def opcode_name(opcode: int) -> str:
+    """The protocol name of ``opcode`` (``"UNKNOWN_0x42"`` for opcodes V2.0.6 does not define);
+    ``opcode`` is an ``int`` 0–255 (``TypeError`` / ``FieldRangeError`` otherwise)."""
+    if type(opcode) is not int or not 0 <= opcode <= 0xFF:
+        opcode = check_int("opcode", opcode, 0, 0xFF)
+    return Opcode(opcode).name if opcode in _OPCODE_VALUES else f"UNKNOWN_0x{opcode:02X}"
+
 
 _C = TypeVar("_C", bound="Command")
-_T = TypeVar("_T", bound="_Thresholds")
 
-IMAGE_SCALE = 10000  # image coordinates: U16 [0, 10000], origin top-left
 MAX_PARAMS = 0xFFFF - 72
 """Most parameter bytes a packet can carry (S, a U16, counts 72 bytes besides them)."""
+TEMPERATURE_UNIT = TEMPERATURE.raw_unit
+TEMPERATURE_RAW = (TEMPERATURE.raw_low, TEMPERATURE.raw_high)  # 0.1 °C
+ZOOM_RATIO_MAX = ZOOM_RATIO.raw_high / ZOOM_RATIO.scale
+ZOOM_FRACTION_RAW_MAX = ZOOM_FRACTION.raw_high
 
 
 class ImagePoint(NamedTuple):
@@ -59,82 +142,18 @@ class ImageBox(NamedTuple):
     bottom: float
 
 
-def _img(field_name: str, value: float) -> int:
-    return quantize(field_name, value, IMAGE_SCALE, 0, IMAGE_SCALE, "image fraction")
-
-
-def _box_raw(name: str, box: ImageBox) -> tuple[int, int, int, int]:
-    x0, y0 = _img(f"{name}.left", box.left), _img(f"{name}.top", box.top)
-    x1, y1 = _img(f"{name}.right", box.right), _img(f"{name}.bottom", box.bottom)
-    if x1 < x0:
-        raise FieldRangeError(f"{name}.right", box.right, box.left, 1.0, "image fraction",
-                              detail="right edge must not be left of the left edge")  # fmt: skip
-    if y1 < y0:
-        raise FieldRangeError(f"{name}.bottom", box.bottom, box.top, 1.0, "image fraction",
-                              detail="bottom edge must not be above the top edge")  # fmt: skip
-    return x0, y0, x1, y1
-
-
-def _box(x0: int, y0: int, x1: int, y1: int) -> ImageBox:
-    s = IMAGE_SCALE
-    return ImageBox(x0 / s, y0 / s, x1 / s, y1 / s)
-
-
-def _mask(name: str, cameras: object) -> int:
-    return check_int(name, cameras, 1, 0xFF, "camera mask")
-
-
 def _store(command: Command, name: str, value: object) -> None:
     """Store a checked, normalised field value on a frozen command."""
     object.__setattr__(command, name, value)
 
 
-def _switch(name: str, value: int, on: int = 1) -> bool:
-    if value not in (0, on):
-        raise ValueError(f"{name}: parameter byte 0x{value:02X} is neither 0x00 nor 0x{on:02X}")
-    return value == on
-
-
-# --- raw checks of decoded parameters (the receive side: each gives the anomalies) -----------
-IMAGE_UNIT = "1/10000 of the image"
-TEMPERATURE_UNIT = "0.1 degC"
-
-
-def _mask_raw(value: int) -> tuple[Anomaly, ...]:
-    return check_raw("cameras", value, 1, 0xFF, "camera mask", "0x00 selects no camera")
-
-
-def _switch_raw(name: str, value: int, on: int = 1, meaning: str = "") -> tuple[Anomaly, ...]:
-    if value in (0, on):
-        return ()
-    meaning = meaning or f"0x00 = off, 0x{on:02X} = on"
-    return (Anomaly(name, value, 0, on, "", f"only {meaning}"),)
-
-
-def _point_raw(name: str, x: int, y: int) -> tuple[Anomaly, ...]:
-    return (check_raw(f"{name}.x", x, 0, IMAGE_SCALE, IMAGE_UNIT)
-            + check_raw(f"{name}.y", y, 0, IMAGE_SCALE, IMAGE_UNIT))  # fmt: skip
-
-
-def _box_raw_anomalies(name: str, x0: int, y0: int, x1: int, y1: int) -> tuple[Anomaly, ...]:
-    found: tuple[Anomaly, ...] = ()
-    for edge, value in (("left", x0), ("top", y0), ("right", x1), ("bottom", y1)):
-        found += check_raw(f"{name}.{edge}", value, 0, IMAGE_SCALE, IMAGE_UNIT)
-    if x1 < x0:
-        found += (Anomaly(f"{name}.right", x1, x0, IMAGE_SCALE, IMAGE_UNIT,
-                          "right edge must not be left of the left edge"),)  # fmt: skip
-    if y1 < y0:
-        found += (Anomaly(f"{name}.bottom", y1, y0, IMAGE_SCALE, IMAGE_UNIT,
-                          "bottom edge must not be above the top edge"),)  # fmt: skip
-    return found
-
-
 @dataclass(frozen=True, slots=True)
 class Command:
-    """Base of all commands. ``OPCODE`` is the protocol opcode; ``LAYOUT`` the parameter
-    layout (little-endian)."""
+    """Base of all commands. ``OPCODE`` is the protocol opcode, ``SCHEMA`` the rest of its
+    description; ``LAYOUT`` the parameter layout (little-endian), compiled from the schema."""
 
     OPCODE: ClassVar[Opcode]
+    SCHEMA: ClassVar[CommandSchema] = CommandSchema()
     LAYOUT: ClassVar[struct.Struct] = struct.Struct("<")
 
     def __post_init__(self) -> None:
@@ -144,7 +163,7 @@ class Command:
         self.raw_params()  # validates every field, raising before anything is sent
 
     def _normalize(self) -> None:
-        """Check tuple and enum fields and store them as their classes (none here)."""
+        """Check tuple and enum fields and store them as their classes (compiled)."""
 
     @property
     def opcode(self) -> Opcode:
@@ -156,6 +175,7 @@ class Command:
 
     @classmethod
     def from_raw_params(cls: type[_C], raw: tuple[int, ...]) -> _C:
+        """The command of raw parameters (``ValueError`` for values V2.0.6 does not allow)."""
         return cls()
 
     def encode_params(self) -> bytes:
@@ -166,7 +186,13 @@ class Command:
     def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
         """Every value of the raw parameters (as unpacked by ``LAYOUT``) outside its range:
         empty exactly when :meth:`from_raw_params` accepts them."""
-        return ()
+        found: tuple[Anomaly, ...] = ()
+        at = 0
+        for kind in cls.SCHEMA.params:
+            n = len(kind.wire)
+            found += kind.anomalies(*raw[at : at + n])
+            at += n
+        return found
 
     @classmethod
     def decode_params(cls, params: bytes) -> Command:
@@ -185,16 +211,11 @@ class Command:
 
     def as_dict(self) -> dict[str, Any]:
         """Name, opcode, parameters in units and raw, for JSON output."""
+        kinds = {a: k for k in self.SCHEMA.params for a in k.attrs}
         params: dict[str, Any] = {}
         for f in fields(self):
             v = getattr(self, f.name)
-            if isinstance(v, tuple) and hasattr(v, "_asdict"):
-                v = v._asdict()
-            elif isinstance(v, CameraMask):
-                v = int(v)
-            elif isinstance(v, (NightVisionMode, OsdCoordinateSource)):
-                v = v.name
-            params[f.name] = v
+            params[f.name] = v if v is None else kinds[f.name].json(v)
         return {
             "command": self.OPCODE.name,
             "opcode": int(self.OPCODE),
@@ -204,298 +225,300 @@ class Command:
         }
 
 
-# --- no-parameter commands ------------------------------------------------------------
+_DEFINED: list[type[Command]] = []
+
+
+def _compile(cls: type[_C]) -> type[_C]:
+    """Register a command class and compile its codec from its schema: ``LAYOUT``,
+    ``raw_params``, ``from_raw_params`` and ``_normalize`` as straight-line functions (the hot
+    path runs no loop over the schema)."""
+    kinds = cls.SCHEMA.params
+    attrs = [f.name for f in fields(cls)]
+    owned = [a for k in kinds for a in k.attrs]
+    if sorted(owned) != sorted(attrs):
+        raise TypeError(f"{cls.__name__}: attributes {attrs} but schema parameters {owned}")
+    env: dict[str, Any] = {"_store": _store}
+    enc, dec, norm, unpack = [], [], [], []
+    at = 0
+    for i, k in enumerate(kinds):
+        env[f"e{i}"], env[f"d{i}"], env[f"n{i}"] = k.encoder(), k.decode, k.normalize
+        args = ", ".join(f"self.{a}" for a in k.attrs)
+        raw = ", ".join(f"r{j}" for j in range(at, at + len(k.wire)))
+        at += len(k.wire)
+        enc.append(f"e{i}({args})" if k.scalar else f"*e{i}({args})")
+        if len(k.attrs) == 1:
+            dec.append(f"{k.attrs[0]}=d{i}({raw})")
+        else:
+            unpack.append(f"    v{i} = d{i}({raw})")
+            dec += [f"{a}=v{i}[{j}]" for j, a in enumerate(k.attrs)]
+        if k.normalizes:
+            norm += [f"    _store(self, {a!r}, n{i}(self.{a}))" for a in k.attrs]
+    targets = "".join(f"r{j}, " for j in range(at))
+    src = (f"def raw_params(self):\n    return ({', '.join(enc)}{',' if len(enc) == 1 else ''})\n"
+           f"def from_raw_params(cls, raw):\n    {targets or '_'} = {'raw' if at else '()'}\n"
+           + "".join(line + "\n" for line in unpack)
+           + f"    return cls({', '.join(dec)})\n"
+           f"def _normalize(self):\n" + ("\n".join(norm) or "    pass") + "\n")  # fmt: skip
+    exec(compile(src, f"<codec of {cls.__name__}>", "exec"), env)  # our own text, from the schema
+    cls.LAYOUT = struct_of(cls.SCHEMA.wire)
+    cls.raw_params = env["raw_params"]  # type: ignore[method-assign]
+    cls.from_raw_params = classmethod(env["from_raw_params"])  # type: ignore[method-assign,assignment]
+    cls._normalize = env["_normalize"]  # type: ignore[method-assign]
+    _DEFINED.append(cls)
+    return cls
+
+
+# -- parameters several commands share ---------------------------------------------------------
+CAM1, CAM2 = Cameras(), Cameras()
+"""The camera mask parameter (its default, camera 1 or 2, is the class attribute's)."""
+RATE_LIMIT = CONTROL_RATE_RAW / 10
+"""°/s at zoom 1×: the largest rate the control field carries (it shrinks with zoom)."""
+ANGLE_LIMIT = CONTROL_ANGLE_RAW / 100
+"""Degrees: the largest control angle."""
+YAW_INPUT_RANGE = (-180.0, 360.0)
+"""Degrees, half-open: how every absolute yaw or heading may be given (the Euler yaw of
+``enter_euler_control``, the aircraft's yaw of ``update_aircraft``, the waits): MAVLink's
+±180° headings and compass 0–360° alike; each is sent in the range its wire field takes."""
+
+
+def _angle(name: str, doc: str, default: object = 0.0) -> Parameter:
+    return Parameter(name, Kind.REAL, doc, "deg", -ANGLE_LIMIT, ANGLE_LIMIT, default=default)
+
+
+def _rate(name: str, doc: str) -> Parameter:
+    return Parameter(name, Kind.REAL, f"{doc}; the limit is divided by the current zoom",
+                     "deg/s", -RATE_LIMIT, RATE_LIMIT, default=0.0)  # fmt: skip
+
+
+_EULER = (_angle("roll", "Euler roll", None), _angle("pitch", "Euler pitch", None),
+          Parameter("yaw", Kind.REAL, "Euler yaw (north = 0); 180-360 is sent as -180-0",
+                    "deg", *YAW_INPUT_RANGE, high_open=True, default=None))  # fmt: skip
+_ANGLES = (_angle("roll", "Euler roll"), _angle("pitch", "Euler pitch"),
+           _angle("yaw", "relative to the aircraft"))  # fmt: skip
+_RELATIVE = tuple(_angle(n, "relative to the aircraft") for n in ("roll", "pitch", "yaw"))
+_PITCH_YAW_RATES = (_rate("pitch_rate", "pitch rate"), _rate("yaw_rate", "yaw rate"))
+
+
+# -- the commands, in the order of the docs' command table -------------------------------------
+@_compile
 @dataclass(frozen=True, slots=True)
 class NullCommand(Command):
     """0x00: separates two commands with the same opcode (docs/protocol-notes.md §4 "The
-    same-opcode rule")."""
+    same-opcode rule"). The client sends it by itself: no method."""
 
     OPCODE = Opcode.NULL
 
 
+@_compile
 @dataclass(frozen=True, slots=True)
-class Calibration(Command):
-    """0x01: calibrate the pod (keep it still; answers "in progress" for a few seconds)."""
+class EulerControl(Command):
+    """0x14: Euler-angle control mode. Control values: roll/pitch/yaw Euler angles."""
 
-    OPCODE = Opcode.CALIBRATION
-
-
-@dataclass(frozen=True, slots=True)
-class Centre(Command):
-    """0x03: centre pitch and heading (lock/follow), heading (top-down). Control values must
-    be sent invalid while it runs."""
-
-    OPCODE = Opcode.CENTRE
+    OPCODE = Opcode.EULER_CONTROL
+    SCHEMA = CommandSchema(mode=ModeSpec(Mode.EULER_CONTROL, "angles"), methods=(Method(
+        "enter_euler_control",
+        "Euler-angle control mode holding absolute angles (omitted: the current).", _EULER),))
 
 
+@_compile
 @dataclass(frozen=True, slots=True)
 class AngleControl(Command):
     """0x10: angle-control mode. Control values: roll, pitch = Euler angle; yaw = angle
     relative to the aircraft."""
 
     OPCODE = Opcode.ANGLE_CONTROL
+    SCHEMA = CommandSchema(mode=ModeSpec(Mode.ANGLE_CONTROL, "angles"), methods=(Method(
+        "enter_angle_control",
+        "Angle-control mode: Euler roll/pitch, yaw relative to the aircraft.", _ANGLES),))
 
 
-@dataclass(frozen=True, slots=True)
-class PointingLock(Command):
-    """0x11: pointing-lock mode. Control values: pitch/yaw angular rates."""
-
-    OPCODE = Opcode.POINTING_LOCK
-
-
-@dataclass(frozen=True, slots=True)
-class PointingFollow(Command):
-    """0x12: pointing-follow mode. Control values: pitch/yaw rates (yaw 0 → follow aircraft)."""
-
-    OPCODE = Opcode.POINTING_FOLLOW
-
-
-@dataclass(frozen=True, slots=True)
-class TopDown(Command):
-    """0x13: top-down mode (pitch −90°). Control values: yaw rate."""
-
-    OPCODE = Opcode.TOP_DOWN
-
-
-@dataclass(frozen=True, slots=True)
-class EulerControl(Command):
-    """0x14: Euler-angle control mode. Control values: roll/pitch/yaw Euler angles."""
-
-    OPCODE = Opcode.EULER_CONTROL
-
-
-@dataclass(frozen=True, slots=True)
-class GazeLock(Command):
-    """0x16: gaze (geographic target lock) at the image centre; needs valid aircraft INS."""
-
-    OPCODE = Opcode.GAZE_LOCK
-
-
+@_compile
 @dataclass(frozen=True, slots=True)
 class Fpv(Command):
     """0x1C: FPV mode. Control values: roll/pitch/yaw angles relative to the aircraft."""
 
     OPCODE = Opcode.FPV
+    SCHEMA = CommandSchema(mode=ModeSpec(Mode.FPV, "angles"), methods=(Method(
+        "enter_fpv", "FPV mode: angles relative to the aircraft.", _RELATIVE),))
 
 
-# --- pod commands with parameters -----------------------------------------------------
+@_compile
+@dataclass(frozen=True, slots=True)
+class PointingLock(Command):
+    """0x11: pointing-lock mode. Control values: pitch/yaw angular rates."""
+
+    OPCODE = Opcode.POINTING_LOCK
+    SCHEMA = CommandSchema(mode=ModeSpec(Mode.POINTING_LOCK, "rates"), methods=(Method(
+        "enter_pointing_lock", "Pointing-lock mode with pitch/yaw rates.", _PITCH_YAW_RATES),))
+
+
+@_compile
+@dataclass(frozen=True, slots=True)
+class PointingFollow(Command):
+    """0x12: pointing-follow mode. Control values: pitch/yaw rates (yaw 0 → follow aircraft)."""
+
+    OPCODE = Opcode.POINTING_FOLLOW
+    SCHEMA = CommandSchema(mode=ModeSpec(Mode.POINTING_FOLLOW, "rates"), methods=(Method(
+        "enter_pointing_follow", "Pointing-follow mode; yaw rate 0 follows the aircraft's heading.",
+        _PITCH_YAW_RATES),))
+
+
+@_compile
+@dataclass(frozen=True, slots=True)
+class TopDown(Command):
+    """0x13: top-down mode (pitch −90°). Control values: yaw rate."""
+
+    OPCODE = Opcode.TOP_DOWN
+    SCHEMA = CommandSchema(mode=ModeSpec(Mode.TOP_DOWN, "rates"), methods=(Method(
+        "enter_top_down", "Top-down mode (pitch -90 deg) with a yaw rate.",
+        (_rate("yaw_rate", "yaw rate"),)),))
+
+
+@_compile
+@dataclass(frozen=True, slots=True)
+class GazeLock(Command):
+    """0x16: gaze (geographic target lock) at the image centre; needs valid aircraft INS."""
+
+    OPCODE = Opcode.GAZE_LOCK
+    SCHEMA = CommandSchema(mode=ModeSpec(Mode.GAZE, "rates"), needs_ins=True, methods=(Method(
+        "enter_gaze_lock", "Geographic lock on the image centre; needs valid aircraft INS data.",
+        _PITCH_YAW_RATES),))
+
+
+@_compile
 @dataclass(frozen=True, slots=True)
 class GazeAtCoordinates(Command):
     """0x15: gaze at a geographic coordinate (PP lon, QQ lat: S32 1e-7°; RR alt: S32 mm)."""
 
     OPCODE = Opcode.GAZE_AT_COORDINATES
-    LAYOUT = struct.Struct("<iii")
+    SCHEMA = CommandSchema(
+        params=(real("longitude", "i", "WGS84, 1e-7 deg steps", -1_800_000_000, 1_800_000_000,
+                     1e7, "deg", "1e-7 deg"),
+                real("latitude", "i", "WGS84, 1e-7 deg steps", -900_000_000, 900_000_000, 1e7,
+                     "deg", "1e-7 deg"),
+                real("altitude", "i", "above mean sea level, 1 mm steps", None, None, 1000, "m")),
+        mode=ModeSpec(Mode.GAZE, "rates"), needs_ins=True,
+        methods=(Method("gaze_at", "Gaze at a coordinate; needs valid aircraft INS data."),))
     latitude: float
     longitude: float
     altitude: float
 
-    def raw_params(self) -> tuple[int, ...]:
-        return (
-            quantize("longitude", self.longitude, 1e7, -1_800_000_000, 1_800_000_000, "deg"),
-            quantize("latitude", self.latitude, 1e7, -900_000_000, 900_000_000, "deg"),
-            quantize("altitude", self.altitude, 1000, *S32, "m"),
-        )
 
-    @classmethod
-    def from_raw_params(cls, raw: tuple[int, ...]) -> GazeAtCoordinates:
-        lon, lat, alt = raw
-        return cls(latitude=lat / 1e7, longitude=lon / 1e7, altitude=alt / 1000)
+@_compile
+@dataclass(frozen=True, slots=True)
+class Calibration(Command):
+    """0x01: calibrate the pod (keep it still; answers "in progress" for a few seconds)."""
 
-    @classmethod
-    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
-        lon, lat, _ = raw
-        return (check_raw("longitude", lon, -1_800_000_000, 1_800_000_000, "1e-7 deg")
-                + check_raw("latitude", lat, -900_000_000, 900_000_000, "1e-7 deg"))  # fmt: skip
+    OPCODE = Opcode.CALIBRATION
+    SCHEMA = CommandSchema(status=StatusRule.CALIBRATION, methods=(Method(
+        "calibrate", "Calibrate the pod; waits while the GCU answers \"in progress\".",
+        (Parameter("timeout", Kind.REAL, "how long to wait for the result", "s", 0.0, float("inf"),
+                   low_open=True, high_open=True, default=15.0),)),))  # fmt: skip
 
 
+@_compile
+@dataclass(frozen=True, slots=True)
+class Centre(Command):
+    """0x03: centre pitch and heading (lock/follow), heading (top-down). Control values must
+    be sent invalid while it runs."""
+
+    OPCODE = Opcode.CENTRE
+    SCHEMA = CommandSchema(changes_mode=True, methods=(Method(
+        "centre", "Centre pitch and heading; control values are sent invalid meanwhile.", ()),))
+
+
+@_compile
 @dataclass(frozen=True, slots=True)
 class Track(Command):
     """0x17: enter (``enter=True``) or exit image tracking of the target in ``box``."""
 
     OPCODE = Opcode.TRACK
-    LAYOUT = struct.Struct("<BBHHHH")
+    SCHEMA = CommandSchema(
+        params=(CAM1, Switch("enter", "enter or exit tracking",
+                             meaning="0x00 = exit, 0x01 = enter"), Box()),
+        mode=ModeSpec(Mode.TRACK, "none"), matrix_row=0,
+        methods=(Method("track", "Enter image tracking of the target in the box.",
+                        ("box", "cameras"), required=("box",)),
+                 Method("stop_tracking", "Exit image tracking (same opcode, TT = 0).",
+                        ("cameras",))))  # fmt: skip
     enter: bool = True
     box: ImageBox = ImageBox(0.0, 0.0, 0.0, 0.0)
     cameras: CameraMask | int = CameraMask.CAMERA_1
 
-    def _normalize(self) -> None:
-        _store(self, "box", check_tuple("box", self.box, ImageBox))
 
-    def raw_params(self) -> tuple[int, ...]:
-        return (_mask("cameras", self.cameras), int(check_bool("enter", self.enter)),
-                *_box_raw("box", self.box))  # fmt: skip
-
-    @classmethod
-    def from_raw_params(cls, raw: tuple[int, ...]) -> Track:
-        kk, tt, *box = raw
-        return cls(_switch("enter", tt), _box(*box), CameraMask(kk))
-
-    @classmethod
-    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
-        kk, tt, x0, y0, x1, y1 = raw
-        return (_mask_raw(kk) + _switch_raw("enter", tt, meaning="0x00 = exit, 0x01 = enter")
-                + _box_raw_anomalies("box", x0, y0, x1, y1))  # fmt: skip
-
-
+@_compile
 @dataclass(frozen=True, slots=True)
 class ClickToPan(Command):
     """0x1A: turn the camera so that ``point`` comes to the image centre; the pod then
     switches to pointing-lock. Control values must be invalid while it runs."""
 
     OPCODE = Opcode.CLICK_TO_PAN
-    LAYOUT = struct.Struct("<BHH")
+    SCHEMA = CommandSchema(params=(CAM1, Point()), changes_mode=True, methods=(Method(
+        "click_to_pan", "Bring an image point to the centre; the pod ends in pointing-lock.",
+        ("point", "cameras")),))
     point: ImagePoint
     cameras: CameraMask | int = CameraMask.CAMERA_1
 
-    def _normalize(self) -> None:
-        _store(self, "point", check_tuple("point", self.point, ImagePoint))
 
-    def raw_params(self) -> tuple[int, ...]:
-        return (
-            _mask("cameras", self.cameras),
-            _img("point.x", self.point.x),
-            _img("point.y", self.point.y),
-        )
-
-    @classmethod
-    def from_raw_params(cls, raw: tuple[int, ...]) -> ClickToPan:
-        kk, x, y = raw
-        return cls(ImagePoint(x / IMAGE_SCALE, y / IMAGE_SCALE), CameraMask(kk))
-
-    @classmethod
-    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
-        kk, x, y = raw
-        return _mask_raw(kk) + _point_raw("point", x, y)
-
-
-# --- camera commands ------------------------------------------------------------------
+@_compile
 @dataclass(frozen=True, slots=True)
-class OsdCoordinates(Command):
-    """0x06: which coordinates the OSD shows (aircraft or target)."""
-
-    OPCODE = Opcode.OSD_COORDINATES
-    LAYOUT = struct.Struct("<B")
-    coordinates: OsdCoordinateSource = OsdCoordinateSource.AIRCRAFT
-
-    def _normalize(self) -> None:
-        value = check_member("coordinates", self.coordinates, OsdCoordinateSource)
-        _store(self, "coordinates", value)
-
-    def raw_params(self) -> tuple[int, ...]:
-        return (int(self.coordinates),)
-
-    @classmethod
-    def from_raw_params(cls, raw: tuple[int, ...]) -> OsdCoordinates:
-        return cls(OsdCoordinateSource(check_int("coordinates", raw[0], 0, 1)))
-
-    @classmethod
-    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
-        return check_raw("coordinates", raw[0], 0, 1, "", "0 = aircraft, 1 = target")
-
-
-@dataclass(frozen=True, slots=True)
-class ImageAutoFlip(Command):
-    """0x07: image auto-flip on/off (wire: 0x00 = on, 0x01 = off)."""
-
-    OPCODE = Opcode.IMAGE_AUTO_FLIP
-    LAYOUT = struct.Struct("<B")
-    enabled: bool = True
-
-    def raw_params(self) -> tuple[int, ...]:
-        return (0 if check_bool("enabled", self.enabled) else 1,)
-
-    @classmethod
-    def from_raw_params(cls, raw: tuple[int, ...]) -> ImageAutoFlip:
-        return cls(not _switch("auto flip off", raw[0]))
-
-    @classmethod
-    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
-        return _switch_raw("enabled", raw[0], meaning="0x00 = on, 0x01 = off")
-
-
-@dataclass(frozen=True, slots=True)
-class TimeZone(Command):
-    """0x08: the pod's time zone as a whole-hour UTC offset (S8; real zones −12 … +14)."""
-
-    OPCODE = Opcode.TIME_ZONE
-    LAYOUT = struct.Struct("<b")
-    offset_hours: int = 0
-
-    def raw_params(self) -> tuple[int, ...]:
-        return (check_int("offset_hours", self.offset_hours, -12, 14, "h"),)
-
-    @classmethod
-    def from_raw_params(cls, raw: tuple[int, ...]) -> TimeZone:
-        return cls(raw[0])
-
-    @classmethod
-    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
-        return check_raw("offset_hours", raw[0], -12, 14, "h")
-
-
-@dataclass(frozen=True, slots=True)
-class _MaskOnly(Command):
-    LAYOUT = struct.Struct("<B")
-    cameras: CameraMask | int = CameraMask.CAMERA_1
-
-    def raw_params(self) -> tuple[int, ...]:
-        return (_mask("cameras", self.cameras),)
-
-    @classmethod
-    def from_raw_params(cls: type[_C], raw: tuple[int, ...]) -> _C:
-        return cls(CameraMask(raw[0]))  # type: ignore[call-arg]
-
-    @classmethod
-    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
-        return _mask_raw(raw[0])
-
-
-@dataclass(frozen=True, slots=True)
-class TakePhoto(_MaskOnly):
+class TakePhoto(Command):
     """0x20: take a photo with the masked cameras."""
 
     OPCODE = Opcode.TAKE_PHOTO
+    SCHEMA = CommandSchema(params=(CAM1,), methods=(Method("take_photo", "Take a photo."),))
+    cameras: CameraMask | int = CameraMask.CAMERA_1
 
 
+@_compile
 @dataclass(frozen=True, slots=True)
-class Record(_MaskOnly):
+class Record(Command):
     """0x21: start or stop recording (a toggle)."""
 
     OPCODE = Opcode.RECORD
+    SCHEMA = CommandSchema(params=(CAM1,), methods=(
+        Method("toggle_recording", "Start or stop recording (a toggle on the wire)."),
+        Method("start_recording",
+               "Start recording unless the camera records (then None, nothing sent)."),
+        Method("stop_recording",
+               "Stop recording if the camera records (else None, nothing sent).")))
+    cameras: CameraMask | int = CameraMask.CAMERA_1
 
 
+@_compile
 @dataclass(frozen=True, slots=True)
-class ZoomIn(_MaskOnly):
+class ZoomIn(Command):
     """0x22: zoom in continuously until :class:`ZoomStop`."""
 
     OPCODE = Opcode.ZOOM_IN
+    SCHEMA = CommandSchema(params=(CAM1,), status=StatusRule.ZOOM,
+                           methods=(Method("zoom_in", "Zoom in continuously until stop_zoom."),))
+    cameras: CameraMask | int = CameraMask.CAMERA_1
 
 
+@_compile
 @dataclass(frozen=True, slots=True)
-class ZoomOut(_MaskOnly):
+class ZoomOut(Command):
     """0x23: zoom out continuously until :class:`ZoomStop`."""
 
     OPCODE = Opcode.ZOOM_OUT
+    SCHEMA = CommandSchema(params=(CAM1,), status=StatusRule.ZOOM,
+                           methods=(Method("zoom_out", "Zoom out continuously until stop_zoom."),))
+    cameras: CameraMask | int = CameraMask.CAMERA_1
 
 
+@_compile
 @dataclass(frozen=True, slots=True)
-class ZoomStop(_MaskOnly):
+class ZoomStop(Command):
     """0x24: stop a continuous zoom."""
 
     OPCODE = Opcode.ZOOM_STOP
+    SCHEMA = CommandSchema(params=(CAM1,), status=StatusRule.ZOOM,
+                           methods=(Method("stop_zoom", "Stop a continuous zoom."),))
+    cameras: CameraMask | int = CameraMask.CAMERA_1
 
 
-@dataclass(frozen=True, slots=True)
-class Focus(_MaskOnly):
-    """0x26: trigger focus."""
-
-    OPCODE = Opcode.FOCUS
-
-
-ZOOM_RATIO_MAX = 3276.8
-ZOOM_FRACTION_RAW_MAX = 10000
-
-
+@_compile
 @dataclass(frozen=True, slots=True)
 class ZoomTo(Command):
     """0x25: zoom to a ratio (``ratio=10.0`` → wire −100) or to a fraction of the maximum
@@ -503,137 +526,76 @@ class ZoomTo(Command):
     """
 
     OPCODE = Opcode.ZOOM_TO
-    LAYOUT = struct.Struct("<Bh")
+    SCHEMA = CommandSchema(
+        params=(CAM1, ZoomValue()), status=StatusRule.ZOOM, matrix_row=4,
+        methods=(Method("zoom_to", "Zoom to a ratio; sent as -(ratio x 10).",
+                        ("ratio", "cameras"), required=("ratio",)),
+                 Method("zoom_to_fraction",
+                        "Zoom to a fraction of the maximum ratio; sent as fraction x 10000.",
+                        ("fraction", "cameras"), required=("fraction",))))  # fmt: skip
     ratio: float | None = None
     fraction: float | None = None
     cameras: CameraMask | int = CameraMask.CAMERA_1
 
-    def raw_params(self) -> tuple[int, ...]:
-        return (_mask("cameras", self.cameras), self.raw_value)
-
     @property
     def raw_value(self) -> int:
         """The S16 ZZ ZZ value: −(ratio × 10), or fraction × 10000."""
-        if (self.ratio is None) == (self.fraction is None):
-            raise ValueError("ZoomTo: give exactly one of ratio= or fraction=")
-        if self.ratio is not None:
-            return -quantize("ratio", self.ratio, 10, 10, 32768, "x")
-        assert self.fraction is not None
-        return quantize("fraction", self.fraction, ZOOM_FRACTION_RAW_MAX, 1, ZOOM_FRACTION_RAW_MAX,
-                        "of maximum ratio")  # fmt: skip
-
-    @classmethod
-    def from_raw_params(cls, raw: tuple[int, ...]) -> ZoomTo:
-        kk, zz = raw
-        if zz <= -10:
-            return cls(ratio=-zz / 10, cameras=CameraMask(kk))
-        if 1 <= zz <= ZOOM_FRACTION_RAW_MAX:
-            return cls(fraction=zz / ZOOM_FRACTION_RAW_MAX, cameras=CameraMask(kk))
-        raise ValueError(f"ZOOM_TO: value {zz} is in neither [-32768, -10] nor [1, 10000]")
-
-    @classmethod
-    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
-        kk, zz = raw
-        found = _mask_raw(kk)
-        if not (zz <= -10 or 1 <= zz <= ZOOM_FRACTION_RAW_MAX):
-            detail = "a ratio -32768 to -10 (-0.1x) or a fraction 1 to 10000"
-            found += (Anomaly("raw_value", zz, -32768, ZOOM_FRACTION_RAW_MAX, "", detail),)
-        return found
+        value: int = self.raw_params()[1]
+        return value
 
 
+@_compile
+@dataclass(frozen=True, slots=True)
+class Focus(Command):
+    """0x26: trigger focus."""
+
+    OPCODE = Opcode.FOCUS
+    SCHEMA = CommandSchema(params=(CAM1,), matrix_row=5,
+                           methods=(Method("focus", "Trigger focus."),))
+    cameras: CameraMask | int = CameraMask.CAMERA_1
+
+
+@_compile
 @dataclass(frozen=True, slots=True)
 class Palette(Command):
     """0x2A: thermal palette 1–10, or 0 to cycle."""
 
     OPCODE = Opcode.PALETTE
-    LAYOUT = struct.Struct("<BB")
+    SCHEMA = CommandSchema(
+        params=(CAM2, integer("palette", "B", "1-10, or 0 to cycle", 0, 10, detail="0 cycles")),
+        status=StatusRule.THERMAL, matrix_row=6,
+        methods=(Method("set_palette", "Thermal palette."),))
     palette: int = 0
     cameras: CameraMask | int = CameraMask.CAMERA_2
 
-    def raw_params(self) -> tuple[int, ...]:
-        return (_mask("cameras", self.cameras), check_int("palette", self.palette, 0, 10))
 
-    @classmethod
-    def from_raw_params(cls, raw: tuple[int, ...]) -> Palette:
-        return cls(raw[1], CameraMask(raw[0]))
-
-    @classmethod
-    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
-        return _mask_raw(raw[0]) + check_raw("palette", raw[1], 0, 10, "", "0 cycles")
-
-
+@_compile
 @dataclass(frozen=True, slots=True)
 class NightVision(Command):
     """0x2B: night vision off / on / auto."""
 
     OPCODE = Opcode.NIGHT_VISION
-    LAYOUT = struct.Struct("<BB")
+    SCHEMA = CommandSchema(
+        params=(CAM1, choice("mode", NightVisionMode, "night vision mode", "0 off, 1 on, 2 auto")),
+        matrix_row=7, methods=(Method("set_night_vision", "Night vision off, on or auto."),))
     mode: NightVisionMode = NightVisionMode.ON
     cameras: CameraMask | int = CameraMask.CAMERA_1
 
-    def _normalize(self) -> None:
-        _store(self, "mode", check_member("mode", self.mode, NightVisionMode))
 
-    def raw_params(self) -> tuple[int, ...]:
-        return (_mask("cameras", self.cameras), int(self.mode))
-
-    @classmethod
-    def from_raw_params(cls, raw: tuple[int, ...]) -> NightVision:
-        return cls(NightVisionMode(check_int("mode", raw[1], 0, 2)), CameraMask(raw[0]))
-
-    @classmethod
-    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
-        return _mask_raw(raw[0]) + check_raw("mode", raw[1], 0, 2, "", "0 off, 1 on, 2 auto")
-
-
+@_compile
 @dataclass(frozen=True, slots=True)
 class AreaTemperature(Command):
     """0x30: area temperature measurement on/off over ``box``."""
 
     OPCODE = Opcode.AREA_TEMPERATURE
-    LAYOUT = struct.Struct("<BBHHHH")
+    SCHEMA = CommandSchema(
+        params=(CAM2, Switch(doc="measurement on/off"), Box()),
+        status=StatusRule.THERMAL, matrix_row=8,
+        methods=(Method("set_area_temperature",
+                        "Area temperature measurement over a box (radiometric thermal)."),))
     enabled: bool = True
     box: ImageBox = ImageBox(0.0, 0.0, 1.0, 1.0)
     cameras: CameraMask | int = CameraMask.CAMERA_2
-
-    def _normalize(self) -> None:
-        _store(self, "box", check_tuple("box", self.box, ImageBox))
-
-    def raw_params(self) -> tuple[int, ...]:
-        return (_mask("cameras", self.cameras), int(check_bool("enabled", self.enabled)),
-                *_box_raw("box", self.box))  # fmt: skip
-
-    @classmethod
-    def from_raw_params(cls, raw: tuple[int, ...]) -> AreaTemperature:
-        kk, tt, *box = raw
-        return cls(_switch("enabled", tt), _box(*box), CameraMask(kk))
-
-    @classmethod
-    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
-        kk, tt, x0, y0, x1, y1 = raw
-        return _mask_raw(kk) + _switch_raw("enabled", tt) + _box_raw_anomalies("box", x0, y0,
-                                                                               x1, y1)  # fmt: skip
-
-
-TEMPERATURE_RAW = S16  # 0.1 °C
-
-
-def _temps_raw(raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
-    kk, tt, hh, ll = raw
-    found = _mask_raw(kk) + _switch_raw("enabled", tt)
-    if ll > hh:
-        found += (Anomaly("low", ll, TEMPERATURE_RAW[0], hh, TEMPERATURE_UNIT,
-                          "low must not exceed high"),)  # fmt: skip
-    return found
-
-
-def _temps(high: float, low: float) -> tuple[int, int]:
-    hh = quantize("high", high, 10, *TEMPERATURE_RAW, "degC")
-    ll = quantize("low", low, 10, *TEMPERATURE_RAW, "degC")
-    if ll > hh:
-        raise FieldRangeError("low", low, TEMPERATURE_RAW[0] / 10, high, "degC",
-                              detail="low must not exceed high")  # fmt: skip
-    return hh, ll
 
 
 @dataclass(frozen=True, slots=True)
@@ -641,167 +603,162 @@ class _Thresholds(Command):
     """Body of the two threshold commands: on/off, high/low in °C (0.1 °C resolution, S16),
     ``low`` not above ``high``, and the cameras."""
 
-    LAYOUT = struct.Struct("<BBhh")
     enabled: bool = True
     high: float = 0.0
     low: float = 0.0
     cameras: CameraMask | int = CameraMask.CAMERA_2
 
-    def raw_params(self) -> tuple[int, ...]:
-        return (_mask("cameras", self.cameras), int(check_bool("enabled", self.enabled)),
-                *_temps(self.high, self.low))  # fmt: skip
 
-    @classmethod
-    def from_raw_params(cls: type[_T], raw: tuple[int, ...]) -> _T:
-        kk, tt, hh, ll = raw
-        return cls(_switch("enabled", tt), hh / 10, ll / 10, CameraMask(kk))
-
-    @classmethod
-    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
-        return _temps_raw(raw)
-
-
+@_compile
 @dataclass(frozen=True, slots=True)
 class TemperatureAlarm(_Thresholds):
     """0x31: temperature alarm on/off with high/low thresholds in °C (0.1 °C resolution)."""
 
     OPCODE = Opcode.TEMPERATURE_ALARM
+    SCHEMA = CommandSchema(
+        params=(CAM2, Switch(doc="alarm on/off"), Thresholds()), status=StatusRule.THERMAL,
+        matrix_row=9, methods=(Method(
+            "set_temperature_alarm",
+            "Temperature alarm with high/low thresholds (radiometric thermal)."),))
 
 
+@_compile
 @dataclass(frozen=True, slots=True)
 class Isotherm(_Thresholds):
     """0x32: isotherm off, or on in "inside the interval" mode with high/low thresholds (°C)."""
 
     OPCODE = Opcode.ISOTHERM
+    SCHEMA = CommandSchema(
+        params=(CAM2, Switch(doc="isotherm on/off"), Thresholds()), status=StatusRule.THERMAL,
+        matrix_row=10, methods=(Method(
+            "set_isotherm", "Isotherm between low and high (radiometric thermal)."),))
 
 
+@_compile
 @dataclass(frozen=True, slots=True)
 class SpotTemperature(Command):
     """0x33: spot temperature measurement on/off at ``point``."""
 
     OPCODE = Opcode.SPOT_TEMPERATURE
-    LAYOUT = struct.Struct("<BBHH")
+    SCHEMA = CommandSchema(
+        params=(CAM2, Switch(doc="measurement on/off"), Point()), status=StatusRule.THERMAL,
+        matrix_row=11, methods=(Method(
+            "set_spot_temperature",
+            "Spot temperature measurement at an image point (radiometric thermal)."),))
     enabled: bool = True
     point: ImagePoint = ImagePoint(0.5, 0.5)
     cameras: CameraMask | int = CameraMask.CAMERA_2
 
-    def _normalize(self) -> None:
-        _store(self, "point", check_tuple("point", self.point, ImagePoint))
 
-    def raw_params(self) -> tuple[int, ...]:
-        return (
-            _mask("cameras", self.cameras),
-            int(check_bool("enabled", self.enabled)),
-            _img("point.x", self.point.x),
-            _img("point.y", self.point.y),
-        )
-
-    @classmethod
-    def from_raw_params(cls, raw: tuple[int, ...]) -> SpotTemperature:
-        kk, tt, x, y = raw
-        point = ImagePoint(x / IMAGE_SCALE, y / IMAGE_SCALE)
-        return cls(_switch("enabled", tt), point, CameraMask(kk))
-
-    @classmethod
-    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
-        kk, tt, x, y = raw
-        return _mask_raw(kk) + _switch_raw("enabled", tt) + _point_raw("point", x, y)
-
-
+@_compile
 @dataclass(frozen=True, slots=True)
-class _Switch(Command):
-    LAYOUT = struct.Struct("<B")
-    enabled: bool = True
-
-    def raw_params(self) -> tuple[int, ...]:
-        return (int(check_bool("enabled", self.enabled)),)
-
-    @classmethod
-    def from_raw_params(cls: type[_C], raw: tuple[int, ...]) -> _C:
-        return cls(_switch("enabled", raw[0]))  # type: ignore[call-arg]
-
-    @classmethod
-    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
-        return _switch_raw("enabled", raw[0])
-
-
-@dataclass(frozen=True, slots=True)
-class Osd(_Switch):
+class Osd(Command):
     """0x73: on-screen display on/off."""
 
     OPCODE = Opcode.OSD
+    SCHEMA = CommandSchema(params=(Switch(doc="OSD on/off"),), matrix_row=12,
+                           methods=(Method("set_osd", "On-screen display on/off."),))
+    enabled: bool = True
 
 
+@_compile
 @dataclass(frozen=True, slots=True)
-class TargetDetection(_Switch):
-    """0x75: AI target detection on/off."""
+class OsdCoordinates(Command):
+    """0x06: which coordinates the OSD shows (aircraft or target)."""
 
-    OPCODE = Opcode.TARGET_DETECTION
+    OPCODE = Opcode.OSD_COORDINATES
+    SCHEMA = CommandSchema(
+        params=(choice("coordinates", OsdCoordinateSource, "aircraft or target",
+                       "0 = aircraft, 1 = target"),), matrix_row=1,
+        methods=(Method("set_osd_coordinates", "Which coordinates the OSD shows."),))
+    coordinates: OsdCoordinateSource = OsdCoordinateSource.AIRCRAFT
 
 
+@_compile
 @dataclass(frozen=True, slots=True)
-class DigitalZoom(_Switch):
-    """0x76: digital zoom of the zoom camera on/off."""
+class ImageAutoFlip(Command):
+    """0x07: image auto-flip on/off (wire: 0x00 = on, 0x01 = off)."""
 
-    OPCODE = Opcode.DIGITAL_ZOOM
+    OPCODE = Opcode.IMAGE_AUTO_FLIP
+    SCHEMA = CommandSchema(
+        params=(Switch(doc="auto-flip on/off", on=0, off=1, meaning="0x00 = on, 0x01 = off"),),
+        matrix_row=2, methods=(Method("set_image_auto_flip", "Image auto-flip on/off."),))
+    enabled: bool = True
 
 
+@_compile
+@dataclass(frozen=True, slots=True)
+class TimeZone(Command):
+    """0x08: the pod's time zone as a whole-hour UTC offset (S8; real zones −12 … +14)."""
+
+    OPCODE = Opcode.TIME_ZONE
+    SCHEMA = CommandSchema(
+        params=(integer("offset_hours", "b", "whole hours", -12, 14, "h"),), matrix_row=3,
+        methods=(Method("set_time_zone", "The pod's UTC offset in whole hours.",
+                        required=("offset_hours",)),))
+    offset_hours: int = 0
+
+
+@_compile
 @dataclass(frozen=True, slots=True)
 class PictureInPicture(Command):
     """0x74: picture-in-picture mode 1–4, or 0 to cycle."""
 
     OPCODE = Opcode.PICTURE_IN_PICTURE
-    LAYOUT = struct.Struct("<B")
+    SCHEMA = CommandSchema(
+        params=(integer("mode", "B", "1-4, or 0 to cycle", 0, 4, detail="0 cycles"),),
+        matrix_row=13, methods=(Method("set_picture_in_picture", "Picture-in-picture mode."),))
     mode: int = 0
 
-    def raw_params(self) -> tuple[int, ...]:
-        return (check_int("mode", self.mode, 0, 4),)
 
-    @classmethod
-    def from_raw_params(cls, raw: tuple[int, ...]) -> PictureInPicture:
-        return cls(raw[0])
+@_compile
+@dataclass(frozen=True, slots=True)
+class TargetDetection(Command):
+    """0x75: AI target detection on/off."""
 
-    @classmethod
-    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
-        return check_raw("mode", raw[0], 0, 4, "", "0 cycles")
+    OPCODE = Opcode.TARGET_DETECTION
+    SCHEMA = CommandSchema(params=(Switch(doc="detection on/off"),), matrix_row=14,
+                           methods=(Method("set_target_detection", "AI target detection on/off."),))
+    enabled: bool = True
 
 
+@_compile
+@dataclass(frozen=True, slots=True)
+class DigitalZoom(Command):
+    """0x76: digital zoom of the zoom camera on/off."""
+
+    OPCODE = Opcode.DIGITAL_ZOOM
+    SCHEMA = CommandSchema(params=(Switch(doc="digital zoom on/off"),), matrix_row=15,
+                           methods=(Method("set_digital_zoom", "Digital zoom on/off."),))
+    enabled: bool = True
+
+
+@_compile
 @dataclass(frozen=True, slots=True)
 class FillLight(Command):
     """0x80: fill light brightness 0–255 (0 = off). Turning it on also turns night vision on."""
 
     OPCODE = Opcode.FILL_LIGHT
-    LAYOUT = struct.Struct("<B")
+    SCHEMA = CommandSchema(
+        params=(integer("brightness", "B", "0 = off"),), matrix_row=16,
+        methods=(Method("set_fill_light",
+                        "Fill light brightness; turning it on also turns night vision on.",
+                        required=("brightness",)),))
     brightness: int = 255
 
-    def raw_params(self) -> tuple[int, ...]:
-        return (check_int("brightness", self.brightness, 0, 255),)
 
-    @classmethod
-    def from_raw_params(cls, raw: tuple[int, ...]) -> FillLight:
-        return cls(raw[0])
-
-
+@_compile
 @dataclass(frozen=True, slots=True)
 class Ranging(Command):
     """0x81: continuous laser ranging on/off (wire: 0x02 = on, 0x00 = off)."""
 
     OPCODE = Opcode.RANGING
-    LAYOUT = struct.Struct("<B")
+    SCHEMA = CommandSchema(params=(Switch(doc="ranging on/off", on=2),), matrix_row=17,
+                           methods=(Method("set_ranging", "Continuous laser ranging on/off."),))
     enabled: bool = True
 
-    def raw_params(self) -> tuple[int, ...]:
-        return (2 if check_bool("enabled", self.enabled) else 0,)
 
-    @classmethod
-    def from_raw_params(cls, raw: tuple[int, ...]) -> Ranging:
-        return cls(_switch("enabled", raw[0], on=2))
-
-    @classmethod
-    def raw_anomalies(cls, raw: tuple[int, ...]) -> tuple[Anomaly, ...]:
-        return _switch_raw("enabled", raw[0], on=2)
-
-
+# -- what is not a V2.0.6 command ----------------------------------------------------------------
 @dataclass(frozen=True, slots=True)
 class UnknownCommand(Command):
     """An opcode V2.0.6 does not define, kept byte for byte."""
@@ -894,22 +851,14 @@ class AnomalousCommand(Command):
                 "params_hex": self.params.hex(" ")}  # fmt: skip
 
 
-COMMAND_TYPES: dict[int, type[Command]] = {
-    int(cls.OPCODE): cls
-    for cls in (
-        NullCommand, Calibration, Centre, AngleControl, PointingLock, PointingFollow, TopDown,
-        EulerControl, GazeAtCoordinates, GazeLock, Track, ClickToPan, Fpv, OsdCoordinates,
-        ImageAutoFlip, TimeZone, TakePhoto, Record, ZoomIn, ZoomOut, ZoomStop, ZoomTo, Focus,
-        Palette, NightVision, AreaTemperature, TemperatureAlarm, Isotherm, SpotTemperature, Osd,
-        PictureInPicture, TargetDetection, DigitalZoom, FillLight, Ranging,
-    )
-}  # fmt: skip
+COMMAND_TYPES: dict[int, type[Command]] = {int(cls.OPCODE): cls for cls in _DEFINED}
 """Opcode → command class, one entry per command of V2.0.6."""
+if sorted(COMMAND_TYPES) != sorted(_OPCODE_VALUES) or len(COMMAND_TYPES) != len(_DEFINED):
+    raise TypeError("every Opcode member needs exactly one command class (and no more)")
 
-MODE_COMMANDS: frozenset[Opcode] = frozenset({
-    Opcode.ANGLE_CONTROL, Opcode.POINTING_LOCK, Opcode.POINTING_FOLLOW, Opcode.TOP_DOWN,
-    Opcode.EULER_CONTROL, Opcode.GAZE_AT_COORDINATES, Opcode.GAZE_LOCK, Opcode.TRACK, Opcode.FPV,
-})  # fmt: skip
+MODE_COMMANDS: frozenset[Opcode] = frozenset(
+    c.OPCODE for c in COMMAND_TYPES.values() if c.SCHEMA.mode is not None
+)
 """Commands that switch the pod's working mode."""
 
 
@@ -932,3 +881,49 @@ def decode_command(opcode: int, params: bytes) -> Command:
     if cls is None:
         return UnknownCommand(code=opcode, params=bytes(params))
     return cls.decode_params(params)
+
+
+# -- the dissector's view (re-exported by gcu_async.protocol.schema_tables) ----------------------
+class WireParam(NamedTuple):
+    """One parameter field on the wire, for table-driven decoders (the Lua dissector)."""
+
+    name: str
+    """``"cameras"``, ``"box.left"``, ``"point.x"``."""
+    fmt: str
+    """One struct code: B b H h I i (little-endian)."""
+    scale: float
+    """Engineering value = raw / scale (1 for plain integers)."""
+    unit: str
+    """Engineering unit, ``""`` if none."""
+    low: int | None
+    """Raw range, inclusive; ``None`` = the wire type's own range."""
+    high: int | None
+    enum: str | None
+    """Name of the IntEnum (in :mod:`gcu_async.protocol`) of a choice field, else ``None``."""
+
+
+class WireRow(NamedTuple):
+    """One command's parameter bytes, field by field in wire order."""
+
+    opcode: int
+    command: str
+    """The :class:`Opcode` member name, e.g. ``"ZOOM_TO"``."""
+    params: tuple[WireParam, ...]
+
+
+def wire_rows() -> tuple[WireRow, ...]:
+    """Every opcode (the null command included), ascending, with its parameter fields."""
+    rows = []
+    for opcode in sorted(COMMAND_TYPES):
+        params = []
+        for kind in COMMAND_TYPES[opcode].SCHEMA.params:
+            enum_name = getattr(getattr(kind, "enum", None), "__name__", None)
+            for w in kind.wire:
+                own = WIRE_RANGES[w.fmt]
+                low = None if w.raw_low == own[0] else w.raw_low
+                high = None if w.raw_high == own[1] else w.raw_high
+                params.append(WireParam(w.name, w.fmt, float(w.scale), w.unit, low, high,
+                                        enum_name))  # fmt: skip
+        rows.append(WireRow(opcode, Opcode(opcode).name, tuple(params)))
+    return tuple(rows)
+

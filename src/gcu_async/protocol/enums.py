@@ -1,4 +1,5 @@
-"""Opcodes, modes, pod models and every bit field of the protocol.
+"""Modes, pod models and every bit field of the protocol (opcodes: re-exported from the
+command schema, :mod:`gcu_async.protocol.commands`).
 
 Enums carry the protocol's own names; unknown raw values map to an ``UNKNOWN`` member so
 decoding never fails on a newer firmware (the raw integer always stays on the frame).
@@ -7,60 +8,11 @@ decoding never fails on a newer firmware (the raw integer always stays on the fr
 from __future__ import annotations
 
 from enum import IntEnum, IntFlag
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from gcu_async._checks import check_int
-
-
-class Opcode(IntEnum):
-    """Command opcodes of V2.0.6 (byte 69 of both directions)."""
-
-    NULL = 0x00
-    CALIBRATION = 0x01
-    CENTRE = 0x03
-    OSD_COORDINATES = 0x06
-    IMAGE_AUTO_FLIP = 0x07
-    TIME_ZONE = 0x08
-    ANGLE_CONTROL = 0x10
-    POINTING_LOCK = 0x11
-    POINTING_FOLLOW = 0x12
-    TOP_DOWN = 0x13
-    EULER_CONTROL = 0x14
-    GAZE_AT_COORDINATES = 0x15
-    GAZE_LOCK = 0x16
-    TRACK = 0x17
-    CLICK_TO_PAN = 0x1A
-    FPV = 0x1C
-    TAKE_PHOTO = 0x20
-    RECORD = 0x21
-    ZOOM_IN = 0x22
-    ZOOM_OUT = 0x23
-    ZOOM_STOP = 0x24
-    ZOOM_TO = 0x25
-    FOCUS = 0x26
-    PALETTE = 0x2A
-    NIGHT_VISION = 0x2B
-    AREA_TEMPERATURE = 0x30
-    TEMPERATURE_ALARM = 0x31
-    ISOTHERM = 0x32
-    SPOT_TEMPERATURE = 0x33
-    OSD = 0x73
-    PICTURE_IN_PICTURE = 0x74
-    TARGET_DETECTION = 0x75
-    DIGITAL_ZOOM = 0x76
-    FILL_LIGHT = 0x80
-    RANGING = 0x81
-
-
-_OPCODE_VALUES = frozenset(int(o) for o in Opcode)
-
-
-def opcode_name(opcode: int) -> str:
-    """The protocol name of ``opcode`` (``"UNKNOWN_0x42"`` for opcodes V2.0.6 does not define);
-    ``opcode`` is an ``int`` 0–255 (``TypeError`` / ``FieldRangeError`` otherwise)."""
-    if type(opcode) is not int or not 0 <= opcode <= 0xFF:
-        opcode = check_int("opcode", opcode, 0, 0xFF)
-    return Opcode(opcode).name if opcode in _OPCODE_VALUES else f"UNKNOWN_0x{opcode:02X}"
+if TYPE_CHECKING:  # at run time: __getattr__ below (the schema module imports this one)
+    from gcu_async.protocol.commands import Opcode as Opcode
+    from gcu_async.protocol.commands import opcode_name as opcode_name
 
 
 class _UnknownIfUnlisted:
@@ -217,3 +169,14 @@ class SubFrameRequest(IntEnum):
 
     NONE = 0x00
     STANDARD = 0x01
+
+
+def __getattr__(name: str) -> Any:
+    """``Opcode`` and ``opcode_name`` live with the command schema
+    (:mod:`gcu_async.protocol.commands`, so a command is added in one file); they are
+    re-exported here, loaded on first use to keep the import graph acyclic."""
+    if name in ("Opcode", "opcode_name"):
+        from gcu_async.protocol import commands
+
+        return getattr(commands, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -15,13 +15,19 @@ from typing import Any, NamedTuple
 
 from gcu_async._checks import check_int
 from gcu_async.protocol.anomalies import Anomaly
-from gcu_async.protocol.enums import CameraMask, ExecutionStatus, Opcode, opcode_name
+from gcu_async.protocol.command_fields import StatusRule
+from gcu_async.protocol.commands import COMMAND_TYPES, Opcode, opcode_name
+from gcu_async.protocol.enums import CameraMask, ExecutionStatus
 
-ZOOM_OPCODES = frozenset({Opcode.ZOOM_IN, Opcode.ZOOM_OUT, Opcode.ZOOM_STOP, Opcode.ZOOM_TO})
-THERMAL_OPCODES = frozenset({
-    Opcode.PALETTE, Opcode.AREA_TEMPERATURE, Opcode.TEMPERATURE_ALARM, Opcode.ISOTHERM,
-    Opcode.SPOT_TEMPERATURE,
-})  # fmt: skip
+
+def _ruled(rule: StatusRule) -> frozenset[Opcode]:
+    return frozenset(c.OPCODE for c in COMMAND_TYPES.values() if c.SCHEMA.status is rule)
+
+
+ZOOM_OPCODES = _ruled(StatusRule.ZOOM)
+"""Commands whose failure status is the mask of the failed cameras (their schema says so)."""
+THERMAL_OPCODES = _ruled(StatusRule.THERMAL)
+"""Commands that answer 0x02 on failure."""
 CALIBRATION_IN_PROGRESS = 0x02
 
 
@@ -37,22 +43,24 @@ def failure_status(opcode: int, failed_cameras: int = CameraMask.CAMERA_1) -> in
     return 0x02 if opcode in THERMAL_OPCODES else 0x01
 
 
-_OPCODE_VALUES = frozenset(int(op) for op in Opcode)
+_RULES: dict[int, StatusRule] = {op: c.SCHEMA.status for op, c in COMMAND_TYPES.items()}
 
 
 def status_anomalies(opcode: int, status: int | None) -> tuple[Anomaly, ...]:
     """The status byte as an anomaly when ``opcode`` (a V2.0.6 command) never answers it
     (docs/protocol-notes.md §2 "Execution status per command"): failure is 0x01, 0x02 for
     palette and thermal commands, a camera mask for zoom; calibration adds 0x02."""
-    if status is None or status == 0 or opcode in ZOOM_OPCODES or opcode not in _OPCODE_VALUES:
+    rule = _RULES.get(opcode)
+    if status is None or status == 0 or rule is None or rule is StatusRule.ZOOM:
         return ()
-    if opcode in THERMAL_OPCODES:
+    if rule is StatusRule.THERMAL:
         if status == 0x02:
             return ()
         return (Anomaly("status", status, 0, 2, "", "0x00 = success, 0x02 = failure"),)
-    if status == 0x01 or (opcode == Opcode.CALIBRATION and status == CALIBRATION_IN_PROGRESS):
+    calibration = rule is StatusRule.CALIBRATION
+    if status == 0x01 or (calibration and status == CALIBRATION_IN_PROGRESS):
         return ()
-    if opcode == Opcode.CALIBRATION:
+    if calibration:
         return (Anomaly("status", status, 0, 2, "",
                         "0x00 = success, 0x01 = failure, 0x02 = in progress"),)  # fmt: skip
     return (Anomaly("status", status, 0, 1, "", "0x00 = success, 0x01 = failure"),)
@@ -64,7 +72,7 @@ def read_status(opcode: int, status: int | None) -> ExecutionStatus:
         return ExecutionStatus.NONE
     if status == 0:
         return ExecutionStatus.SUCCESS
-    if opcode == Opcode.CALIBRATION and status == CALIBRATION_IN_PROGRESS:
+    if status == CALIBRATION_IN_PROGRESS and _RULES.get(opcode) is StatusRule.CALIBRATION:
         return ExecutionStatus.IN_PROGRESS
     return ExecutionStatus.FAILED
 

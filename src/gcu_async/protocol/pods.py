@@ -6,7 +6,8 @@ Appendix 8 lists 18 commands; commands it does not list are supported by every m
 from __future__ import annotations
 
 from gcu_async._checks import check_int, type_error
-from gcu_async.protocol.enums import Opcode, PodModel
+from gcu_async.protocol.commands import COMMAND_TYPES, Opcode
+from gcu_async.protocol.enums import PodModel
 
 POD_NAMES: dict[PodModel, str] = {
     PodModel.Z_6A: "Z-6A", PodModel.Z_6C: "Z-6C", PodModel.Z_8RB: "Z-8RB",
@@ -20,12 +21,9 @@ POD_NAMES: dict[PodModel, str] = {
 }  # fmt: skip
 """Vendor spelling of each model. (T) thermometric, (V) observation, (TA)/(VA) + AI core."""
 
-MATRIX_COMMANDS: tuple[Opcode, ...] = (
-    Opcode.TRACK, Opcode.OSD_COORDINATES, Opcode.IMAGE_AUTO_FLIP, Opcode.TIME_ZONE,
-    Opcode.ZOOM_TO, Opcode.FOCUS, Opcode.PALETTE, Opcode.NIGHT_VISION, Opcode.AREA_TEMPERATURE,
-    Opcode.TEMPERATURE_ALARM, Opcode.ISOTHERM, Opcode.SPOT_TEMPERATURE, Opcode.OSD,
-    Opcode.PICTURE_IN_PICTURE, Opcode.TARGET_DETECTION, Opcode.DIGITAL_ZOOM, Opcode.FILL_LIGHT,
-    Opcode.RANGING,
+MATRIX_COMMANDS: tuple[Opcode, ...] = tuple(
+    c.OPCODE for c in sorted((c for c in COMMAND_TYPES.values() if c.SCHEMA.matrix_row is not None),
+                             key=lambda c: c.SCHEMA.matrix_row or 0)
 )  # fmt: skip
 """The rows of Appendix 8, in the document's order."""
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import enum
 
-from gcu_async.protocol.commands import Track
+from gcu_async.protocol.commands import COMMAND_TYPES, Track
 from gcu_async.protocol.enums import Mode, Opcode
 from gcu_async.protocol.host_frames import ControlValues
 from gcu_async.session.tickets import Ticket, TicketState
@@ -35,32 +35,18 @@ class ControlKind(enum.Enum):
 
 
 KIND: dict[int, ControlKind] = {
-    Opcode.ANGLE_CONTROL: ControlKind.ANGLES,
-    Opcode.EULER_CONTROL: ControlKind.ANGLES,
-    Opcode.FPV: ControlKind.ANGLES,
-    Opcode.POINTING_LOCK: ControlKind.RATES,
-    Opcode.POINTING_FOLLOW: ControlKind.RATES,
-    Opcode.TOP_DOWN: ControlKind.RATES,
-    Opcode.GAZE_AT_COORDINATES: ControlKind.RATES,
-    Opcode.GAZE_LOCK: ControlKind.RATES,
-    Opcode.TRACK: ControlKind.NONE,
+    op: ControlKind(c.SCHEMA.mode.control) for op, c in COMMAND_TYPES.items() if c.SCHEMA.mode
 }
-"""Mode commands and what their mode reads from the control values."""
+"""Mode commands and what their mode reads from the control values (from the schema)."""
 
 REPORTED: dict[int, Mode] = {
-    Opcode.ANGLE_CONTROL: Mode.ANGLE_CONTROL,
-    Opcode.EULER_CONTROL: Mode.EULER_CONTROL,
-    Opcode.FPV: Mode.FPV,
-    Opcode.POINTING_LOCK: Mode.POINTING_LOCK,
-    Opcode.POINTING_FOLLOW: Mode.POINTING_FOLLOW,
-    Opcode.TOP_DOWN: Mode.TOP_DOWN,
-    Opcode.GAZE_AT_COORDINATES: Mode.GAZE,
-    Opcode.GAZE_LOCK: Mode.GAZE,
-    Opcode.TRACK: Mode.TRACK,
+    op: c.SCHEMA.mode.mode for op, c in COMMAND_TYPES.items() if c.SCHEMA.mode
 }
-"""The mode byte (GCU main frame byte 5) each mode command leads to."""
+"""The mode byte (GCU main frame byte 5) each mode command leads to (from the schema)."""
 
-MODE_CHANGING = frozenset({*KIND, Opcode.CENTRE, Opcode.CLICK_TO_PAN})
+MODE_CHANGING = frozenset(
+    {*KIND, *(op for op, c in COMMAND_TYPES.items() if c.SCHEMA.changes_mode)}
+)
 """Commands during which (queued or in flight) no control values are sent valid."""
 
 

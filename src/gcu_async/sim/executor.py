@@ -19,16 +19,21 @@ Interpretations the simulator makes:
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TypeVar
 
 from gcu_async.protocol.commands import (
+    COMMAND_TYPES,
     AnomalousCommand,
     AreaTemperature,
+    Calibration,
+    Centre,
     ClickToPan,
     Command,
     DigitalZoom,
     FillLight,
+    Focus,
     GazeAtCoordinates,
+    GazeLock,
     ImageAutoFlip,
     Isotherm,
     NightVision,
@@ -37,12 +42,17 @@ from gcu_async.protocol.commands import (
     Palette,
     PictureInPicture,
     Ranging,
+    Record,
     SpotTemperature,
+    TakePhoto,
     TargetDetection,
     TemperatureAlarm,
     TimeZone,
     Track,
     UnknownCommand,
+    ZoomIn,
+    ZoomOut,
+    ZoomStop,
     ZoomTo,
     command_code,
 )
@@ -59,13 +69,37 @@ SUCCESS = 0x00
 FAILED = 0x01
 
 MODE_OPCODES: dict[int, Mode] = {
-    Opcode.ANGLE_CONTROL: Mode.ANGLE_CONTROL,
-    Opcode.POINTING_LOCK: Mode.POINTING_LOCK,
-    Opcode.POINTING_FOLLOW: Mode.POINTING_FOLLOW,
-    Opcode.TOP_DOWN: Mode.TOP_DOWN,
-    Opcode.EULER_CONTROL: Mode.EULER_CONTROL,
-    Opcode.FPV: Mode.FPV,
+    op: c.SCHEMA.mode.mode for op, c in COMMAND_TYPES.items() if c.SCHEMA.mode is not None
 }
+"""The mode each mode command enters (from the command schema)."""
+
+Handler = Callable[["Executor", Any, HostMainFrame, float], int]
+"""What a command does to the simulated pod: (executor, command, host main frame, now) →
+the execution status byte."""
+HANDLERS: dict[type[Command], Handler] = {}
+"""The behaviour of each command class: the one place a command's simulation is written
+(:func:`behaviour`); a mode command without parameters has :func:`_enter_mode` unless it
+registers its own."""
+_H = TypeVar("_H", bound=Handler)
+
+
+def behaviour(*commands: type[Command]) -> Callable[[_H], _H]:
+    """Register the decorated function as what ``commands`` do to the simulated pod."""
+
+    def register(handler: _H) -> _H:
+        for command in commands:
+            HANDLERS[command] = handler
+        return handler
+
+    return register
+
+
+def handler_for(command: type[Command]) -> Handler | None:
+    """The behaviour of ``command`` (``None``: the simulator does not know it)."""
+    handler = HANDLERS.get(command)
+    if handler is None and command.SCHEMA.mode is not None and not command.SCHEMA.params:
+        return _enter_mode
+    return handler
 
 
 class Executor:
@@ -75,38 +109,6 @@ class Executor:
         self.state = state
         self.profile = profile
         self.calibration_seconds = calibration_seconds
-        self._handlers: dict[int, Callable[[Any, HostMainFrame, float], int]] = {
-            Opcode.CALIBRATION: self._calibration,
-            Opcode.CENTRE: self._centre,
-            Opcode.GAZE_AT_COORDINATES: self._gaze_at,
-            Opcode.GAZE_LOCK: self._gaze_lock,
-            Opcode.TRACK: self._track,
-            Opcode.CLICK_TO_PAN: self._click_to_pan,
-            Opcode.OSD_COORDINATES: self._osd_coordinates,
-            Opcode.IMAGE_AUTO_FLIP: self._auto_flip,
-            Opcode.TIME_ZONE: self._time_zone,
-            Opcode.TAKE_PHOTO: self._photo,
-            Opcode.RECORD: self._record,
-            Opcode.ZOOM_IN: self._zoom,
-            Opcode.ZOOM_OUT: self._zoom,
-            Opcode.ZOOM_STOP: self._zoom,
-            Opcode.ZOOM_TO: self._zoom,
-            Opcode.FOCUS: self._focus,
-            Opcode.PALETTE: self._palette,
-            Opcode.NIGHT_VISION: self._night_vision,
-            Opcode.AREA_TEMPERATURE: self._thermal,
-            Opcode.TEMPERATURE_ALARM: self._thermal,
-            Opcode.ISOTHERM: self._thermal,
-            Opcode.SPOT_TEMPERATURE: self._thermal,
-            Opcode.OSD: self._osd,
-            Opcode.PICTURE_IN_PICTURE: self._pip,
-            Opcode.TARGET_DETECTION: self._target_detection,
-            Opcode.DIGITAL_ZOOM: self._digital_zoom,
-            Opcode.FILL_LIGHT: self._fill_light,
-            Opcode.RANGING: self._ranging,
-        }
-        for opcode in MODE_OPCODES:
-            self._handlers[opcode] = self._mode
 
     def execute(self, command: Command, main: HostMainFrame, now: float) -> int:
         """Run ``command`` (carried by a host packet with main frame ``main``) at clock time
@@ -119,10 +121,13 @@ class Executor:
             return failure_status(opcode, named or 1)
         if not supports(self.profile.model, opcode):
             return failure_status(opcode, int(getattr(command, "cameras", 1)))
-        handler = self._handlers.get(opcode)
-        if handler is None:  # pragma: no cover - every defined non-null opcode has one
+        handler = handler_for(type(command))
+        if handler is None:  # the null command (tests check every other command has one)
             return FAILED
-        return handler(command, main, now)
+        status = handler(self, command, main, now)
+        if status == SUCCESS:
+            self.state.accepted[opcode] = command
+        return status
 
     def calibration_status(self, now: float) -> int:
         """0x02 while a calibration runs, 0x00 once it has finished."""
@@ -132,155 +137,204 @@ class Executor:
         self.state.calibration_until = None
         return SUCCESS
 
-    # -- pod commands ---------------------------------------------------------------------
-    def _calibration(self, command: Command, main: HostMainFrame, now: float) -> int:
-        self.state.calibration_until = now + self.calibration_seconds
-        return self.calibration_status(now)
-
-    def _centre(self, command: Command, main: HostMainFrame, now: float) -> int:
-        return SUCCESS if self.state.gimbal.centre() else FAILED
-
-    def _mode(self, command: Command, main: HostMainFrame, now: float) -> int:
-        self.state.gimbal.enter_mode(MODE_OPCODES[command_code(command)])
-        return SUCCESS
-
-    def _gaze_at(self, command: GazeAtCoordinates, main: HostMainFrame, now: float) -> int:
-        if not main.ins_valid:
-            return FAILED
-        target = GeoPosition(command.latitude, command.longitude, command.altitude)
-        self.state.gimbal.gaze_at(target)
-        return SUCCESS
-
-    def _gaze_lock(self, command: Command, main: HostMainFrame, now: float) -> int:
-        if not main.ins_valid:
-            return FAILED
-        self.state.gimbal.gaze_at(None)
-        return SUCCESS
-
-    def _track(self, command: Track, main: HostMainFrame, now: float) -> int:
-        gimbal = self.state.gimbal
-        if not command.enter:
-            gimbal.stop_track()
-            return SUCCESS
-        if not self._has(command.cameras):
-            return FAILED
-        ok = gimbal.start_track(command.box, self.state.camera.main_zoom)
-        return SUCCESS if ok else FAILED
-
-    def _click_to_pan(self, command: ClickToPan, main: HostMainFrame, now: float) -> int:
-        gimbal = self.state.gimbal
-        if gimbal.mode == Mode.TRACK or not self._has(command.cameras):
-            return FAILED
-        gimbal.click_to_pan(command.point, self.state.camera.main_zoom)
-        return SUCCESS
-
-    # -- camera commands --------------------------------------------------------------------
-    def _has(self, mask: int) -> bool:
+    def has_cameras(self, mask: int) -> bool:
         """Every camera in ``mask`` exists on this pod."""
         return mask != 0 and not mask & ~self.state.camera.mask
 
-    def _osd_coordinates(self, command: OsdCoordinates, main: HostMainFrame,
-                         now: float) -> int:  # fmt: skip
-        self.state.camera.osd_target_coordinates = command.coordinates == OsdCoordinateSource.TARGET
-        return SUCCESS
 
-    def _auto_flip(self, command: ImageAutoFlip, main: HostMainFrame, now: float) -> int:
-        self.state.camera.auto_flip = command.enabled
-        return SUCCESS
+# -- pod commands ---------------------------------------------------------------------
 
-    def _time_zone(self, command: TimeZone, main: HostMainFrame, now: float) -> int:
-        self.state.camera.time_zone = command.offset_hours
-        return SUCCESS
 
-    def _photo(self, command: Any, main: HostMainFrame, now: float) -> int:
-        if not self._has(command.cameras):
-            return FAILED
-        photos = self.state.camera.photos
-        for number in cameras_in(command.cameras):
-            photos[number] = photos.get(number, 0) + 1
-        return SUCCESS
+@behaviour(Calibration)
+def _calibration(ex: Executor, command: Command, main: HostMainFrame, now: float) -> int:
+    ex.state.calibration_until = now + ex.calibration_seconds
+    return ex.calibration_status(now)
 
-    def _record(self, command: Any, main: HostMainFrame, now: float) -> int:
-        if not self._has(command.cameras):
-            return FAILED
-        self.state.camera.recording = not self.state.camera.recording
-        return SUCCESS
 
-    def _focus(self, command: Any, main: HostMainFrame, now: float) -> int:
-        if not self._has(command.cameras):
-            return FAILED
-        self.state.camera.focus_count += 1
-        return SUCCESS
+@behaviour(Centre)
+def _centre(ex: Executor, command: Command, main: HostMainFrame, now: float) -> int:
+    return SUCCESS if ex.state.gimbal.centre() else FAILED
 
-    def _zoom(self, command: Any, main: HostMainFrame, now: float) -> int:
-        mask = int(command.cameras)
-        drives = self.state.camera.zoom
-        failed = 0
-        opcode = command_code(command)
-        for number in cameras_in(mask):
-            drive = drives.get(number)
-            if drive is None:
-                failed |= 1 << (number - 1)
-            elif opcode == Opcode.ZOOM_IN:
-                drive.zoom_in()
-            elif opcode == Opcode.ZOOM_OUT:
-                drive.zoom_out()
-            elif opcode == Opcode.ZOOM_STOP:
-                drive.stop()
-            elif isinstance(command, ZoomTo) and command.ratio is not None:
-                drive.zoom_to(command.ratio)
-            elif isinstance(command, ZoomTo) and command.fraction is not None:
-                drive.zoom_to_fraction(command.fraction)
-        return failed
 
-    def _palette(self, command: Palette, main: HostMainFrame, now: float) -> int:
-        if not command.cameras & (1 << (THERMAL - 1)) or not self._has(command.cameras):
-            return failure_status(Opcode.PALETTE)
-        self.state.camera.cycle_palette(command.palette)
-        return SUCCESS
+def _enter_mode(ex: Executor, command: Command, main: HostMainFrame, now: float) -> int:
+    ex.state.gimbal.enter_mode(MODE_OPCODES[command_code(command)])
+    return SUCCESS
 
-    def _night_vision(self, command: NightVision, main: HostMainFrame, now: float) -> int:
-        if not self._has(command.cameras):
-            return FAILED
-        self.state.camera.night_vision = command.mode
-        return SUCCESS
 
-    def _thermal(self, command: Any, main: HostMainFrame, now: float) -> int:
-        cam = self.state.camera
-        opcode = command_code(command)
-        if not command.cameras & (1 << (THERMAL - 1)) or not self._has(command.cameras):
-            return failure_status(opcode)
-        if isinstance(command, AreaTemperature):
-            cam.area_temperature = command.box if command.enabled else None
-        elif isinstance(command, SpotTemperature):
-            cam.spot_temperature = command.point if command.enabled else None
-        elif isinstance(command, TemperatureAlarm):
-            cam.temperature_alarm = (command.high, command.low) if command.enabled else None
-        elif isinstance(command, Isotherm):
-            cam.isotherm = (command.high, command.low) if command.enabled else None
-        return SUCCESS
+@behaviour(GazeAtCoordinates)
+def _gaze_at(ex: Executor, command: GazeAtCoordinates, main: HostMainFrame, now: float) -> int:
+    if not main.ins_valid:
+        return FAILED
+    target = GeoPosition(command.latitude, command.longitude, command.altitude)
+    ex.state.gimbal.gaze_at(target)
+    return SUCCESS
 
-    def _osd(self, command: Osd, main: HostMainFrame, now: float) -> int:
-        self.state.camera.osd_on = command.enabled
-        return SUCCESS
 
-    def _pip(self, command: PictureInPicture, main: HostMainFrame, now: float) -> int:
-        self.state.camera.cycle_pip(command.mode)
-        return SUCCESS
+@behaviour(GazeLock)
+def _gaze_lock(ex: Executor, command: Command, main: HostMainFrame, now: float) -> int:
+    if not main.ins_valid:
+        return FAILED
+    ex.state.gimbal.gaze_at(None)
+    return SUCCESS
 
-    def _target_detection(self, command: TargetDetection, main: HostMainFrame,
-                          now: float) -> int:  # fmt: skip
-        self.state.camera.target_detection = command.enabled
-        return SUCCESS
 
-    def _digital_zoom(self, command: DigitalZoom, main: HostMainFrame, now: float) -> int:
-        self.state.camera.set_digital_zoom(command.enabled)
+@behaviour(Track)
+def _track(ex: Executor, command: Track, main: HostMainFrame, now: float) -> int:
+    gimbal = ex.state.gimbal
+    if not command.enter:
+        gimbal.stop_track()
         return SUCCESS
+    if not ex.has_cameras(command.cameras):
+        return FAILED
+    ok = gimbal.start_track(command.box, ex.state.camera.main_zoom)
+    return SUCCESS if ok else FAILED
 
-    def _fill_light(self, command: FillLight, main: HostMainFrame, now: float) -> int:
-        self.state.camera.set_fill_light(command.brightness)
-        return SUCCESS
 
-    def _ranging(self, command: Ranging, main: HostMainFrame, now: float) -> int:
-        self.state.rangefinder.on = command.enabled
-        return SUCCESS
+@behaviour(ClickToPan)
+def _click_to_pan(ex: Executor, command: ClickToPan, main: HostMainFrame, now: float) -> int:
+    gimbal = ex.state.gimbal
+    if gimbal.mode == Mode.TRACK or not ex.has_cameras(command.cameras):
+        return FAILED
+    gimbal.click_to_pan(command.point, ex.state.camera.main_zoom)
+    return SUCCESS
+
+
+# -- camera commands --------------------------------------------------------------------
+
+
+@behaviour(OsdCoordinates)
+def _osd_coordinates(ex: Executor, command: OsdCoordinates, main: HostMainFrame,
+                     now: float) -> int:  # fmt: skip
+    ex.state.camera.osd_target_coordinates = command.coordinates == OsdCoordinateSource.TARGET
+    return SUCCESS
+
+
+@behaviour(ImageAutoFlip)
+def _auto_flip(ex: Executor, command: ImageAutoFlip, main: HostMainFrame, now: float) -> int:
+    ex.state.camera.auto_flip = command.enabled
+    return SUCCESS
+
+
+@behaviour(TimeZone)
+def _time_zone(ex: Executor, command: TimeZone, main: HostMainFrame, now: float) -> int:
+    ex.state.camera.time_zone = command.offset_hours
+    return SUCCESS
+
+
+@behaviour(TakePhoto)
+def _photo(ex: Executor, command: Any, main: HostMainFrame, now: float) -> int:
+    if not ex.has_cameras(command.cameras):
+        return FAILED
+    photos = ex.state.camera.photos
+    for number in cameras_in(command.cameras):
+        photos[number] = photos.get(number, 0) + 1
+    return SUCCESS
+
+
+@behaviour(Record)
+def _record(ex: Executor, command: Any, main: HostMainFrame, now: float) -> int:
+    if not ex.has_cameras(command.cameras):
+        return FAILED
+    ex.state.camera.recording = not ex.state.camera.recording
+    return SUCCESS
+
+
+@behaviour(Focus)
+def _focus(ex: Executor, command: Any, main: HostMainFrame, now: float) -> int:
+    if not ex.has_cameras(command.cameras):
+        return FAILED
+    ex.state.camera.focus_count += 1
+    return SUCCESS
+
+
+@behaviour(ZoomIn, ZoomOut, ZoomStop, ZoomTo)
+def _zoom(ex: Executor, command: Any, main: HostMainFrame, now: float) -> int:
+    mask = int(command.cameras)
+    drives = ex.state.camera.zoom
+    failed = 0
+    opcode = command_code(command)
+    for number in cameras_in(mask):
+        drive = drives.get(number)
+        if drive is None:
+            failed |= 1 << (number - 1)
+        elif opcode == Opcode.ZOOM_IN:
+            drive.zoom_in()
+        elif opcode == Opcode.ZOOM_OUT:
+            drive.zoom_out()
+        elif opcode == Opcode.ZOOM_STOP:
+            drive.stop()
+        elif isinstance(command, ZoomTo) and command.ratio is not None:
+            drive.zoom_to(command.ratio)
+        elif isinstance(command, ZoomTo) and command.fraction is not None:
+            drive.zoom_to_fraction(command.fraction)
+    return failed
+
+
+@behaviour(Palette)
+def _palette(ex: Executor, command: Palette, main: HostMainFrame, now: float) -> int:
+    if not command.cameras & (1 << (THERMAL - 1)) or not ex.has_cameras(command.cameras):
+        return failure_status(Opcode.PALETTE)
+    ex.state.camera.cycle_palette(command.palette)
+    return SUCCESS
+
+
+@behaviour(NightVision)
+def _night_vision(ex: Executor, command: NightVision, main: HostMainFrame, now: float) -> int:
+    if not ex.has_cameras(command.cameras):
+        return FAILED
+    ex.state.camera.night_vision = command.mode
+    return SUCCESS
+
+
+@behaviour(AreaTemperature, TemperatureAlarm, Isotherm, SpotTemperature)
+def _thermal(ex: Executor, command: Any, main: HostMainFrame, now: float) -> int:
+    cam = ex.state.camera
+    opcode = command_code(command)
+    if not command.cameras & (1 << (THERMAL - 1)) or not ex.has_cameras(command.cameras):
+        return failure_status(opcode)
+    if isinstance(command, AreaTemperature):
+        cam.area_temperature = command.box if command.enabled else None
+    elif isinstance(command, SpotTemperature):
+        cam.spot_temperature = command.point if command.enabled else None
+    elif isinstance(command, TemperatureAlarm):
+        cam.temperature_alarm = (command.high, command.low) if command.enabled else None
+    elif isinstance(command, Isotherm):
+        cam.isotherm = (command.high, command.low) if command.enabled else None
+    return SUCCESS
+
+
+@behaviour(Osd)
+def _osd(ex: Executor, command: Osd, main: HostMainFrame, now: float) -> int:
+    ex.state.camera.osd_on = command.enabled
+    return SUCCESS
+
+
+@behaviour(PictureInPicture)
+def _pip(ex: Executor, command: PictureInPicture, main: HostMainFrame, now: float) -> int:
+    ex.state.camera.cycle_pip(command.mode)
+    return SUCCESS
+
+
+@behaviour(TargetDetection)
+def _target_detection(ex: Executor, command: TargetDetection, main: HostMainFrame,
+                      now: float) -> int:  # fmt: skip
+    ex.state.camera.target_detection = command.enabled
+    return SUCCESS
+
+
+@behaviour(DigitalZoom)
+def _digital_zoom(ex: Executor, command: DigitalZoom, main: HostMainFrame, now: float) -> int:
+    ex.state.camera.set_digital_zoom(command.enabled)
+    return SUCCESS
+
+
+@behaviour(FillLight)
+def _fill_light(ex: Executor, command: FillLight, main: HostMainFrame, now: float) -> int:
+    ex.state.camera.set_fill_light(command.brightness)
+    return SUCCESS
+
+
+@behaviour(Ranging)
+def _ranging(ex: Executor, command: Ranging, main: HostMainFrame, now: float) -> int:
+    ex.state.rangefinder.on = command.enabled
+    return SUCCESS

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
+from gcu_async.protocol.commands import Command
 from gcu_async.protocol.enums import Mode
 from gcu_async.protocol.units import Attitude, AxisAngles
 from gcu_async.sim.aircraft import ReceivedAircraft
@@ -30,6 +31,9 @@ class SimState:
     """Pod status B12: powered on upside down."""
     calibration_until: float | None = None
     """Clock time at which a running calibration completes."""
+    accepted: dict[int, Command] = field(default_factory=dict)
+    """The last command of each opcode the pod executed with success: what a setting no
+    frame reports (e.g. a time zone before the sub frame shows it) was set to."""
 
     @property
     def mode(self) -> Mode:
