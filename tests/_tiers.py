@@ -138,6 +138,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_public_surface.py": FAST,
     "test_pytest_plugin_without_asyncio.py": "subprocess",
     "test_self_contained.py": "subprocess",
+    "test_schema_literals_once.py": FAST,
     "test_session_contract.py": (FAST, HEAVY),  # 100,000 commands in 8 shards
     "test_session_heartbeat_sockets.py": ("subprocess", ALONE),
     "test_session_pacing.py": FAST,

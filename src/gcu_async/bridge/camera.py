@@ -33,6 +33,7 @@ from gcu_async.bridge.commands import (
 from gcu_async.bridge.geometry import ground_point, quaternion_from_euler
 from gcu_async.bridge.gimbal import DEVICE_ID, encode_version, text
 from gcu_async.bridge.view import GcuView
+from gcu_async.protocol.commands import ZOOM_RATIO_MAX
 from gcu_async.protocol.enums import Mode, Opcode, PodStatus
 from gcu_async.protocol.pods import is_thermal, pod_name
 from gcu_async.protocol.units import GeoPosition
@@ -86,10 +87,10 @@ class CameraConfig:
                 raise ValueError(f"video_url: {self.video_url!r} has scheme {scheme!r}, not "
                                  f"one of {', '.join(STREAM_TYPES)}")  # fmt: skip
         if self.max_zoom is not None and not (
-            math.isfinite(self.max_zoom) and 1.0 <= self.max_zoom <= 3276.8
+            math.isfinite(self.max_zoom) and 1.0 <= self.max_zoom <= ZOOM_RATIO_MAX
         ):
             raise ValueError(f"max_zoom: {self.max_zoom!r} is outside the allowed range "
-                             "[1, 3276.8] x")  # fmt: skip
+                             f"[1, {ZOOM_RATIO_MAX:g}] x")  # fmt: skip
 
 
 def _char_array(value: str, size: int = 32) -> list[int]:

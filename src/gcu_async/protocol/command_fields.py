@@ -220,22 +220,28 @@ def _in_range(w: WireField, raw: int) -> int:
     return raw
 
 
+CAMERA_MASK = WireField("cameras", "B", "camera mask", 1, 0xFF, raw_unit="camera mask")
+"""The camera mask's one field: 1–255, one bit per camera (0x00 selects none)."""
+
+
 @dataclass(frozen=True)
 class Cameras(ParamKind):
     """The camera mask (KK / NN), an ``int`` 1–255 (docs/protocol-notes.md §3)."""
 
     def __post_init__(self) -> None:
-        self._set(("cameras",), (WireField("cameras", "B", "camera mask", 1, 0xFF,
-                                           raw_unit="camera mask"),))  # fmt: skip
+        self._set(("cameras",), (CAMERA_MASK,))
 
     def encode(self, value: Any) -> int:
-        return check_int("cameras", value, 1, 0xFF, "camera mask")
+        return check_int("cameras", value, CAMERA_MASK.raw_low, CAMERA_MASK.raw_high,
+                         "camera mask")  # fmt: skip
 
     def encoder(self) -> Callable[[Any], int]:
+        low, high = CAMERA_MASK.raw_low, CAMERA_MASK.raw_high
+
         def encode(value: Any) -> int:
-            if type(value) is int and 0 < value <= 0xFF:  # the common case, one test
+            if type(value) is int and low <= value <= high:  # the common case, one test
                 return value
-            return check_int("cameras", value, 1, 0xFF, "camera mask")
+            return check_int("cameras", value, low, high, "camera mask")
 
         return encode
 
@@ -245,7 +251,8 @@ class Cameras(ParamKind):
         return CameraMask(_in_range(self.wire[0], raw))
 
     def anomalies(self, raw: int) -> tuple[Anomaly, ...]:  # type: ignore[override]
-        return check_raw("cameras", raw, 1, 0xFF, "camera mask", "0x00 selects no camera")
+        return check_raw("cameras", raw, CAMERA_MASK.raw_low, CAMERA_MASK.raw_high,
+                         "camera mask", "0x00 selects no camera")  # fmt: skip
 
     def json(self, value: Any) -> Any:
         return int(value)

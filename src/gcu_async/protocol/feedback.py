@@ -15,7 +15,7 @@ from typing import Any, NamedTuple
 
 from gcu_async._checks import check_int
 from gcu_async.protocol.anomalies import Anomaly
-from gcu_async.protocol.command_fields import StatusRule
+from gcu_async.protocol.command_fields import CAMERA_MASK, StatusRule
 from gcu_async.protocol.commands import COMMAND_TYPES, Opcode, opcode_name
 from gcu_async.protocol.enums import CameraMask, ExecutionStatus
 
@@ -37,7 +37,8 @@ def failure_status(opcode: int, failed_cameras: int = CameraMask.CAMERA_1) -> in
     failed cameras; it must not be empty (0x00 would read as success), so it is an ``int``
     1–255 for every opcode."""
     check_int("opcode", opcode, 0, 0xFF)
-    mask = check_int("failed_cameras", failed_cameras, 1, 0xFF, "camera mask")
+    mask = check_int("failed_cameras", failed_cameras, CAMERA_MASK.raw_low, CAMERA_MASK.raw_high,
+                     "camera mask")  # fmt: skip
     if opcode in ZOOM_OPCODES:
         return mask
     return 0x02 if opcode in THERMAL_OPCODES else 0x01

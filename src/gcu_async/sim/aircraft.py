@@ -5,11 +5,16 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from gcu_async.protocol.conformance import YAW_SIGNED_LOW
-from gcu_async.protocol.host_frames import HostMainFrame, HostSubFrame
+from gcu_async.protocol.host_frames import HOST_MAIN_SCHEMA, HostMainFrame, HostSubFrame
 from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp
 
 DEFAULT_HEIGHT_M = 100.0
 """Simulator assumption: height above flat ground when the host sends no relative altitude."""
+
+
+_YAW = HOST_MAIN_SCHEMA.by_name["aircraft_yaw_raw"]
+_YAW_TURN = _YAW.raw_high + 1 - _YAW.raw_low
+"""Raw steps in a full turn: the yaw field's range, [0, 36000)."""
 
 
 def aircraft_yaw(raw: int) -> float:
@@ -22,7 +27,7 @@ def aircraft_yaw(raw: int) -> float:
     """
     if raw >= YAW_SIGNED_LOW:
         raw -= 0x10000
-    return (raw % 36000) / 100
+    return (raw % _YAW_TURN) / _YAW.scale
 
 
 @dataclass

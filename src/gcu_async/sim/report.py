@@ -2,21 +2,26 @@
 
 from __future__ import annotations
 
-from gcu_async.protocol.enums import Mode, PodStatus
-from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
-from gcu_async.protocol.layout import S16, S32
-from gcu_async.protocol.units import wrap_degrees_360
+from gcu_async.protocol.enums import PIP_MODE_MASK, Mode, PodStatus
+from gcu_async.protocol.fields import WireField
+from gcu_async.protocol.gcu_frames import GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA, GcuMainFrame, GcuSubFrame
 from gcu_async.sim.profiles import PodProfile
 from gcu_async.sim.state import SimState
 
-
-def _clamp(value: int, low: int, high: int) -> int:
-    return min(max(value, low), high)
+_M, _S = GCU_MAIN_SCHEMA.by_name, GCU_SUB_SCHEMA.by_name
 
 
-def _wrap_centi(degrees: float) -> int:
-    """Degrees → 0.01° wrapped into [-18000, 18000)."""
-    return (round(degrees * 100) + 18000) % 36000 - 18000
+def _clamped(field: WireField, value: float) -> int:
+    """``value`` in the field's units → its raw integer, held inside the field's range (the
+    simulated pod reports the nearest value the field can carry)."""
+    return min(max(round(value * field.scale), field.raw_low), field.raw_high)
+
+
+def _wrapped(field: WireField, degrees: float) -> int:
+    """Degrees → the raw angle of a full-turn field, wrapped into its range (the signed
+    fields' [-180°, 180°), the yaw's [0°, 360°))."""
+    turn = field.raw_high + 1 - field.raw_low
+    return (round(degrees * field.scale) - field.raw_low) % turn + field.raw_low
 
 
 def pod_status(state: SimState) -> int:
@@ -49,40 +54,39 @@ def main_frame(state: SimState) -> GcuMainFrame:
         pod_status(state),
         g.miss[0],
         g.miss[1],
-        _wrap_centi(rel.x),
-        _wrap_centi(rel.y),
-        _wrap_centi(rel.z),
-        _clamp(round(att.roll * 100), -9000, 9000),
-        _wrap_centi(att.pitch),
-        round(wrap_degrees_360(att.yaw) * 100) % 36000,
-        _clamp(round(-pitch_rate * 10), *S16),
-        _clamp(round(roll_rate * 10), *S16),
-        _clamp(round(yaw_rate * 10), *S16),
+        _wrapped(_M["relative_x_raw"], rel.x),
+        _wrapped(_M["relative_y_raw"], rel.y),
+        _clamped(_M["roll_raw"], att.roll),
+        _wrapped(_M["pitch_raw"], att.pitch),
+        _wrapped(_M["yaw_raw"], att.yaw),
+        _clamped(_M["rate_x_raw"], -pitch_rate),
+        _clamped(_M["rate_y_raw"], roll_rate),
+        _clamped(_M["rate_z_raw"], yaw_rate),
     )
 
 
 def sub_frame(state: SimState, profile: PodProfile) -> GcuSubFrame:
     """GCU sub frame 0x01, bytes 38–68."""
     cam, rf = state.camera, state.rangefinder
-    distance = 0 if not rf.on else _clamp(round(rf.distance * 10), *S32)
+    distance = 0 if not rf.on else _clamped(_S["target_distance_raw"], rf.distance)
     lat = lon = alt = 0
     if rf.valid and rf.position is not None:
-        lat = round(rf.position.latitude * 1e7)
-        lon = round(rf.position.longitude * 1e7)
-        alt = _clamp(round(rf.position.altitude * 1000), *S32)
+        lat = _clamped(_S["target_latitude_raw"], rf.position.latitude)
+        lon = _clamped(_S["target_longitude_raw"], rf.position.longitude)
+        alt = _clamped(_S["target_altitude_raw"], rf.position.altitude)
     zoom = state.zoom
     return GcuSubFrame(
-        round(profile.hardware_version * 10),
-        round(profile.firmware_version * 10),
+        _clamped(_S["hardware_version_raw"], profile.hardware_version),
+        _clamped(_S["firmware_version_raw"], profile.firmware_version),
         int(profile.model),
         state.faults & 0xFFFF,
         distance,
         lon,
         lat,
         alt,
-        _clamp(round(zoom.get(1, 0.0) * 10), 0, 0xFFFF),
-        _clamp(round(zoom.get(2, 0.0) * 10), 0, 0xFFFF),
+        _clamped(_S["camera1_zoom_raw"], zoom.get(1, 0.0)),
+        _clamped(_S["camera2_zoom_raw"], zoom.get(2, 0.0)),
         cam.thermal_flags(profile.radiometric),
-        cam.camera_flags() | (cam.pip_mode & 0x07),
-        _clamp(cam.time_zone, -128, 127),
+        cam.camera_flags() | (cam.pip_mode & PIP_MODE_MASK),
+        _clamped(_S["time_zone"], cam.time_zone),
     )

@@ -43,7 +43,7 @@ from gcu_async.protocol.enums import (
 from gcu_async.protocol.feedback import CALIBRATION_IN_PROGRESS, THERMAL_OPCODES, ZOOM_OPCODES
 from gcu_async.protocol.fields import WIRE_RANGES
 from gcu_async.protocol.pods import POD_NAMES
-from gcu_async.wireshark._rows_shim import WireParam, WireRow, wire_rows
+from gcu_async.protocol.schema_tables import WireParam, WireRow, wire_rows
 
 FULL_PROBE_BYTES = 2
 """A parameter this wide or narrower may be probed at every raw value its wire type has."""
