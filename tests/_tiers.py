@@ -159,6 +159,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_tiers.py": FAST,
     "test_transport_memory.py": FAST,
     "test_transport_serial.py": "realtime",
+    "test_transport_registry.py": FAST,
     "test_transport_tcp.py": "realtime",
     "test_transport_tcp_flow.py": "realtime",
     "test_transport_udp.py": "realtime",

@@ -167,6 +167,11 @@ class UdpTransport(Reopening, Transport):
     ``follow_peer`` and ``reuse_port``: see the module docstring.
     """
 
+    ordered = False
+    """UDP datagrams may arrive out of order."""
+    datagram = True
+    """Every ``on_data`` call carries exactly one datagram."""
+
     def __init__(
         self,
         host: str,
@@ -214,16 +219,6 @@ class UdpTransport(Reopening, Transport):
     @property
     def url(self) -> str:
         return f"udp://{format_hostport(self._host, self._port)}"
-
-    @property
-    def ordered(self) -> bool:
-        """UDP datagrams may arrive out of order."""
-        return False
-
-    @property
-    def datagram(self) -> bool:
-        """Every ``on_data`` call carries exactly one datagram."""
-        return True
 
     @property
     def connected(self) -> bool:
@@ -358,6 +353,8 @@ class UdpTransport(Reopening, Transport):
 
     @property
     def backlog(self) -> bool:
+        """True when the last readiness event stopped before the socket was empty (the
+        per-event cap)."""
         dtransport = self._dtransport
         return isinstance(dtransport, DrainingDatagramTransport) and dtransport.backlog
 
