@@ -134,6 +134,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_pytest_plugin_without_asyncio.py": "subprocess",
     "test_self_contained.py": "subprocess",
     "test_session_contract.py": (FAST, HEAVY),  # 100,000 commands in 8 shards
+    "test_session_gate.py": FAST,
     "test_session_heartbeat_sockets.py": ("subprocess", ALONE),
     "test_session_pacing.py": FAST,
     "test_session_regressions.py": FAST,

@@ -420,15 +420,14 @@ class Session:
         pacer.settle(now)
         slot_due = now >= pacer.next_slot
         if not slot_due and not self._kick:
+            return None  # the gate's slot bound, without building the decision
+        when, command, start = self._gate(now)
+        if now < when:
+            if not slot_due and (start is None or now < pacer.early_open_at()):
+                self._kick = False  # early only to start a command, once per window
             return None
-        command, start = self._next_command(now)
-        if not slot_due and (start is None or now < pacer.early_open_at()):
-            self._kick = False  # early only to start a command, once per window
-            return None
-        opcode = command_code(command)
-        if now < pacer.window_open_at() or now < pacer.edge_open_at(opcode):
-            return None  # the rate bound or the edge guard: next_wakeup says when
         self._kick = False
+        opcode = command_code(command)
         ticket = self._in_flight
         if start is not None:
             self._queue.popleft()
@@ -460,48 +459,73 @@ class Session:
         (:attr:`~gcu_async.session.pacing.Pacer.late`): the driver then polls
         at its next turn, which on a busy event loop is the next iteration, late enough for
         the next slot."""
-        state = self._state
-        if state is SessionState.CLOSED:
+        if self._state is SessionState.CLOSED:
             return math.inf
+        when, _, _ = self._gate(now)
+        if when <= now or self._pacer.late:
+            return now  # poll(now) sends (after its timers), or settles the late packet
+        timer = self._timer_at(now)
+        if timer <= now:
+            return now  # poll(now) fires it
+        if timer < when:
+            when = timer
+        return when if when > now + MIN_WAKE else now + MIN_WAKE
+
+    def _gate(self, now: float) -> tuple[float, Command, Ticket | None]:
+        """The one gate of sending, read by :meth:`poll` (a packet goes iff ``now`` has
+        reached it) and :meth:`next_wakeup` (it wakes the driver then): (the earliest time
+        the next packet may go, its command, the queued ticket it would start).
+
+        A packet goes on its heartbeat slot, or early (before it) to start a command that
+        was just queued (``_kick``) once the early window is open; never before the rate
+        bound and the edge guard allow (:mod:`~gcu_async.session.pacing`)."""
         pacer = self._pacer
-        if not self._queue and self._in_flight is None:  # idle: the heartbeat, the silence
-            when = pacer.next_slot
-            gate = pacer.window_open_at()
-            if gate > when:
-                when = gate
-            if pacer.last_opcode:  # the first null after a command waits for the edge
-                gate = pacer.last_time + pacer.guard
-                if gate > when:
-                    when = gate
-            if when <= now or pacer.late:
-                return now  # poll(now) sends the null (the same gates), or settles the owed slot
-            last = self._health.last_reply
-            if state is SessionState.UP and last is not None:
-                silence = last + self.silence_timeout
-                if silence < when:
-                    when = silence
-            return when if when > now + MIN_WAKE else now + MIN_WAKE
         command, start = self._next_command(now)
-        gate = max(pacer.window_open_at(), pacer.edge_open_at(command_code(command)))
-        when = max(pacer.next_slot, gate)
-        if self._kick and start is not None:  # a command may start before its slot
-            when = min(when, max(now, gate, pacer.early_open_at()))
-        if when <= now or pacer.late:
-            return now  # poll(now) sends (the same gates, after its timers), or settles
+        gate = pacer.window_open_at()
+        edge = pacer.edge_open_at(command_code(command))
+        if edge > gate:
+            gate = edge
+        when = pacer.next_slot
+        if gate > when:
+            when = gate
+        if self._kick and start is not None:
+            early = pacer.early_open_at()
+            if gate > early:
+                early = gate
+            if early < when:
+                when = early
+        return when, command, start
+
+    def _timer_at(self, now: float) -> float:
+        """When :meth:`poll` next has something to do besides sending (``inf``: never
+        unless something happens): a timer of :meth:`_timers` falls due, or the recording
+        belief a state-checked record command at the head waits for settles."""
+        when = self._timers_due_at()
+        if self._queue and self._queue[0].recording_target is not None:
+            settle = self._recording.settles_at()
+            if now < settle < when:
+                when = settle
+        return when
+
+    def _timers_due_at(self) -> float:
+        """When the earliest timer :meth:`_timers` fires is due: the link's silence, the
+        command in flight's timeout, a queued command's deadline (``inf``: none)."""
+        when = math.inf
+        if self._state is SessionState.UP and self._health.last_reply is not None:
+            when = self._silence_at(self._health.last_reply)
         t = self._in_flight
-        if t is not None and t.first_sent is not None:
-            when = min(when, t.first_sent + t.timeout)
+        if t is not None and t.first_sent is not None and t.first_sent + t.timeout < when:
+            when = t.first_sent + t.timeout
         deadlines = self._deadlines
         while deadlines and deadlines[0][2].state is not TicketState.QUEUED:
             heapq.heappop(deadlines)
-        if deadlines:
-            when = min(when, deadlines[0][0])
-        if self._state is SessionState.UP and self._health.last_reply is not None:
-            when = min(when, self._health.last_reply + self.silence_timeout)
-        settle = self._recording.settles_at()
-        if settle > now and self._queue and self._queue[0].recording_target is not None:
-            when = min(when, settle)
-        return max(when, now + MIN_WAKE)
+        if deadlines and deadlines[0][0] < when:
+            when = deadlines[0][0]
+        return when
+
+    def _silence_at(self, last_reply: float) -> float:
+        """When silence since ``last_reply`` exceeds ``silence_timeout`` (the link is lost)."""
+        return math.nextafter(last_reply + self.silence_timeout, math.inf)
 
     # -- observations ----------------------------------------------------------------------
     @property
@@ -627,8 +651,9 @@ class Session:
 
     # -- internals: timers and the queue ---------------------------------------------------
     def _timers(self, now: float) -> None:
-        if (self._state is SessionState.UP
-                and self._health.silent_for(now) > self.silence_timeout):  # fmt: skip
+        last = self._health.last_reply
+        if (self._state is SessionState.UP and last is not None
+                and now >= self._silence_at(last)):  # fmt: skip
             self._link_down(now, f"no reply for {self.silence_timeout:g} s", reset=True)
         if not self._deadlines and self._in_flight is None:
             return
