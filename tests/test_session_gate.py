@@ -45,7 +45,7 @@ def check_wakeup(session: Session, now: float, probes: list[float], shared: list
     if wake == math.inf:
         return
     floored = wake == now + MIN_WAKE  # the due time lies within MIN_WAKE: it may be earlier
-    gate, _, _ = session._gate(now)
+    gate = session._gate(now)[0]
     timers = session._timers_due_at()
     times = [now] if floored else [now + (wake - now) * f for f in probes]
     if not floored:

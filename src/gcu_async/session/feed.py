@@ -49,13 +49,15 @@ class AircraftFeed:
     """The aircraft state given by the user, when each part was given, and the frames that
     say what is current (module docstring). ``timeout``: seconds a part stays current."""
 
-    __slots__ = ("_frames", "_given", "_gnss", "_name", "_sent_sub", "_stale", "_sub",
+    __slots__ = ("_frames", "_given", "_gnss", "_idle", "_name", "_sent_sub", "_stale", "_sub",
                  "episodes", "state", "timeout")  # fmt: skip
 
     def __init__(self, timeout: float, name: str = "gcu") -> None:
         self.timeout = timeout
         self._name = name
         self.state = AircraftState()
+        self._idle = True
+        """Nothing was ever given: no claim, nothing stale (the per-packet fast path)."""
         self._given: dict[str, float] = {}
         """Part → session time it was last given."""
         self._gnss: tuple[int, int, float] | None = None
@@ -72,6 +74,7 @@ class AircraftFeed:
         """``state`` is the aircraft state from now on; the parts named in ``given`` were
         measured at ``now`` (the others keep the time they were given)."""
         self.state = state
+        self._idle = False
         for name in given:
             if name in PARTS:
                 self._given[name] = now
@@ -128,6 +131,8 @@ class AircraftFeed:
     def check(self, now: float) -> bool:
         """Follow the stale episodes at a packet built at ``now`` (rule 4); True when one
         starts (then one warning is logged)."""
+        if self._idle:
+            return False
         stale = self.stale_parts(now)
         was = self._stale
         self._stale = stale
@@ -150,7 +155,7 @@ class AircraftFeed:
                now: float) -> tuple[HostMainFrame, HostSubFrame | None]:  # fmt: skip
         """The main frame (with the control values ``values``, None = invalid) and sub frame
         of a packet built at ``now``."""
-        ins = self.ins_valid(now)
+        ins = False if self._idle else self.ins_valid(now)
         key = (values, ins)
         frame = self._frames.get(key)
         if frame is None:
