@@ -145,7 +145,8 @@ class _UdpProtocol(asyncio.DatagramProtocol):
         self.closed: asyncio.Future[None] = asyncio.get_running_loop().create_future()
 
     def datagram_received(self, data: bytes, addr: tuple[Any, ...]) -> None:
-        self._owner._datagram(data, (str(addr[0]), int(addr[1])))
+        # IPv4 gives (str, int) already; IPv6 (host, port, flowinfo, scope_id)
+        self._owner._datagram(data, addr if len(addr) == 2 else (str(addr[0]), int(addr[1])))
 
     def error_received(self, exc: Exception) -> None:
         self._owner._error(exc)
@@ -391,7 +392,8 @@ class UdpTransport(Reopening, Transport):
                     peer=source,
                 )  # fmt: skip
                 call_guarded(self._on_event, event, "event")
-        elif self._remote is None or not same_address(self._remote, source):
+        elif source != self._remote and (self._remote is None
+                                         or not same_address(self._remote, source)):  # fmt: skip
             self.rejected_datagrams += 1
             return
         self.rx_datagrams += 1
