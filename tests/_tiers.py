@@ -166,8 +166,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_transport_udp.py": "realtime",
     "test_transport_udp_drain.py": "realtime",
     "test_transport_udp_errors.py": "realtime",
-    "test_transport_url.py": "realtime",
-    "test_url_rules.py": FAST,
+    "test_transport_url.py": FAST,  # its loopback end-to-end tests are marked realtime
     "test_wireshark_dissector.py": "tshark",
     "test_wireshark_property.py": "tshark",
     "test_wireshark_tables.py": "subprocess",
