@@ -498,10 +498,7 @@ class Session:
                 head.recording_target is None or self._recording.value(now) is not None
             ):
                 command, opcode, start = head.command, head.opcode, head
-        gate = pacer.window_open_at()
-        edge = pacer.edge_open_at(opcode)
-        if edge > gate:
-            gate = edge
+        gate = pacer.open_at(opcode)
         when = pacer.next_slot
         if gate > when:
             when = gate
