@@ -519,6 +519,20 @@ async def cpu_window(session: ClientLoop | BareLoop, peer: Peer, warmup: float,
     return CpuWindow(c1 - c0, w1 - w0, s1 - s0, r1 - r0, peer_cpu)
 
 
+async def idle(kind: str, url: str, seconds: float) -> int:
+    """``--idle``: one idle session for ``seconds``; its packet counts on stderr."""
+    heartbeat = HostPacket(AircraftState().main_frame(), None, NullCommand()).encode()
+    session = ClientLoop(url) if kind == "client" else BareLoop(url, heartbeat, "recv_into")
+    await session.open()
+    try:
+        await asyncio.sleep(seconds)
+        sent, received = session.counts()
+    finally:
+        await session.close()
+    print(f"{kind}: {sent} sent, {received} replies in {seconds:g} s", file=sys.stderr)
+    return 0
+
+
 CPU_SERIES = ("GcuClient", "bare: add_reader + recv_into", "bare: create_datagram_endpoint")
 """The client, the baseline of the target, and asyncio's stock datagram transport (which
 allocates a 256 KiB buffer per datagram: mmap/mremap/munmap on glibc) for context."""
@@ -838,9 +852,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--commands", type=int,
                     help="back-to-back commands per client [1000; quick 100]")
     ap.add_argument("--serve", help=argparse.SUPPRESS)
+    ap.add_argument("--idle", choices=["client", "bare"],
+                    help="run one idle session (the client, or the add_reader + recv_into"
+                         " loop) against --url for --seconds, then print its packet counts:"
+                         " for an instruction count (valgrind --tool=callgrind), the"
+                         " difference of two lengths")  # fmt: skip
+    ap.add_argument("--url", help="with --idle: the simulator's UDP URL")
+    ap.add_argument("--seconds", type=float, default=2.0, help="with --idle [2]")
     args = ap.parse_args(argv)
     if args.serve:
         return asyncio.run(serve(args.serve.split(",")))
+    if args.idle:
+        if not args.url or not args.url.startswith("udp://") or args.seconds <= 0:
+            ap.error("--idle needs --url udp://HOST:PORT and positive --seconds")
+        return asyncio.run(idle(args.idle, args.url, args.seconds))
     quick = args.quick
     defaults = {"cpu_rounds": (16, 4), "cpu_seconds": (1.5, 0.8), "warmup": (0.3, 0.3),
                 "rounds": (120, 10), "commands": (1000, 100)}  # fmt: skip

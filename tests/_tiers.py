@@ -140,6 +140,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_self_contained.py": "subprocess",
     "test_schema_literals_once.py": FAST,
     "test_session_contract.py": (FAST, HEAVY),  # 100,000 commands in 8 shards
+    "test_session_gate.py": FAST,
     "test_session_heartbeat_sockets.py": ("subprocess", ALONE),
     "test_session_pacing.py": FAST,
     "test_session_regressions.py": FAST,
@@ -165,13 +166,13 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_tiers.py": FAST,
     "test_transport_memory.py": FAST,
     "test_transport_serial.py": "realtime",
+    "test_transport_registry.py": FAST,
     "test_transport_tcp.py": "realtime",
     "test_transport_tcp_flow.py": "realtime",
     "test_transport_udp.py": "realtime",
     "test_transport_udp_drain.py": "realtime",
     "test_transport_udp_errors.py": "realtime",
-    "test_transport_url.py": "realtime",
-    "test_url_rules.py": FAST,
+    "test_transport_url.py": FAST,  # its loopback end-to-end tests are marked realtime
     "test_wireshark_dissector.py": "tshark",
     "test_wireshark_property.py": "tshark",
     "test_wireshark_new_command.py": "tshark",

@@ -36,8 +36,11 @@ from gcu_async.sim.model import SimulatorModel
 from gcu_async.sim.server import SimServer
 from gcu_async.sim.simulator import GcuSimulator
 from gcu_async.sim.tcp import TcpServer
+from gcu_async.transport.registry import KINDS
 
-TRANSPORTS = ("memory", "udp", "tcp", "serial")
+TRANSPORTS = ("memory", *(k.scheme for k in KINDS.values() if k.fixture_listen is not None))
+"""``gcu_sim_transport`` values: ``memory`` and every registered transport with a loopback
+endpoint (:attr:`~gcu_async.transport.registry.TransportKind.fixture_listen`)."""
 PTY_AVAILABLE = hasattr(os, "openpty") and sys.platform != "win32"
 """Can the ``"serial"`` transport (a pseudo-terminal and the POSIX serial client) run here?"""
 
@@ -61,8 +64,8 @@ class SimHandle:
         endpoint serves a single client."""
         if isinstance(self.server, MemoryServer):
             return GcuClient(self.server.transport, **options)
-        if self.transport == "udp":
-            options.setdefault("local_port", 0)
+        for name, value in KINDS[self.transport].fixture_client.items():
+            options.setdefault(name, value)
         return connect(self.url, **options)
 
     def set_faults(self, faults: FaultPlan | FaultConfig | None) -> None:
@@ -82,14 +85,11 @@ class SimHandle:
 
 def start_endpoint(sim: GcuSimulator, transport: str) -> SimServer:
     """The (not yet started) endpoint of ``sim`` for a transport name, on loopback."""
-    if transport == "udp":
-        return sim.serve_udp("127.0.0.1", 0)
-    if transport == "tcp":
-        return sim.serve_tcp("127.0.0.1", 0)
-    if transport == "serial":
-        return sim.serve_pty()
-    if transport == "memory":
+    if transport == "memory":  # no URL: the client takes the server's transport object
         return sim.serve_memory()
+    kind = KINDS.get(transport)
+    if kind is not None and kind.fixture_listen is not None:
+        return sim.serve(kind.fixture_listen)
     raise ValueError(f"gcu_sim_transport: {transport!r} is not one of {', '.join(TRANSPORTS)}")
 
 

@@ -1,11 +1,14 @@
-"""MemoryTransport and the Transport base's defaults: datagram, reset, sends_dropped."""
+"""MemoryTransport: the transport contract (tests/_transport_contract.py), and the base's
+defaults: datagram, reset, sends_dropped."""
 
 from __future__ import annotations
 
 import asyncio
+from collections.abc import AsyncIterator
 
 import pytest
 
+from _transport_contract import TO_PEER, Link, TransportContract
 from _transport_recorder import Recorder
 from gcu_async.transport import MemoryTransport
 
@@ -28,8 +31,31 @@ async def test_reset_is_a_no_op_nothing_is_queued() -> None:
     assert not a.datagram
 
 
-@pytest.mark.parametrize("bad", [None, 1, b"x"])
-def test_reset_reason_must_be_a_str(bad: object) -> None:
-    a, _ = MemoryTransport.pair()
-    with pytest.raises(TypeError, match=r"^reason: expected a str, got "):
-        a.reset(bad)  # type: ignore[arg-type]
+class _MemoryPeer:
+    def __init__(self, end: MemoryTransport) -> None:
+        self.end = end
+        self.rec = Recorder(end)
+
+    def send(self, data: bytes) -> None:
+        self.end.send(data)
+
+    async def read(self, n: int) -> bytes:
+        return (await self.rec.wait_bytes(n))[:n]
+
+
+class TestMemoryContract(TransportContract):
+    closed_message = "link is down"
+
+    @pytest.fixture
+    async def link(self) -> AsyncIterator[Link]:
+        a, b = MemoryTransport.pair()
+        peer = _MemoryPeer(b)
+
+        async def ready() -> None:
+            await b.open()
+
+        yield Link(a, peer, ready)
+        await b.close()
+
+    def after_exchange(self, link: Link, rec: Recorder) -> None:
+        assert link.transport.bytes_sent == sum(map(len, TO_PEER))  # type: ignore[attr-defined]

@@ -15,6 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from _transport_contract import FROM_PEER, TO_PEER, Link, TransportContract
 from _transport_recorder import Recorder, open_fds, other_tasks
 from gcu_async.errors import LinkLost
 from gcu_async.transport import BAUDRATES, Backoff, LinkEventKind, SerialTransport
@@ -69,23 +70,6 @@ def pty() -> Iterator[Pty]:
     p = Pty()
     yield p
     p.close_all()
-
-
-async def test_bytes_both_directions(pty: Pty) -> None:
-    every_byte = bytes(range(256))  # includes CR, LF, XON/XOFF, ^C: raw 8-bit both ways
-    async with SerialTransport(pty.path, 115200) as t:
-        rec = Recorder(t)
-        assert t.connected
-        t.send(every_byte)
-        t.send(b"\xa5\x5a")
-        assert await pty.read(258) == every_byte + b"\xa5\x5a"
-        pty.write(every_byte * 4)
-        assert await rec.wait_bytes(1024) == every_byte * 4
-        assert t.bytes_sent == 258
-        assert t.bytes_received == 1024
-        assert rec.events == []
-    assert not t.connected
-    assert other_tasks() == set()
 
 
 @pytest.mark.parametrize("baudrate", BAUDRATES)
@@ -377,17 +361,6 @@ async def test_read_error_in_the_middle_of_draining(
     await t.close()
 
 
-async def test_reset_does_nothing_when_closed_and_checks_its_reason(pty: Pty) -> None:
-    t = SerialTransport(pty.path)
-    t.reset("never opened")
-    async with t:
-        with pytest.raises(TypeError, match=r"reason: expected a str, got NoneType None"):
-            t.reset(None)  # type: ignore[arg-type]
-        assert t.connected
-        assert not t.datagram
-    t.reset("after close")
-
-
 PTY_HOLDS_AT_MOST = 65536
 """Generous bound on what a pty queues towards a side that does not read (~16-20 KiB)."""
 
@@ -515,3 +488,37 @@ async def test_close_while_reopening_stops_the_task_without_an_event() -> None:
     finally:
         pty.close_all()
     assert other_tasks() == set()
+
+
+class _PtyPeer:
+    def __init__(self, pty: Pty) -> None:
+        self.pty = pty
+
+    def send(self, data: bytes) -> None:
+        self.pty.write(data)
+
+    async def read(self, n: int) -> bytes:
+        return await self.pty.read(n)
+
+
+class TestSerialContract(TransportContract):
+    """The contract through a real pseudo-terminal (raw 8-bit both ways)."""
+
+    closed_message = "port is closed"
+
+    @pytest.fixture
+    def link(self, pty: Pty) -> Link:
+        return Link(SerialTransport(pty.path, 115200), _PtyPeer(pty), extra={"pty": pty})
+
+    def after_exchange(self, link: Link, rec: Recorder) -> None:
+        t = link.transport
+        assert isinstance(t, SerialTransport)
+        assert t.bytes_sent == sum(map(len, TO_PEER))
+        assert t.bytes_received == sum(map(len, FROM_PEER))
+
+    async def after_double_open(self, link: Link) -> None:
+        pty = link.extra["pty"]
+        fds = open_fds()
+        await link.transport.open()  # a third time: still no new fd
+        assert open_fds() == fds
+        assert pty.path in link.transport.url

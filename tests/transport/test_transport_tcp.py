@@ -11,6 +11,7 @@ from typing import Any
 
 import pytest
 
+from _transport_contract import FROM_PEER, TO_PEER, Link, TransportContract
 from _transport_recorder import Recorder, other_tasks
 from gcu_async.errors import LinkLost
 from gcu_async.transport import Backoff, LinkEventKind, TcpTransport
@@ -103,23 +104,6 @@ class MaxRandom(random.Random):
 
     def random(self) -> float:
         return 1.0
-
-
-async def test_bytes_both_directions_in_order(servers: list[Server]) -> None:
-    server = await start(servers, echo=True)
-    async with TcpTransport(LOOP, server.port) as t:
-        rec = Recorder(t)
-        assert t.connected
-        assert t.url == f"tcp://127.0.0.1:{server.port}"
-        payload = bytes(range(256)) * 40
-        for i in range(0, len(payload), 1000):
-            t.send(payload[i : i + 1000])
-        assert await server.wait_received(len(payload)) == payload
-        assert await rec.wait_bytes(len(payload)) == payload  # echoed back, in order
-        assert t.bytes_sent == t.bytes_received == len(payload)
-        assert rec.events == []
-    assert not t.connected
-    assert other_tasks() == set()
 
 
 async def test_connection_refused_on_open_raises_linklost() -> None:
@@ -303,48 +287,6 @@ async def test_without_reconnect_stays_down_until_reopened(servers: list[Server]
     await t.close()
 
 
-async def test_handler_exception_keeps_connection(servers: list[Server]) -> None:
-    server = await start(servers)
-    loop = asyncio.get_running_loop()
-    reported: list[dict[str, Any]] = []
-    loop.set_exception_handler(lambda _loop, ctx: reported.append(ctx))
-    try:
-        async with TcpTransport(LOOP, server.port) as t:
-            rec = Recorder(t)
-
-            def on_data(data: bytes) -> None:
-                rec.on_data(data)
-                if len(rec.chunks) == 1:
-                    raise RuntimeError("handler bug")
-
-            t.set_handlers(on_data, rec.on_event)
-            writer = await server.wait_connected()
-            writer.write(b"first")
-            await rec.wait_bytes(5)
-            writer.write(b"second")
-            assert await rec.wait_bytes(11) == b"firstsecond"
-            assert t.connected
-            assert rec.events == []
-            assert len(reported) == 1
-    finally:
-        loop.set_exception_handler(None)
-
-
-async def test_close_is_idempotent(servers: list[Server]) -> None:
-    server = await start(servers)
-    t = TcpTransport(LOOP, server.port)
-    await t.close()  # never opened
-    await t.open()
-    await t.open()  # already connected: no second connection
-    await server.wait_connected()
-    await asyncio.sleep(0.02)
-    assert len(server.writers) == 1
-    await t.close()
-    await t.close()
-    assert not t.connected
-    assert other_tasks() == set()
-
-
 def test_backoff_ceilings_and_full_jitter() -> None:
     b = Backoff()
     assert (b.base, b.factor, b.cap) == (0.05, 2.0, 2.0)
@@ -383,3 +325,55 @@ def test_constructor_validation() -> None:
         TcpTransport(LOOP, connect_timeout=0)
     assert TcpTransport(LOOP).url == "tcp://127.0.0.1:2332"
     assert TcpTransport("::1", 5).url == "tcp://[::1]:5"
+
+
+class _TcpPeer:
+    def __init__(self, server: Server) -> None:
+        self.server = server
+
+    def send(self, data: bytes) -> None:
+        self.server.writers[-1].write(data)
+
+    async def read(self, n: int) -> bytes:
+        return (await self.server.wait_received(n))[:n]
+
+
+class TestTcpContract(TransportContract):
+    closed_message = "link is down"
+
+    @pytest.fixture
+    async def link(self, servers: list[Server]) -> Link:
+        server = await start(servers)
+
+        async def ready() -> None:
+            await server.wait_connected()
+
+        return Link(TcpTransport(LOOP, server.port), _TcpPeer(server), ready,
+                    extra={"server": server})  # fmt: skip
+
+    def after_exchange(self, link: Link, rec: Recorder) -> None:
+        t, server = link.transport, link.extra["server"]
+        assert isinstance(t, TcpTransport)
+        assert t.url == f"tcp://127.0.0.1:{server.port}"
+        assert t.bytes_sent == sum(map(len, TO_PEER))
+        assert t.bytes_received == sum(map(len, FROM_PEER))
+
+    async def after_double_open(self, link: Link) -> None:
+        await asyncio.sleep(0.02)
+        assert len(link.extra["server"].writers) == 1  # one connection
+
+
+async def test_bytes_echoed_back_in_order_in_1000_byte_pieces(servers: list[Server]) -> None:
+    """Past one segment: 10 KiB in 1000-byte sends, echoed back whole and in order."""
+    server = await start(servers, echo=True)
+    async with TcpTransport(LOOP, server.port) as t:
+        rec = Recorder(t)
+        payload = bytes(range(256)) * 40
+        for i in range(0, len(payload), 1000):
+            t.send(payload[i : i + 1000])
+        assert await server.wait_received(len(payload)) == payload
+        assert await rec.wait_bytes(len(payload)) == payload  # echoed back, in order
+        assert t.bytes_sent == t.bytes_received == len(payload)
+        assert rec.events == []
+    assert not t.connected
+    assert other_tasks() == set()

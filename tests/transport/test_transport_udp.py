@@ -10,7 +10,8 @@ from typing import Any, cast
 
 import pytest
 
-from _transport_recorder import Recorder, other_tasks
+from _transport_contract import FROM_PEER, TO_PEER, Link, TransportContract
+from _transport_recorder import Recorder
 from gcu_async.errors import LinkLost
 from gcu_async.transport import LinkEventKind, UdpTransport
 from gcu_async.transport.udp import is_broadcast_address
@@ -88,31 +89,6 @@ def udp_to(peer: Peer, **kw: Any) -> UdpTransport:
     kw.setdefault("local_host", LOOP)
     kw.setdefault("local_port", 0)
     return UdpTransport(peer.address[0], peer.address[1], **kw)
-
-
-async def test_bytes_both_directions_in_order(make_peer: Any, reader_path: str) -> None:
-    gcu = await make_peer()
-    async with udp_to(gcu) as t:
-        assert isinstance(t, UdpTransport)
-        rec = Recorder(t)
-        assert t.connected
-        assert t.draining is (reader_path == "draining")
-        assert t.datagram
-        assert t.peer == gcu.address
-        t.send(b"\xa5\x5a host packet")
-        await gcu.wait_count(1)
-        data, source = gcu.received[0]
-        assert data == b"\xa5\x5a host packet"
-        assert source[:2] == t.local_address
-        for i in range(50):
-            gcu.send(bytes([i]) * (i + 1), t.local_address)
-        await rec.wait_until(lambda: len(rec.chunks) == 50)
-        assert rec.chunks == [bytes([i]) * (i + 1) for i in range(50)]
-        assert t.rx_datagrams == 50
-        assert t.rejected_datagrams == 0
-        assert t.tx_datagrams == 1
-    assert not t.connected
-    assert other_tasks() == set()
 
 
 async def test_datagrams_from_other_sources_are_counted_and_dropped(make_peer: Any) -> None:
@@ -245,46 +221,6 @@ async def test_send_errors_are_counted_and_not_fatal(make_peer: Any) -> None:
         assert gcu.received[0][0] == b"still alive"
 
 
-async def test_handler_exception_does_not_stop_delivery(make_peer: Any) -> None:
-    gcu = await make_peer()
-    loop = asyncio.get_running_loop()
-    reported: list[dict[str, Any]] = []
-    loop.set_exception_handler(lambda _loop, ctx: reported.append(ctx))
-    try:
-        async with udp_to(gcu) as t:
-            rec = Recorder(t)
-
-            def on_data(data: bytes) -> None:
-                rec.on_data(data)
-                if data == b"boom":
-                    raise RuntimeError("handler bug")
-
-            t.set_handlers(on_data, rec.on_event)
-            gcu.send(b"boom", t.local_address)
-            gcu.send(b"after", t.local_address)
-            await rec.wait_until(lambda: len(rec.chunks) == 2)
-            assert rec.chunks == [b"boom", b"after"]
-            assert len(reported) == 1
-            assert isinstance(reported[0]["exception"], RuntimeError)
-    finally:
-        loop.set_exception_handler(None)
-
-
-async def test_close_is_idempotent_and_send_after_close_raises(make_peer: Any) -> None:
-    gcu = await make_peer()
-    t = udp_to(gcu)
-    with pytest.raises(LinkLost):
-        t.send(b"not open yet")
-    await t.open()
-    await t.open()  # already open: no second socket
-    await t.close()
-    await t.close()
-    assert not t.connected
-    with pytest.raises(LinkLost, match="closed"):
-        t.send(b"too late")
-    assert other_tasks() == set()
-
-
 async def test_bind_conflict_raises_linklost(make_peer: Any) -> None:
     gcu = await make_peer()
     busy = await make_peer()
@@ -339,3 +275,47 @@ async def test_reset_is_a_no_op(make_peer: Any) -> None:
         assert t.sends_dropped == 0
         with pytest.raises(TypeError, match="reason"):
             t.reset(42)  # type: ignore[arg-type]
+
+
+class _UdpPeer:
+    """The :class:`Peer` datagram endpoint as the contract's peer of ``transport``."""
+
+    def __init__(self, peer: Peer, transport: UdpTransport) -> None:
+        self.peer, self.transport = peer, transport
+
+    def send(self, data: bytes) -> None:
+        self.peer.send(data, self.transport.local_address)
+
+    async def read(self, n: int) -> bytes:
+        async def loop() -> bytes:
+            while len(data := b"".join(d for d, _ in self.peer.received)) < n:
+                self.peer.got.clear()
+                await self.peer.got.wait()
+            return data
+
+        return await asyncio.wait_for(loop(), 2.0)
+
+
+class TestUdpContract(TransportContract):
+    """The contract on both receive paths (``reader_path``: draining and fallback)."""
+
+    datagram = True
+    ordered = False
+    closed_message = "closed"
+
+    @pytest.fixture
+    async def link(self, make_peer: Any, reader_path: str) -> Link:
+        gcu = await make_peer()
+        t = udp_to(gcu)
+        return Link(t, _UdpPeer(gcu, t), extra={"gcu": gcu, "reader_path": reader_path})
+
+    def after_exchange(self, link: Link, rec: Recorder) -> None:
+        t, gcu = link.transport, link.extra["gcu"]
+        assert isinstance(t, UdpTransport)
+        assert t.draining is (link.extra["reader_path"] == "draining")
+        assert t.peer == gcu.address
+        assert all(source[:2] == t.local_address for _, source in gcu.received)
+        assert [data for data, _ in gcu.received] == TO_PEER
+        assert t.rx_datagrams == len(FROM_PEER)
+        assert t.rejected_datagrams == 0
+        assert t.tx_datagrams == len(TO_PEER)

@@ -14,7 +14,6 @@ import asyncio
 import enum
 import logging
 import math
-import time
 from collections.abc import Callable
 
 from gcu_async._checks import check_instance
@@ -46,10 +45,10 @@ from gcu_async.session import (
     TicketDone,
     TicketState,
 )
+from gcu_async.transport.arrival import ArrivalBound, arrival_bound
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 log = logging.getLogger("gcu_async.client")
-_RESOLUTION = time.get_clock_info("monotonic").resolution
 
 
 class ClientState(enum.Enum):
@@ -90,10 +89,9 @@ class Driver:
         self.closed_event: asyncio.Event | None = None
         """Set once the client closes (None before it was first opened)."""
         self._datagram = transport.datagram
-        self._rx_bound: float | None = None
-        """Replies delivered from now on arrived after this time (links that reorder); None:
-        the transport cannot tell (see :meth:`_arrival_bound`)."""
-        self._bound_from_loop = False
+        self._bound: ArrivalBound | None = None
+        """Replies delivered from now on arrived after ``_bound.value`` (links that reorder);
+        None: the link never reorders, or cannot tell (:func:`arrival_bound`)."""
         self._timer_when = 0.0
         """Event-loop time the pending timer is due."""
 
@@ -133,7 +131,7 @@ class Driver:
             self.state = ClientState.CLOSED
             raise
         self.session.open(self._clock())
-        self._arrival_bound(loop)
+        self._bound = arrival_bound(self.transport, self._clock, loop)
         self._pump()
         try:
             await asyncio.wait_for(asyncio.shield(self._first_reply), connect_timeout)
@@ -217,34 +215,9 @@ class Driver:
             raise UnsupportedCommandError(opcode_name(command_code(command)), pod_name(model))
 
     # -- the pump: the only place packets are sent -----------------------------------------
-    def _arrival_bound(self, loop: asyncio.AbstractEventLoop) -> None:
-        """Choose how replies get a lower bound on their arrival (links that reorder; docs/
-        client.md, "The session contract", A4). Best, for free: on a draining transport whose
-        loop keeps this client's time (the default clock), a reply not delivered by the time
-        a timer runs arrived after that loop iteration's poll returned, which was no earlier
-        than the timer was due. Else: read the link empty before each send
-        (``read_pending``). Else none: the session assumes a responsive loop."""
-        self._rx_bound = None
-        self._bound_from_loop = False
-        transport = self.transport
-        if transport.ordered:
-            return
-        now = self._clock()
-        if (transport.drains and self._clock is time.monotonic
-                and type(loop).time is asyncio.BaseEventLoop.time):  # fmt: skip
-            self._bound_from_loop = True
-            self._rx_bound = now
-        elif transport.read_pending():
-            self._rx_bound = now
-        else:
-            log.info("%s cannot be read on demand: reply timing assumes a responsive event "
-                     "loop (docs/client.md, \"The session contract\")", transport.url)
-
     def _on_timer(self) -> None:
-        if self._bound_from_loop and not self.transport.backlog:
-            # this iteration's poll returned at >= when - resolution (asyncio runs I/O
-            # callbacks before timers): later deliveries arrived after it
-            self._rx_bound = self._timer_when - _RESOLUTION
+        if self._bound is not None:
+            self._bound.timer_ran(self._timer_when)
         self._timer, self._timer_at = None, math.inf
         self._pump()
 
@@ -254,10 +227,8 @@ class Driver:
             self._timer, self._timer_at = None, math.inf
         session = self.session
         try:
-            if self._rx_bound is not None and not self._bound_from_loop:
-                now = self._clock()  # read what waits first: replies before sends
-                if self.transport.read_pending():
-                    self._rx_bound = now
+            if self._bound is not None:  # read what waits first: replies before sends
+                self._bound.before_send()
             wire = WIRE_LOG.isEnabledFor(logging.DEBUG)  # the level may change at run time
             session.trace = self._trace if wire else None
             now = self._clock()
@@ -298,8 +269,9 @@ class Driver:
         log_packet(self.transport.url, False, packet)
 
     def _on_data(self, data: bytes) -> None:
+        bound = self._bound
         self.session.receive(data, self._clock(), datagram=self._datagram,
-                             arrived_after=self._rx_bound)  # fmt: skip
+                             arrived_after=None if bound is None else bound.value)  # fmt: skip
         self._dispatch()
         if self._timer is None:  # a reply never brings the next wake-up forward
             self._schedule()

@@ -29,7 +29,13 @@ from collections.abc import Iterable
 
 from gcu_async.protocol.aircraft import AircraftState
 from gcu_async.protocol.enums import SubFrameRequest
-from gcu_async.protocol.host_frames import MS_PER_WEEK, ControlValues, HostMainFrame, HostSubFrame
+from gcu_async.protocol.host_frames import (
+    GNSS_WEEK_MAX,
+    MS_PER_WEEK,
+    ControlValues,
+    HostMainFrame,
+    HostSubFrame,
+)
 
 log = logging.getLogger("gcu_async.session")
 
@@ -41,21 +47,21 @@ position in the sub frame)."""
 TIMEOUT_MAX = 10.0
 """Seconds; the longest ``aircraft_timeout`` accepted (beyond it a value is no measurement
 of the aircraft any more)."""
-GNSS_WEEK_MAX = 32767
-"""The last week host bytes 55–56 (S16) can carry."""
 
 
 class AircraftFeed:
     """The aircraft state given by the user, when each part was given, and the frames that
     say what is current (module docstring). ``timeout``: seconds a part stays current."""
 
-    __slots__ = ("_frames", "_given", "_gnss", "_name", "_sent_sub", "_stale", "_sub",
+    __slots__ = ("_frames", "_given", "_gnss", "_idle", "_name", "_sent_sub", "_stale", "_sub",
                  "episodes", "state", "timeout")  # fmt: skip
 
     def __init__(self, timeout: float, name: str = "gcu") -> None:
         self.timeout = timeout
         self._name = name
         self.state = AircraftState()
+        self._idle = True
+        """Nothing was ever given: no claim, nothing stale (the per-packet fast path)."""
         self._given: dict[str, float] = {}
         """Part → session time it was last given."""
         self._gnss: tuple[int, int, float] | None = None
@@ -72,6 +78,7 @@ class AircraftFeed:
         """``state`` is the aircraft state from now on; the parts named in ``given`` were
         measured at ``now`` (the others keep the time they were given)."""
         self.state = state
+        self._idle = False
         for name in given:
             if name in PARTS:
                 self._given[name] = now
@@ -128,6 +135,8 @@ class AircraftFeed:
     def check(self, now: float) -> bool:
         """Follow the stale episodes at a packet built at ``now`` (rule 4); True when one
         starts (then one warning is logged)."""
+        if self._idle:
+            return False
         stale = self.stale_parts(now)
         was = self._stale
         self._stale = stale
@@ -150,7 +159,7 @@ class AircraftFeed:
                now: float) -> tuple[HostMainFrame, HostSubFrame | None]:  # fmt: skip
         """The main frame (with the control values ``values``, None = invalid) and sub frame
         of a packet built at ``now``."""
-        ins = self.ins_valid(now)
+        ins = False if self._idle else self.ins_valid(now)
         key = (values, ins)
         frame = self._frames.get(key)
         if frame is None:

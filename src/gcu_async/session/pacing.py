@@ -74,6 +74,17 @@ class Pacer:
         sent = self._sent
         return sent[0] + (WINDOW + MARGIN) if len(sent) == self.limit else -math.inf
 
+    def open_at(self, opcode: int) -> float:
+        """Earliest time the rate bound and the edge guard both allow a packet with
+        ``opcode`` (the later of :meth:`window_open_at` and :meth:`edge_open_at`, in one
+        call: the session asks twice per heartbeat)."""
+        sent = self._sent
+        when = sent[0] + (WINDOW + MARGIN) if len(sent) == self.limit else -math.inf
+        last = self.last_opcode
+        if last is not None and opcode != last and self.last_time + self.guard > when:
+            when = self.last_time + self.guard
+        return when
+
     def early_open_at(self) -> float:
         """Earliest time a packet may go before its slot (one per :data:`WINDOW`)."""
         return self.last_early + WINDOW

@@ -127,8 +127,10 @@ class RunLedger:
         found.delivered = True
         if found.index > self.delivered_index:
             self.delivered_index = found.index
-        self._mark_stale_before(found.index, now + self.guard)
-        self._prune(earliest)
+        if found.index > self._stale_upto:
+            self._mark_stale_before(found.index, now + self.guard)
+        if self._runs[0].index < self.delivered_index:
+            self._prune(earliest)
         return found
 
     def may_start(self, opcode: int) -> bool:

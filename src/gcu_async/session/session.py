@@ -92,6 +92,7 @@ from gcu_async.session.tickets import Ticket, TicketState
 log = logging.getLogger("gcu_async.session")
 
 NULL = NullCommand()
+_NULL_OPCODE = int(Opcode.NULL)
 _RECORDING = int(CameraFlags.RECORDING)
 RATE_MIN_HZ = 2.0
 """Slowest heartbeat accepted (the protocol advises 30–50 Hz and must never stop)."""
@@ -222,6 +223,8 @@ class Session:
         """Called with every whole packet received (before it is decoded), e.g. to log it."""
         self._feed = AircraftFeed(self.aircraft_timeout, self.name)
         self._last_encoded: tuple[object, object, object, bytes] = (None, None, None, b"")
+        self._silent_at = math.inf
+        """When the link counts as lost if no reply comes first (set by every reply)."""
 
     # -- lifecycle -------------------------------------------------------------------------
     @property
@@ -417,17 +420,16 @@ class Session:
             return None
         self._timers(now)
         pacer = self._pacer
-        pacer.settle(now)
+        if pacer.late:
+            pacer.settle(now)
         slot_due = now >= pacer.next_slot
         if not slot_due and not self._kick:
+            return None  # the gate's slot bound, without building the decision
+        when, command, opcode, start = self._gate(now)
+        if now < when:
+            if not slot_due and (start is None or now < pacer.early_open_at()):
+                self._kick = False  # early only to start a command, once per window
             return None
-        command, start = self._next_command(now)
-        if not slot_due and (start is None or now < pacer.early_open_at()):
-            self._kick = False  # early only to start a command, once per window
-            return None
-        opcode = command_code(command)
-        if now < pacer.window_open_at() or now < pacer.edge_open_at(opcode):
-            return None  # the rate bound or the edge guard: next_wakeup says when
         self._kick = False
         ticket = self._in_flight
         if start is not None:
@@ -450,7 +452,8 @@ class Session:
         self._health.packets_sent += 1
         if self._feed.check(now):
             self.stats.aircraft_stale += 1
-        main, sub = self._feed.frames(self._valid_values(now), now)
+        values = None if self._control.values is None else self._valid_values(now)
+        main, sub = self._feed.frames(values, now)
         return self._encode(main, sub, command)
 
     def next_wakeup(self, now: float) -> float:
@@ -460,48 +463,66 @@ class Session:
         (:attr:`~gcu_async.session.pacing.Pacer.late`): the driver then polls
         at its next turn, which on a busy event loop is the next iteration, late enough for
         the next slot."""
-        state = self._state
-        if state is SessionState.CLOSED:
+        if self._state is SessionState.CLOSED:
             return math.inf
+        when = self._gate(now)[0]
+        if when <= now or self._pacer.late:
+            return now  # poll(now) sends (after its timers), or settles the late packet
+        timer = self._timers_due_at()
+        if timer <= now:
+            return now  # poll(now) fires it
+        if timer < when:
+            when = timer
+        if self._queue and self._queue[0].recording_target is not None:
+            settle = self._recording.settles_at()  # the head waits for the belief to settle
+            if now < settle < when:
+                when = settle
+        return when if when > now + MIN_WAKE else now + MIN_WAKE
+
+    def _gate(self, now: float) -> tuple[float, Command, int, Ticket | None]:
+        """The one gate of sending, read by :meth:`poll` (a packet goes iff ``now`` has
+        reached it) and :meth:`next_wakeup` (it wakes the driver then): (the earliest time
+        the next packet may go, its command and opcode, the queued ticket it would start).
+
+        A packet goes on its heartbeat slot, or early (before it) to start a command that
+        was just queued (``_kick``) once the early window is open; never before the rate
+        bound and the edge guard allow (:mod:`~gcu_async.session.pacing`)."""
         pacer = self._pacer
-        if not self._queue and self._in_flight is None:  # idle: the heartbeat, the silence
-            when = pacer.next_slot
-            gate = pacer.window_open_at()
-            if gate > when:
-                when = gate
-            if pacer.last_opcode:  # the first null after a command waits for the edge
-                gate = pacer.last_time + pacer.guard
-                if gate > when:
-                    when = gate
-            if when <= now or pacer.late:
-                return now  # poll(now) sends the null (the same gates), or settles the owed slot
-            last = self._health.last_reply
-            if state is SessionState.UP and last is not None:
-                silence = last + self.silence_timeout
-                if silence < when:
-                    when = silence
-            return when if when > now + MIN_WAKE else now + MIN_WAKE
-        command, start = self._next_command(now)
-        gate = max(pacer.window_open_at(), pacer.edge_open_at(command_code(command)))
-        when = max(pacer.next_slot, gate)
-        if self._kick and start is not None:  # a command may start before its slot
-            when = min(when, max(now, gate, pacer.early_open_at()))
-        if when <= now or pacer.late:
-            return now  # poll(now) sends (the same gates, after its timers), or settles
+        command: Command = NULL
+        opcode, start, t = _NULL_OPCODE, None, self._in_flight
+        if t is not None:  # it repeats until its feedback
+            command, opcode = t.command, t.opcode
+        elif self._queue:  # the head starts once a reply proved it may, and its state is known
+            head = self._queue[0]
+            if self._ledger.may_start(head.opcode) and (
+                head.recording_target is None or self._recording.value(now) is not None
+            ):
+                command, opcode, start = head.command, head.opcode, head
+        gate = pacer.open_at(opcode)
+        when = pacer.next_slot
+        if gate > when:
+            when = gate
+        if self._kick and start is not None:
+            early = pacer.early_open_at()
+            if gate > early:
+                early = gate
+            if early < when:
+                when = early
+        return when, command, opcode, start
+
+    def _timers_due_at(self) -> float:
+        """When the earliest timer :meth:`_timers` fires is due: the link's silence, the
+        command in flight's timeout, a queued command's deadline (``inf``: none)."""
+        when = self._silent_at if self._state is SessionState.UP else math.inf
         t = self._in_flight
-        if t is not None and t.first_sent is not None:
-            when = min(when, t.first_sent + t.timeout)
+        if t is not None and t.first_sent is not None and t.first_sent + t.timeout < when:
+            when = t.first_sent + t.timeout
         deadlines = self._deadlines
         while deadlines and deadlines[0][2].state is not TicketState.QUEUED:
             heapq.heappop(deadlines)
-        if deadlines:
-            when = min(when, deadlines[0][0])
-        if self._state is SessionState.UP and self._health.last_reply is not None:
-            when = min(when, self._health.last_reply + self.silence_timeout)
-        settle = self._recording.settles_at()
-        if settle > now and self._queue and self._queue[0].recording_target is not None:
-            when = min(when, settle)
-        return max(when, now + MIN_WAKE)
+        if deadlines and deadlines[0][0] < when:
+            when = deadlines[0][0]
+        return when
 
     # -- observations ----------------------------------------------------------------------
     @property
@@ -585,6 +606,8 @@ class Session:
     def _on_reply(self, main: GcuMainFrame, sub: GcuSubFrame | None, feedback: Feedback,
                   now: float, earliest: float | None) -> None:  # fmt: skip
         self._health.on_reply(now)
+        # the first instant the silence since this reply exceeds silence_timeout
+        self._silent_at = math.nextafter(now + self.silence_timeout, math.inf)
         self._status = main
         self._feedback = feedback
         if sub is not None:
@@ -627,8 +650,7 @@ class Session:
 
     # -- internals: timers and the queue ---------------------------------------------------
     def _timers(self, now: float) -> None:
-        if (self._state is SessionState.UP
-                and self._health.silent_for(now) > self.silence_timeout):  # fmt: skip
+        if self._state is SessionState.UP and now >= self._silent_at:
             self._link_down(now, f"no reply for {self.silence_timeout:g} s", reset=True)
         if not self._deadlines and self._in_flight is None:
             return
@@ -664,19 +686,6 @@ class Session:
                 return
             queue.popleft()
             self._finish(head, TicketState.SKIPPED, now)
-
-    def _next_command(self, now: float) -> tuple[Command, Ticket | None]:
-        """(command for the next packet, the queued ticket it would start or None)."""
-        t = self._in_flight
-        if t is not None:
-            return t.command, None
-        if self._queue:
-            head = self._queue[0]
-            if self._ledger.may_start(head.opcode) and (
-                head.recording_target is None or self._recording.value(now) is not None
-            ):
-                return head.command, head
-        return NULL, None
 
     def _link_down(self, now: float, reason: str, *, reset: bool) -> None:
         if self._state is SessionState.UP:

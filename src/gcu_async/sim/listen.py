@@ -11,10 +11,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from gcu_async.protocol.links import DEFAULT_BAUDRATE
-from gcu_async.transport.url import Converter, merge_options, split_hostport, split_url
+from gcu_async.transport.registry import KINDS
+from gcu_async.transport.url import merge_options, split_hostport, split_url
 
 EXAMPLES = "udp://127.0.0.1:2337, tcp://127.0.0.1:2332, pty, serial:///dev/ttyUSB0?baudrate=115200"
-_OPTIONS: dict[str, dict[str, Converter]] = {"udp": {}, "tcp": {}, "pty": {}}
 
 
 @dataclass(frozen=True)
@@ -22,7 +22,8 @@ class ListenSpec:
     """Where a simulator endpoint listens."""
 
     kind: str
-    """``udp``, ``tcp``, ``pty`` or ``serial``."""
+    """The scheme (a :data:`~gcu_async.transport.registry.KINDS` key): ``udp``, ``tcp``,
+    ``pty`` or ``serial``."""
     host: str = ""
     port: int = 0
     path: str = ""
@@ -47,11 +48,10 @@ def parse_listen_url(url: str) -> ListenSpec:
     (``listen URL 'URL': FIELD: ...``)."""
     try:
         parts = split_url(url, listen=True)
-        options = merge_options(parts.scheme, parts.query, {}, _OPTIONS.get(parts.scheme))
+        allowed = KINDS[parts.scheme].listen_options
+        options = merge_options(parts.scheme, parts.query, {}, allowed)
     except ValueError as exc:
         raise ValueError(f"listen URL {url!r}: {exc}") from None
-    if parts.scheme == "serial":
-        baudrate = options.get("baudrate", DEFAULT_BAUDRATE)
-        assert isinstance(baudrate, int)
-        return ListenSpec("serial", path=parts.device, baudrate=baudrate)
-    return ListenSpec(parts.scheme, parts.host, parts.port)
+    # each listen option is a ListenSpec field (registry.TransportKind.listen_options)
+    return ListenSpec(parts.scheme, parts.host, parts.port, parts.device,
+                      **options)  # type: ignore[arg-type]  # fmt: skip

@@ -56,6 +56,7 @@ def main_frame(state: SimState) -> GcuMainFrame:
         g.miss[1],
         _wrapped(_M["relative_x_raw"], rel.x),
         _wrapped(_M["relative_y_raw"], rel.y),
+        _wrapped(_M["relative_z_raw"], rel.z),
         _clamped(_M["roll_raw"], att.roll),
         _wrapped(_M["pitch_raw"], att.pitch),
         _wrapped(_M["yaw_raw"], att.yaw),

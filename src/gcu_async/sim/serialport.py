@@ -19,6 +19,7 @@ from typing import Any
 
 from gcu_async.protocol.links import DEFAULT_BAUDRATE
 from gcu_async.sim.exchange import Exchange
+from gcu_async.sim.listen import ListenSpec
 from gcu_async.sim.server import ServerParts, SimServer
 
 log = logging.getLogger("gcu_async.sim")
@@ -157,3 +158,14 @@ def _open_device(path: str, baudrate: int) -> Any:
         return serial.Serial(path, baudrate=baudrate, timeout=0, write_timeout=0)
     except serial.SerialException as exc:
         raise OSError(f"{path}: {exc}") from exc
+
+
+def listen(parts: ServerParts, spec: ListenSpec) -> SerialServer:
+    """The ``serial`` listener of the transport registry (docs/architecture.md): the
+    device ``spec.path`` at ``spec.baudrate``."""
+    return SerialServer(parts, spec.path, spec.baudrate)
+
+
+def listen_pty(parts: ServerParts, spec: ListenSpec) -> SerialServer:
+    """The ``pty`` listener of the transport registry: a new pseudo-terminal."""
+    return SerialServer(parts)

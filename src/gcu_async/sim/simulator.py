@@ -21,6 +21,7 @@ from gcu_async.sim.server import ServerParts, SimServer
 from gcu_async.sim.stall import StallSwitch
 from gcu_async.sim.tcp import TcpServer
 from gcu_async.sim.udp import UdpServer
+from gcu_async.transport.registry import kind_of
 
 
 class GcuSimulator:
@@ -129,12 +130,7 @@ class GcuSimulator:
 
     def serve(self, listen: str | ListenSpec) -> SimServer:
         """The endpoint a listen URL names: ``udp://HOST[:PORT]``, ``tcp://HOST[:PORT]``,
-        ``pty`` or ``serial:///dev/ttyX[?baudrate=N]``."""
+        ``pty`` or ``serial:///dev/ttyX[?baudrate=N]`` (each scheme's factory is its
+        :class:`~gcu_async.transport.registry.TransportKind`'s ``listener``)."""
         spec = parse_listen_url(listen) if isinstance(listen, str) else listen
-        if spec.kind == "udp":
-            return self.serve_udp(spec.host, spec.port, spec.reply_to, spec.reply_port)
-        if spec.kind == "tcp":
-            return self.serve_tcp(spec.host, spec.port)
-        if spec.kind == "pty":
-            return self.serve_pty()
-        return self.serve_serial(spec.path, spec.baudrate)
+        return kind_of(spec.kind, listen=True).listen(self._parts(), spec)

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 
 from gcu_async.protocol.links import GCU_TCP_PORT
 from gcu_async.sim.exchange import Exchange
+from gcu_async.sim.listen import ListenSpec
 from gcu_async.sim.server import ServerParts, SimServer
 from gcu_async.sim.stall import TransportReading
 from gcu_async.transport._common import format_hostport
@@ -229,3 +230,8 @@ def _ends(transport: asyncio.BaseTransport) -> tuple[Address, Address] | None:
     if not (isinstance(local, tuple) and isinstance(peer, tuple)):
         return None
     return (str(local[0]), int(local[1])), (str(peer[0]), int(peer[1]))
+
+
+def listen(parts: ServerParts, spec: ListenSpec) -> TcpServer:
+    """The ``tcp`` listener of the transport registry (docs/architecture.md)."""
+    return TcpServer(parts, spec.host, spec.port)

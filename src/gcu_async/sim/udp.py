@@ -21,6 +21,7 @@ from typing import Any
 from gcu_async.capture.synth import source_address
 from gcu_async.protocol.links import GCU_UDP_PORT
 from gcu_async.sim.exchange import Exchange
+from gcu_async.sim.listen import ListenSpec
 from gcu_async.sim.server import ServerParts, SimServer
 from gcu_async.sim.stall import TransportReading
 from gcu_async.transport._common import format_hostport
@@ -179,3 +180,8 @@ class UdpServer(SimServer):
         transport.close()
         if self._closed is not None:
             await asyncio.wait_for(asyncio.shield(self._closed), timeout=2.0)
+
+
+def listen(parts: ServerParts, spec: ListenSpec) -> UdpServer:
+    """The ``udp`` listener of the transport registry (docs/architecture.md)."""
+    return UdpServer(parts, spec.host, spec.port, spec.reply_to, spec.reply_port)

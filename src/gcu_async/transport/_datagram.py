@@ -39,6 +39,7 @@ import os
 import socket
 import struct
 import sys
+from collections.abc import Callable
 from typing import Any
 
 MAX_PER_EVENT = 10_000
@@ -120,9 +121,9 @@ def _address(addr: Any) -> str:
 class DrainingDatagramTransport(asyncio.DatagramTransport):
     """Datagram transport over a bound, non-blocking ``sock`` for ``protocol``.
 
-    Calls ``protocol.datagram_received`` for each datagram, ``error_received`` for OS
-    errors, and ``connection_lost(None)`` (via ``call_soon``) after :meth:`close`; the socket
-    is closed then. ``connection_made`` is not called."""
+    Calls ``protocol.datagram_received`` (or ``deliver``) for each datagram,
+    ``error_received`` for OS errors, and ``connection_lost(None)`` (via ``call_soon``) after
+    :meth:`close`; the socket is closed then. ``connection_made`` is not called."""
 
     def __init__(
         self,
@@ -130,11 +131,14 @@ class DrainingDatagramTransport(asyncio.DatagramTransport):
         sock: socket.socket,
         protocol: asyncio.DatagramProtocol,
         bufsize: int,
+        deliver: Callable[[bytes, Any], None] | None = None,
     ) -> None:
         super().__init__(extra={"socket": sock, "sockname": sock.getsockname()})
         self._loop = loop
         self._sock = sock
         self._protocol = protocol
+        self._deliver = protocol.datagram_received if deliver is None else deliver
+        """Where each datagram goes (``protocol.datagram_received`` unless given)."""
         self._view = memoryview(bytearray(bufsize))
         self._closing = False
         self.error_queue = enable_error_queue(sock)
@@ -153,6 +157,7 @@ class DrainingDatagramTransport(asyncio.DatagramTransport):
         the socket was found empty at the end. ``woken``: called for a readiness event (one
         that finds no datagram then reads the error queue)."""
         recv, view, protocol = self._sock.recvfrom_into, self._view, self._protocol
+        deliver = self._deliver
         for i in range(self.max_per_event):
             if self._closing:  # a handler closed us: the socket may be gone already
                 return False
@@ -173,7 +178,7 @@ class DrainingDatagramTransport(asyncio.DatagramTransport):
             except OSError as exc:
                 protocol.error_received(exc)
                 return False  # like asyncio; anything left is read at the next event
-            protocol.datagram_received(bytes(view[:n]), addr)
+            deliver(bytes(view[:n]), addr)
         return False
 
     def sendto(self, data: Any, addr: Any = None) -> None:

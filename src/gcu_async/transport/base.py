@@ -6,7 +6,9 @@ datagram transports deliver one datagram per call, see :attr:`Transport.datagram
 changes go to ``on_event``. ``send`` never blocks: it hands bytes to the OS (or the peer),
 may drop them when the OS cannot take more (stream transports, counted in
 ``sends_dropped``), and raises :class:`~gcu_async.errors.LinkLost` when the link is down.
-:meth:`Transport.reset` discards whatever is still queued towards the peer.
+:meth:`Transport.reset` discards whatever is still queued towards the peer. A transport
+that can bound when its replies arrived (UDP) also implements the optional
+:class:`~gcu_async.transport.arrival.ReadsOnDemand`; the others need not.
 """
 
 from __future__ import annotations
@@ -66,6 +68,14 @@ class Transport(OpenClose):
     with :meth:`set_handlers` before opening and are called from the event loop.
     """
 
+    ordered: bool = True
+    """True when packets arrive in the order sent (stream transports). Datagram transports
+    (UDP) may reorder; the client then guards commands against it. A fact of the class,
+    which the transport registry reports (:class:`~gcu_async.transport.registry.TransportKind`)."""
+    datagram: bool = False
+    """True when every ``on_data`` call carries exactly one received datagram (UDP), so
+    the receiver may deframe each call on its own. False for byte streams."""
+
     def __init__(self) -> None:
         self._on_data: DataHandler = _drop
         self._on_event: EventHandler = _ignore
@@ -87,39 +97,6 @@ class Transport(OpenClose):
     @abc.abstractmethod
     def connected(self) -> bool:
         """True while :meth:`send` can deliver bytes."""
-
-    @property
-    def ordered(self) -> bool:
-        """True when packets arrive in the order sent (stream transports). Datagram
-        transports (UDP) may reorder; the client then guards commands against it."""
-        return True
-
-    @property
-    def datagram(self) -> bool:
-        """True when every ``on_data`` call carries exactly one received datagram (UDP), so
-        the receiver may deframe each call on its own. False for byte streams."""
-        return False
-
-    @property
-    def drains(self) -> bool:
-        """True when every readiness event delivers everything the OS holds for this
-        transport (unless :attr:`backlog`): then whatever is delivered in a later event-loop
-        iteration arrived after this iteration's poll of the OS returned."""
-        return False
-
-    @property
-    def backlog(self) -> bool:
-        """True when the last readiness event stopped before the OS queue was empty (a
-        per-event cap: see :attr:`drains`)."""
-        return False
-
-    def read_pending(self) -> bool:
-        """Read and deliver, right now and synchronously, everything the OS holds for this
-        transport. True if it found the link empty at the end, so that whatever is
-        delivered later arrived after this call began; False if this transport cannot tell
-        (the default; see :meth:`UdpTransport.read_pending`). A driver on a busy event loop
-        uses this to bound how late it processes replies (docs/client.md, "Assumptions")."""
-        return False
 
     def reset(self, reason: str) -> None:
         """Discard what is queued towards the peer and start the link over, so that nothing

@@ -2,7 +2,9 @@
 
 :class:`CapturingTransport` wraps any :class:`~gcu_async.transport.Transport` and behaves
 exactly like it (every property and method is the wrapped one's; attributes it does not
-define, such as ``local_address`` or ``rx_datagrams``, are read from the wrapped transport),
+define, such as ``local_address``, ``rx_datagrams`` or the optional
+:class:`~gcu_async.transport.arrival.ReadsOnDemand` members, are read from the wrapped
+transport, so it has a capability exactly when the wrapped one has),
 while writing each datagram, TCP segment or serial chunk to a
 :class:`~gcu_async.capture.PacketCapture`:
 
@@ -46,6 +48,8 @@ class CapturingTransport(Transport):
         super().__init__()
         self.inner = inner
         """The wrapped transport."""
+        self.ordered = inner.ordered
+        self.datagram = inner.datagram
         self.capture = capture
         self._acquired = False
         self._tcp: tuple[Address, Address] | None = None
@@ -63,31 +67,12 @@ class CapturingTransport(Transport):
         return self.inner.connected
 
     @property
-    def ordered(self) -> bool:
-        return self.inner.ordered
-
-    @property
-    def datagram(self) -> bool:
-        return self.inner.datagram
-
-    @property
-    def drains(self) -> bool:
-        return self.inner.drains
-
-    @property
-    def backlog(self) -> bool:
-        return self.inner.backlog
-
-    @property
     def sends_dropped(self) -> int:
         return self.inner.sends_dropped
 
     @sends_dropped.setter
     def sends_dropped(self, value: int) -> None:
         return  # the base class initialises it; the wrapped transport keeps the count
-
-    def read_pending(self) -> bool:
-        return self.inner.read_pending()
 
     def __getattr__(self, name: str) -> Any:
         if name == "inner":  # not set yet (during __init__)

@@ -130,7 +130,10 @@ async def _endpoint(
 ) -> asyncio.DatagramTransport:
     """A draining transport where the loop has ``add_reader``; else asyncio's own."""
     try:
-        return DrainingDatagramTransport(loop, sock, proto, MAX_DATAGRAM)
+        # IPv4 addresses come as (str, int) already: straight to the owner, one call less
+        # per datagram (IPv6 ones are 4-tuples: through the protocol, which shortens them)
+        deliver = proto.owner._datagram if sock.family == socket.AF_INET else None
+        return DrainingDatagramTransport(loop, sock, proto, MAX_DATAGRAM, deliver)
     except NotImplementedError:  # e.g. Windows' proactor loop
         pass
     dtransport, _ = await loop.create_datagram_endpoint(lambda: proto, sock=sock)
@@ -141,19 +144,19 @@ async def _endpoint(
 
 class _UdpProtocol(asyncio.DatagramProtocol):
     def __init__(self, owner: UdpTransport) -> None:
-        self._owner = owner
+        self.owner = owner
         self.closed: asyncio.Future[None] = asyncio.get_running_loop().create_future()
 
     def datagram_received(self, data: bytes, addr: tuple[Any, ...]) -> None:
-        self._owner._datagram(data, (str(addr[0]), int(addr[1])))
+        self.owner._datagram(data, (str(addr[0]), int(addr[1])))
 
     def error_received(self, exc: Exception) -> None:
-        self._owner._error(exc)
+        self.owner._error(exc)
 
     def connection_lost(self, exc: Exception | None) -> None:
         if not self.closed.done():
             self.closed.set_result(None)
-        self._owner._lost(self, exc)
+        self.owner._lost(self, exc)
 
 
 class UdpTransport(Reopening, Transport):
@@ -166,6 +169,11 @@ class UdpTransport(Reopening, Transport):
     (default) sets it when ``local_port`` is not 0 and the platform has it. ``discovery``,
     ``follow_peer`` and ``reuse_port``: see the module docstring.
     """
+
+    ordered = False
+    """UDP datagrams may arrive out of order."""
+    datagram = True
+    """Every ``on_data`` call carries exactly one datagram."""
 
     def __init__(
         self,
@@ -214,16 +222,6 @@ class UdpTransport(Reopening, Transport):
     @property
     def url(self) -> str:
         return f"udp://{format_hostport(self._host, self._port)}"
-
-    @property
-    def ordered(self) -> bool:
-        """UDP datagrams may arrive out of order."""
-        return False
-
-    @property
-    def datagram(self) -> bool:
-        """Every ``on_data`` call carries exactly one datagram."""
-        return True
 
     @property
     def connected(self) -> bool:
@@ -344,7 +342,8 @@ class UdpTransport(Reopening, Transport):
         """Send one datagram to :attr:`remote_address`. Raises :class:`LinkLost` if closed.
 
         OS errors are counted (:attr:`send_errors`), not raised: see the module docstring."""
-        dtransport, dest = self._dtransport, self.remote_address
+        dtransport = self._dtransport
+        dest = self._peer if self._follow_peer and self._peer is not None else self._remote
         if dtransport is None or dtransport.is_closing() or dest is None:
             raise LinkLost(f"{self.url}: transport is closed")
         self.tx_datagrams += 1
@@ -358,6 +357,8 @@ class UdpTransport(Reopening, Transport):
 
     @property
     def backlog(self) -> bool:
+        """True when the last readiness event stopped before the socket was empty (the
+        per-event cap)."""
         dtransport = self._dtransport
         return isinstance(dtransport, DrainingDatagramTransport) and dtransport.backlog
 
@@ -394,7 +395,8 @@ class UdpTransport(Reopening, Transport):
                     peer=source,
                 )  # fmt: skip
                 call_guarded(self._on_event, event, "event")
-        elif self._remote is None or not same_address(self._remote, source):
+        elif source != self._remote and (self._remote is None
+                                         or not same_address(self._remote, source)):  # fmt: skip
             self.rejected_datagrams += 1
             return
         self.rx_datagrams += 1

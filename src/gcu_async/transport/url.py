@@ -31,134 +31,23 @@ so a URL means the same place to both (a listen URL may also say ``pty``, and po
 from __future__ import annotations
 
 import ipaddress
-import random
 import re
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from collections.abc import Mapping
 from urllib.parse import parse_qsl, unquote, urlsplit
 
-from gcu_async.protocol.links import DEFAULT_BAUDRATE, GCU_TCP_PORT, GCU_UDP_PORT
-from gcu_async.transport.backoff import Backoff
 from gcu_async.transport.base import Transport
-from gcu_async.transport.serial import SerialTransport, check_baudrate
-from gcu_async.transport.tcp import TcpTransport
-from gcu_async.transport.udp import UdpTransport
+from gcu_async.transport.options import Converter, check_host
+from gcu_async.transport.registry import KINDS, UrlParts, allowed_schemes, kind_of
 
-Converter = Callable[[str, object, bool], object]
-"""(field, value, value is query text) → the option's value, or ValueError."""
+__all__ = [
+    "Converter", "UrlParts", "check_host", "merge_options", "open_transport", "serial_device",
+    "split_hostport", "split_url",
+]  # fmt: skip
 
-_LABEL = re.compile(r"(?!-)[A-Za-z0-9-]{1,63}(?<!-)\Z")
-_TRUE = {"1", "true", "yes", "on"}
-_FALSE = {"0", "false", "no", "off"}
-
-
-def check_host(field: str, host: str) -> str:
-    """Return ``host`` if it is an IP address or a valid DNS name, else raise ValueError."""
-    try:
-        ipaddress.ip_address(host)
-        return host
-    except ValueError:
-        pass
-    if ":" in host:
-        raise ValueError(f"{field}: {host!r} is not a valid IPv6 address")
-    if re.fullmatch(r"[0-9.]+", host):
-        raise ValueError(f"{field}: {host!r} is not a valid IPv4 address")
-    name = host[:-1] if host.endswith(".") else host
-    if not name or len(name) > 253 or not all(_LABEL.match(p) for p in name.split(".")):
-        raise ValueError(f"{field}: {host!r} is not a valid host name or address")
-    return host
-
-
-def _as_int(field: str, value: object, text: bool) -> object:
-    if text and isinstance(value, str):
-        if not re.fullmatch(r"[+-]?[0-9]+", value.strip()):
-            raise ValueError(f"{field}: {value!r} is not an integer")
-        return int(value)
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise ValueError(f"{field}: {value!r} is not an integer (an int)")
-    return value
-
-
-def _as_float(field: str, value: object, text: bool) -> object:
-    if text and isinstance(value, str):
-        try:
-            return float(value)
-        except ValueError:
-            raise ValueError(f"{field}: {value!r} is not a number") from None
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"{field}: {value!r} is not a number (an int or float)")
-    try:
-        return float(value)
-    except OverflowError:
-        raise ValueError(f"{field}: {value!r} is too large for a number of seconds") from None
-
-
-def _as_bool(field: str, value: object, text: bool) -> object:
-    if isinstance(value, bool):
-        return value
-    if text and isinstance(value, str) and value.strip().lower() in _TRUE | _FALSE:
-        return value.strip().lower() in _TRUE
-    if text:
-        raise ValueError(
-            f"{field}: {value!r} is not a boolean (use 1/0, true/false, yes/no, on/off)"
-        )
-    raise ValueError(f"{field}: {value!r} is not a bool (True or False)")
-
-
-def _optional(conv: Converter) -> Converter:
-    def convert(field: str, value: object, text: bool) -> object:
-        if value is None or (text and isinstance(value, str) and value.strip().lower() == "none"):
-            return None
-        return conv(field, value, text)
-
-    return convert
-
-
-def _as_host(field: str, value: object, text: bool) -> object:
-    if not isinstance(value, str):
-        raise ValueError(f"{field}: {value!r} is not a host name or address")
-    return check_host(field, value)
-
-
-def _as_rng(field: str, value: object, text: bool) -> object:
-    if not isinstance(value, random.Random):
-        raise ValueError(f"{field}: {value!r} is not a random.Random")
-    return value
-
-
-_UDP_OPTIONS: dict[str, Converter] = {
-    "local_port": _as_int,
-    "local_host": _as_host,
-    "broadcast": _as_bool,
-    "discovery": _as_bool,
-    "follow_peer": _as_bool,
-    "reuse_port": _optional(_as_bool),
+_SCHEMES: dict[str, Mapping[str, Converter]] = {
+    k.scheme: k.options for k in KINDS.values() if k.connect is not None
 }
-_TCP_OPTIONS: dict[str, Converter] = {
-    "connect_timeout": _as_float,
-    "reconnect": _as_bool,
-    "backoff_base": _as_float,
-    "backoff_factor": _as_float,
-    "backoff_cap": _as_float,
-    "max_attempts": _optional(_as_int),
-    "max_total": _optional(_as_float),
-    "rng": _as_rng,
-}
-_KEYWORD_ONLY = {"rng"}
-_BACKOFF_FIELDS = (
-    ("backoff_base", "base"), ("backoff_factor", "factor"), ("backoff_cap", "cap"),
-    ("max_attempts", "max_attempts"), ("max_total", "max_total"),
-)  # fmt: skip
-def _as_baudrate(field: str, value: object, text: bool) -> object:
-    return check_baudrate(_as_int(field, value, text))
-
-
-_SERIAL_OPTIONS: dict[str, Converter] = {"baudrate": _as_baudrate}
-_SCHEMES: dict[str, dict[str, Converter]] = {
-    "udp": _UDP_OPTIONS,
-    "tcp": _TCP_OPTIONS,
-    "serial": _SERIAL_OPTIONS,
-}
+"""The client's options per scheme (read from the registry)."""
 
 
 def open_transport(url: str, **options: object) -> Transport:
@@ -176,26 +65,6 @@ def open_transport(url: str, **options: object) -> Transport:
         raise ValueError(f"{url or repr(url)}: {exc}") from exc
 
 
-@dataclass(frozen=True)
-class UrlParts:
-    """A URL taken apart by :func:`split_url`."""
-
-    scheme: str
-    """``udp``, ``tcp``, ``serial`` (or, for a listen URL, ``pty``), in lower case."""
-    host: str = ""
-    """udp/tcp: the host name or address (an IPv6 address without its brackets)."""
-    port: int = 0
-    """udp/tcp: the port, or the GCU's default for the scheme when the URL gives none."""
-    device: str = ""
-    """serial: the device (``/dev/ttyUSB0``, ``COM3``; see :func:`serial_device`)."""
-    query: str = ""
-    """The query string, still to be read as options."""
-
-
-_DEFAULT_PORTS = {"udp": GCU_UDP_PORT, "tcp": GCU_TCP_PORT}
-_PTY_FORMS = ("pty", "pty:", "pty://")
-
-
 def split_url(url: str, *, listen: bool = False) -> UrlParts:
     """Take a GCU URL apart: the rules shared by the client's transports and the
     simulator's listen URLs.
@@ -208,42 +77,38 @@ def split_url(url: str, *, listen: bool = False) -> UrlParts:
     (``scheme``, ``host``, ``port``, ``path``, ``device``, ``fragment``); the caller adds
     the URL in front.
     """
-    if listen and url.strip().lower() in _PTY_FORMS:
-        return UrlParts("pty")
+    if listen:
+        bare = url.strip().lower()
+        for kind in KINDS.values():
+            if kind.address == "none" and bare in (kind.scheme, f"{kind.scheme}:",
+                                                    f"{kind.scheme}://"):  # fmt: skip
+                return UrlParts(kind.scheme)
     try:
         parts = urlsplit(url)
     except ValueError as exc:
         raise ValueError(f"host: cannot parse ({exc})") from None
-    scheme = parts.scheme.lower()
-    allowed = "udp://, tcp://, serial:// or pty" if listen else "udp://, tcp:// or serial://"
-    if not scheme:
-        raise ValueError(f"scheme: missing (use {allowed})")
-    if scheme not in _SCHEMES:
-        raise ValueError(f"scheme: {parts.scheme!r} is not supported (allowed: {allowed})")
+    if not parts.scheme:
+        raise ValueError(f"scheme: missing (use {allowed_schemes(listen=listen)})")
+    kind = kind_of(parts.scheme, listen=listen)
+    scheme = kind.scheme
+    if kind.address == "none":
+        raise ValueError(f"scheme: {kind.form} takes nothing after it (use {kind.form})")
     if parts.fragment:
         raise ValueError(f"fragment: {parts.fragment!r} is not allowed")
-    if scheme == "serial":
+    if kind.address == "device":
         return UrlParts(scheme, device=serial_device(parts.netloc, parts.path), query=parts.query)
     if parts.path not in ("", "/"):
         raise ValueError(f"path: {parts.path!r} is not allowed (use {scheme}://HOST[:PORT])")
     lowest = 0 if listen else 1
-    host, port = split_hostport(parts.netloc, _DEFAULT_PORTS[scheme], lowest_port=lowest)
+    host, port = split_hostport(parts.netloc, kind.default_port, lowest_port=lowest)
     return UrlParts(scheme, host, port, query=parts.query)
 
 
 def _build(url: str, kwargs: Mapping[str, object]) -> Transport:
     parts = split_url(url)
-    scheme = parts.scheme
-    opts = merge_options(scheme, parts.query, kwargs)
-    if scheme == "serial":
-        baudrate = opts.get("baudrate", DEFAULT_BAUDRATE)
-        return SerialTransport(parts.device, baudrate)  # type: ignore[arg-type]
-    host, port = parts.host, parts.port
-    if scheme == "udp":
-        return UdpTransport(host, port, **opts)  # type: ignore[arg-type]
-    backoff_opts = {field: opts.pop(name) for name, field in _BACKOFF_FIELDS if name in opts}
-    backoff = Backoff(**backoff_opts)  # type: ignore[arg-type]
-    return TcpTransport(host, port, backoff=backoff, **opts)  # type: ignore[arg-type]
+    kind = KINDS[parts.scheme]
+    assert kind.connect is not None  # split_url took a client's scheme
+    return kind.connect(parts, merge_options(parts.scheme, parts.query, kwargs))
 
 
 def merge_options(
@@ -254,16 +119,18 @@ def merge_options(
 ) -> dict[str, object]:
     """The options of a URL's query and of keyword arguments, converted; ``allowed``: the
     options a URL of ``scheme`` takes (default: a transport's)."""
-    allowed = _SCHEMES[scheme] if allowed is None else allowed
+    kind = KINDS[scheme]
+    allowed = kind.options if allowed is None else allowed
+    keyword_only = kind.keyword_only
     names = ", ".join(sorted(allowed))
-    query_names = ", ".join(sorted(set(allowed) - _KEYWORD_ONLY))
+    query_names = ", ".join(sorted(set(allowed) - keyword_only))
     raw: dict[str, tuple[object, bool]] = {}
     try:
         pairs = parse_qsl(query, keep_blank_values=True, strict_parsing=bool(query))
     except ValueError:
         raise ValueError(f"query: {query!r} is not name=value pairs joined by &") from None
     for name, value in pairs:
-        if name not in allowed or name in _KEYWORD_ONLY:
+        if name not in allowed or name in keyword_only:
             raise ValueError(
                 f"option: {name!r} is not a {scheme} URL option (allowed: {query_names})"
             )
@@ -345,4 +212,3 @@ def serial_device(netloc: str, path: str) -> str:
     if not device or device == "/":
         raise ValueError("device: missing (use serial:///dev/ttyUSB0, or serial://COM3 on Windows)")
     return device
-
