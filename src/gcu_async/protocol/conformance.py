@@ -520,7 +520,8 @@ class HostConformance:
     def _ins_report(self, devs: dict[str, Deviation], duration: float) -> None:
         d = devs.get("ins_valid.toggles")
         zero = devs.get("main.all_zero")
-        per_min = self._ins_toggles / (duration / 60) if duration > 0 else 0.0
+        minutes = duration / 60  # 0.0 for a duration too small to divide (5e-324 s)
+        per_min = self._ins_toggles / minutes if minutes > 0 else 0.0
         if d is not None:
             d.title = f"INS-valid flag toggles {self._ins_toggles} times ({per_min:.1f} a minute)"
             d.diagnosis = (f"{self._dropouts} dropouts of at most {SHORT_DROPOUT} packets: the "

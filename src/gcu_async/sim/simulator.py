@@ -3,8 +3,10 @@ endpoints, with fault injection, a "silence" switch and a "stall" switch."""
 
 from __future__ import annotations
 
+import importlib
 import math
 import os
+from typing import cast
 
 from gcu_async.capture.writer import PacketCapture, as_capture
 from gcu_async.protocol.enums import PodModel
@@ -133,4 +135,9 @@ class GcuSimulator:
         ``pty`` or ``serial:///dev/ttyX[?baudrate=N]`` (each scheme's factory is its
         :class:`~gcu_async.transport.registry.TransportKind`'s ``listener``)."""
         spec = parse_listen_url(listen) if isinstance(listen, str) else listen
-        return kind_of(spec.kind, listen=True).listen(self._parts(), spec)
+        kind = kind_of(spec.kind, listen=True)
+        if kind.listener is None:
+            raise ValueError(f"scheme: the simulator cannot listen on {kind.form}")
+        module, _, name = kind.listener.partition(":")
+        factory = getattr(importlib.import_module(module), name)
+        return cast("SimServer", factory(self._parts(), spec))

@@ -13,10 +13,9 @@ simulator imports this package, never the other way round.
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Literal, cast
+from typing import Literal
 
 from gcu_async.protocol.links import DEFAULT_BAUDRATE, GCU_TCP_PORT, GCU_UDP_PORT
 from gcu_async.transport.backoff import Backoff
@@ -34,10 +33,6 @@ from gcu_async.transport.options import (
 from gcu_async.transport.serial import SerialTransport
 from gcu_async.transport.tcp import TcpTransport
 from gcu_async.transport.udp import UdpTransport
-
-if TYPE_CHECKING:
-    from gcu_async.sim.listen import ListenSpec
-    from gcu_async.sim.server import ServerParts, SimServer
 
 
 @dataclass(frozen=True)
@@ -106,14 +101,6 @@ class TransportKind:
     def form(self) -> str:
         """How the scheme is written in messages (``udp://``, ``pty``)."""
         return self.scheme if self.address == "none" else f"{self.scheme}://"
-
-    def listen(self, parts: ServerParts, spec: ListenSpec) -> SimServer:
-        """The simulator's (not yet started) endpoint for ``spec``."""
-        if self.listener is None:
-            raise ValueError(f"scheme: the simulator cannot listen on {self.form}")
-        module, _, name = self.listener.partition(":")
-        factory = getattr(importlib.import_module(module), name)
-        return cast("SimServer", factory(parts, spec))
 
 
 def _udp(parts: UrlParts, options: dict[str, object]) -> Transport:
