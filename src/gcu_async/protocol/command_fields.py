@@ -21,7 +21,7 @@ from typing import Any, ClassVar, Literal, NamedTuple
 from gcu_async._checks import check_bool, check_int
 from gcu_async.errors import FieldRangeError
 from gcu_async.protocol.anomalies import Anomaly, check_raw
-from gcu_async.protocol.enums import Mode
+from gcu_async.protocol.enums import CameraMask, Mode
 from gcu_async.protocol.fields import WireField
 from gcu_async.protocol.units import check_member, check_tuple, quantize
 
@@ -228,6 +228,9 @@ CAMERA_MASK = WireField("cameras", "B", "camera mask", 1, 0xFF, raw_unit="camera
 class Cameras(ParamKind):
     """The camera mask (KK / NN), an ``int`` 1–255 (docs/protocol-notes.md §3)."""
 
+    enum: ClassVar[type[CameraMask]] = CameraMask
+    """The flags its bits name (the dissector's rows carry the name)."""
+
     def __post_init__(self) -> None:
         self._set(("cameras",), (CAMERA_MASK,))
 
@@ -246,8 +249,6 @@ class Cameras(ParamKind):
         return encode
 
     def decode(self, raw: int) -> Any:  # type: ignore[override]
-        from gcu_async.protocol.enums import CameraMask
-
         return CameraMask(_in_range(self.wire[0], raw))
 
     def anomalies(self, raw: int) -> tuple[Anomaly, ...]:  # type: ignore[override]

@@ -899,7 +899,8 @@ class WireParam(NamedTuple):
     """Raw range, inclusive; ``None`` = the wire type's own range."""
     high: int | None
     enum: str | None
-    """Name of the IntEnum (in :mod:`gcu_async.protocol`) of a choice field, else ``None``."""
+    """Name of the IntEnum of a choice field, or of the IntFlag whose bits a mask field names
+    (in :mod:`gcu_async.protocol`), else ``None``."""
 
 
 class WireRow(NamedTuple):
