@@ -14,7 +14,7 @@ import asyncio
 import enum
 import logging
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 from gcu_async._checks import check_instance
 from gcu_async.client.telemetry import Callbacks, Telemetry
@@ -36,6 +36,7 @@ from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame
 from gcu_async.protocol.pods import POD_NAMES, pod_name, supports
 from gcu_async.session import (
+    Event,
     LinkDown,
     LinkUp,
     ResetLink,
@@ -45,7 +46,7 @@ from gcu_async.session import (
     TicketDone,
     TicketState,
 )
-from gcu_async.transport.arrival import ArrivalBound, arrival_bound
+from gcu_async.transport.arrival import ArrivalBound, arrival_bound, loop_keeps
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 log = logging.getLogger("gcu_async.client")
@@ -94,6 +95,8 @@ class Driver:
         None: the link never reorders, or cannot tell (:func:`arrival_bound`)."""
         self._timer_when = 0.0
         """Event-loop time the pending timer is due."""
+        self._loop_clock = False
+        """The event loop's time is ``clock`` (:func:`loop_keeps`)."""
 
     @property
     def pod_model(self) -> PodModel | None:
@@ -132,6 +135,7 @@ class Driver:
             raise
         self.session.open(self._clock())
         self._bound = arrival_bound(self.transport, self._clock, loop)
+        self._loop_clock = loop_keeps(self._clock, loop)
         self._pump()
         try:
             await asyncio.wait_for(asyncio.shield(self._first_reply), connect_timeout)
@@ -216,8 +220,9 @@ class Driver:
 
     # -- the pump: the only place packets are sent -----------------------------------------
     def _on_timer(self) -> None:
-        if self._bound is not None:
-            self._bound.timer_ran(self._timer_when)
+        bound = self._bound
+        if bound is not None:
+            bound.timer_ran(self._timer_when)
         self._timer, self._timer_at = None, math.inf
         self._pump()
 
@@ -227,8 +232,9 @@ class Driver:
             self._timer, self._timer_at = None, math.inf
         session = self.session
         try:
-            if self._bound is not None:  # read what waits first: replies before sends
-                self._bound.before_send()
+            bound = self._bound
+            if bound is not None and not bound.from_loop:  # replies before sends
+                bound.before_send()
             wire = WIRE_LOG.isEnabledFor(logging.DEBUG)  # the level may change at run time
             session.trace = self._trace if wire else None
             now = self._clock()
@@ -244,7 +250,9 @@ class Driver:
                 except (LinkLost, OSError) as exc:
                     session.send_failed()
                     log.debug("send failed: %s", exc)
-            self._dispatch()
+            events = session.events()
+            if events:
+                self._handle(events)
         except Exception:  # the heartbeat must never stop
             log.exception("gcu_async: heartbeat step failed")
         self._schedule()
@@ -260,7 +268,8 @@ class Driver:
             self._timer.cancel()
         loop = self._loop
         assert loop is not None
-        self._timer_when = loop.time() + (when - now)
+        # the loop's own clock needs no conversion (the usual case: time.monotonic)
+        self._timer_when = when if self._loop_clock else loop.time() + (when - now)
         self._timer = loop.call_at(self._timer_when, self._on_timer)
         self._timer_at = when
 
@@ -269,10 +278,12 @@ class Driver:
         log_packet(self.transport.url, False, packet)
 
     def _on_data(self, data: bytes) -> None:
-        bound = self._bound
-        self.session.receive(data, self._clock(), datagram=self._datagram,
-                             arrived_after=None if bound is None else bound.value)  # fmt: skip
-        self._dispatch()
+        bound, session = self._bound, self.session
+        session.receive(data, self._clock(), datagram=self._datagram,
+                        arrived_after=None if bound is None else bound.value)  # fmt: skip
+        events = session.events()
+        if events:
+            self._handle(events)
         if self._timer is None:  # a reply never brings the next wake-up forward
             self._schedule()
 
@@ -291,8 +302,10 @@ class Driver:
     # -- events ----------------------------------------------------------------------------
     def _dispatch(self) -> None:
         events = self.session.events()
-        if not events:
-            return
+        if events:
+            self._handle(events)
+
+    def _handle(self, events: Sequence[Event]) -> None:
         for event in events:
             if isinstance(event, TelemetrySample):
                 self.telemetry.publish(event)

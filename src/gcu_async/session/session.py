@@ -70,6 +70,7 @@ from gcu_async.protocol.packets import (
     DEFAULT_VERSION,
     GCU_HEADER,
     SUPPORTED_VERSIONS,
+    GcuPacket,
     HostPacket,
     decode_gcu_packet,
 )
@@ -223,6 +224,10 @@ class Session:
         """Called with every whole packet received (before it is decoded), e.g. to log it."""
         self._feed = AircraftFeed(self.aircraft_timeout, self.name)
         self._last_encoded: tuple[object, object, object, bytes] = (None, None, None, b"")
+        self._last_datagram = b""
+        self._last_packet: GcuPacket | None = None
+        """The last whole-packet datagram decoded, and its packet (decoding is a pure
+        function of the bytes: a repeated datagram reuses it)."""
         self._silent_at = math.inf
         """When the link counts as lost if no reply comes first (set by every reply)."""
 
@@ -265,13 +270,20 @@ class Session:
         if self._state is SessionState.CLOSED:
             return
         deframer = self._deframer
-        if (datagram and not deframer.buffered and len(data) >= BASE_LENGTH
-                and data[2] | data[3] << 8 == len(data) and data[:2] == GCU_HEADER):  # fmt: skip
-            try:  # the usual datagram: exactly one packet (the decoder checks the CRC)
-                packet = decode_gcu_packet(data)
-            except RemoteProtocolError:
-                pass  # the deframer below sorts it out and counts what it discards
-            else:
+        if datagram and not deframer.buffered:
+            packet: GcuPacket | None = None
+            if data == self._last_datagram:  # one memcmp: an idle GCU repeats its reply
+                packet = self._last_packet
+            elif (len(data) >= BASE_LENGTH and data[2] | data[3] << 8 == len(data)
+                    and data[:2] == GCU_HEADER):  # fmt: skip
+                try:  # the usual datagram: exactly one packet (the decoder checks the CRC)
+                    packet = decode_gcu_packet(data)
+                except RemoteProtocolError:
+                    pass  # the deframer below sorts it out and counts what it discards
+                else:
+                    if type(data) is bytes:  # immutable: safe to compare with later
+                        self._last_datagram, self._last_packet = data, packet
+            if packet is not None:
                 if self.trace is not None:
                     self.trace(data)
                 if packet.version not in SUPPORTED_VERSIONS:

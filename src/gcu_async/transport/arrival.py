@@ -79,6 +79,12 @@ class ArrivalBound:
                 self.value = now
 
 
+def loop_keeps(clock: Callable[[], float], loop: asyncio.AbstractEventLoop) -> bool:
+    """True when ``loop``'s time is ``clock`` itself (:func:`time.monotonic` on asyncio's own
+    loops): a time on the clock is then a time on the loop."""
+    return clock is time.monotonic and type(loop).time is asyncio.BaseEventLoop.time
+
+
 def arrival_bound(transport: Transport, clock: Callable[[], float],
                   loop: asyncio.AbstractEventLoop) -> ArrivalBound | None:  # fmt: skip
     """How a driver bounds reply arrival on ``transport`` (call it once the link is open).
@@ -91,8 +97,7 @@ def arrival_bound(transport: Transport, clock: Callable[[], float],
         return None
     if isinstance(transport, ReadsOnDemand):
         now = clock()
-        if (transport.drains and clock is time.monotonic
-                and type(loop).time is asyncio.BaseEventLoop.time):  # fmt: skip
+        if transport.drains and loop_keeps(clock, loop):
             return ArrivalBound(transport, clock, now, from_loop=True)
         if transport.read_pending():
             return ArrivalBound(transport, clock, now, from_loop=False)
