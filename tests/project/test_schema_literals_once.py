@@ -41,6 +41,10 @@ integers, percent, the time and unit conversions (ms per s, s per hour, s per da
 round counts (10,000 datagrams, 10 km, 10 ms in µs)."""
 
 
+COMMON_PAIRS = {(0.0, 100.0)}
+"""Pairs too common to mean one field: 0–100 is every percentage (a zoom's share of its
+range, a count of examples), whichever field also has it."""
+
 SMALL = 10
 """A range within ±10 (a switch's 0–1, a choice of a few, a palette) is too common to count as
 a copy: small integers are everywhere."""
@@ -153,7 +157,7 @@ def _copies(ranges: set[tuple[float, float]], root: Path = SRC) -> list[str]:
                 continue
             present = set(numbers)
             pairs = [r for r in ranges if r[0] in present and r[1] in present
-                     and max(abs(r[0]), abs(r[1])) > SMALL]  # fmt: skip
+                     and max(abs(r[0]), abs(r[1])) > SMALL and r not in COMMON_PAIRS]  # fmt: skip
             loners = sorted(present & distinctive)
             if pairs or loners:
                 what = pairs[0] if pairs else loners
