@@ -17,6 +17,7 @@ import random
 import struct
 from pathlib import Path
 
+from _catalogue_samples import required_samples
 from _protocol_strategies import seal
 from gcu_async.capture import PacketCapture
 from gcu_async.protocol import (
@@ -75,6 +76,8 @@ from gcu_async.protocol import (
     ZoomStop,
     ZoomTo,
 )
+from gcu_async.protocol.builder import build
+from gcu_async.protocol.catalogue import CATALOGUE
 from gcu_async.protocol.fields import WIRE_RANGES
 from gcu_async.protocol.host_frames import ControlValues
 from gcu_async.wireshark.tables import WireParam, rows
@@ -101,6 +104,9 @@ COMMANDS: list[Command] = [
     TargetDetection(True), DigitalZoom(False), FillLight(0), FillLight(255), Ranging(True),
     Ranging(False), UnknownCommand(0x42, b"\x01\x02\xff"), UnknownCommand(0xFE),
 ]  # fmt: skip
+COMMANDS += [build(e, **required_samples(e)).command for e in CATALOGUE
+             if e.command not in {type(c) for c in COMMANDS}]  # fmt: skip
+"""Above: chosen edge values per command; then one sample of any command added since."""
 
 
 def host_packets() -> list[bytes]:

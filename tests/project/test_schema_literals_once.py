@@ -1,4 +1,5 @@
-"""Every numeric range of the protocol schema is written once in ``src/``.
+"""Every numeric range of the protocol schema is written once in ``src/``, and so is every
+opcode and frame byte offset (the second half of this file).
 
 The schema (:mod:`gcu_async.protocol.fields`'s ``WireField``\\ s, gathered from every frame
 schema and every command's parameters) is where a field's raw range lives; everything else
@@ -39,6 +40,10 @@ COMMON = {0, 1, 2, 10, 60, 100, 1000, 3600, 10000, 86400}
 integers, percent, the time and unit conversions (ms per s, s per hour, s per day), and
 round counts (10,000 datagrams, 10 km, 10 ms in µs)."""
 
+
+COMMON_PAIRS = {(0.0, 100.0)}
+"""Pairs too common to mean one field: 0–100 is every percentage (a zoom's share of its
+range, a count of examples), whichever field also has it."""
 
 SMALL = 10
 """A range within ±10 (a switch's 0–1, a choice of a few, a palette) is too common to count as
@@ -152,7 +157,7 @@ def _copies(ranges: set[tuple[float, float]], root: Path = SRC) -> list[str]:
                 continue
             present = set(numbers)
             pairs = [r for r in ranges if r[0] in present and r[1] in present
-                     and max(abs(r[0]), abs(r[1])) > SMALL]  # fmt: skip
+                     and max(abs(r[0]), abs(r[1])) > SMALL and r not in COMMON_PAIRS]  # fmt: skip
             loners = sorted(present & distinctive)
             if pairs or loners:
                 what = pairs[0] if pairs else loners
@@ -195,3 +200,118 @@ def test_a_copy_is_caught(tmp_path: Path) -> None:
     (tmp_path / "protocol" / "fields.py").write_text(f"R = {raw!r}\n", encoding="utf-8")
     found = _copies(ranges, tmp_path)
     assert [f.split(":")[0] for f in found] == ["lone.py", "pair.py"], found
+
+
+# -- opcodes and byte offsets ---------------------------------------------------------------
+# An opcode is written once, as its ``Opcode`` member (commands.py); a byte offset once, in
+# layout.py and the frame schemas (each field's offset derives from the table's order).
+# Outside them, three kinds of literal are copies: a hex literal that is an opcode (from 0x10:
+# 0x00-0x08 are everyday bit values), a frame boundary (bytes 36-38, 68-70) anywhere, and a
+# field's byte offset as a subscript or slice bound (``raw[69]``, ``raw[5:37]``).
+
+OPCODE_ALLOWED = {
+    ("protocol/enums.py", "ANGLE_CONTROL = 0x10"): "Mode bytes: the GCU's reported mode, "
+    "a fact of its own whose values V2.0.6 took from the opcodes entering each mode",
+    ("protocol/enums.py", "POINTING_LOCK = 0x11"): "Mode byte",
+    ("protocol/enums.py", "POINTING_FOLLOW = 0x12"): "Mode byte",
+    ("protocol/enums.py", "TOP_DOWN = 0x13"): "Mode byte",
+    ("protocol/enums.py", "EULER_CONTROL = 0x14"): "Mode byte",
+    ("protocol/enums.py", "GAZE = 0x16"): "Mode byte",
+    ("protocol/enums.py", "TRACK = 0x17"): "Mode byte",
+    ("protocol/enums.py", "FPV = 0x1C"): "Mode byte",
+    ("capture/synth.py", "SYN, FIN, RST, PSH, ACK = 0x02, 0x01, 0x04, 0x08, 0x10"):
+        "TCP header flags",
+    ("capture/blocks.py", "2.0 ** -(value & 0x7F) if value & 0x80"):
+        "pcapng if_tsresol: bit 7 chooses a power of two",
+}
+"""(file, text of the line) → why a hex literal there that equals an opcode is no copy."""
+
+FOREIGN_LAYOUTS = {
+    "capture/blocks.py": "pcapng block layouts",
+    "sim/udp.py": "the kernel's struct ifreq",
+    "transport/_datagram.py": "socket addresses (sockaddr_in, sockaddr_in6)",
+    "cli/decode.py": "the width of a token shown in an error message",
+    "wireshark/__init__.py": "a digest's first 16 hex digits",
+}
+"""Files whose subscripts index other formats than V2.0.6 packets."""
+
+
+def frame_offsets() -> tuple[set[int], set[int]]:
+    """(every field's byte offset in a packet, the frame boundaries around the sub frame)."""
+    from gcu_async.protocol import layout
+    from gcu_async.protocol.gcu_frames import GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA
+    from gcu_async.protocol.host_frames import HOST_MAIN_SCHEMA, HOST_SUB_SCHEMA
+
+    fields = {layout.SUB_HEADER_OFFSET, layout.OPCODE_OFFSET, layout.OPCODE_OFFSET + 1}
+    for schema in (GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA, HOST_MAIN_SCHEMA, HOST_SUB_SCHEMA):
+        fields |= set(schema.offsets.values())
+    main_end = layout.MAIN_START + layout.MAIN_SIZE - 1
+    sub_end = layout.SUB_START + layout.SUB_SIZE - 1
+    boundaries = {main_end, layout.SUB_HEADER_OFFSET, layout.SUB_START, sub_end,
+                  layout.OPCODE_OFFSET, layout.OPCODE_OFFSET + 1}  # fmt: skip
+    return fields, boundaries
+
+
+def _literals(path: Path) -> Iterator[tuple[int, str, int, bool]]:
+    """Each integer literal: (line, its text, its value, written as a subscript or slice
+    bound)."""
+    tokens = tokenize.generate_tokens(io.StringIO(path.read_text(encoding="utf-8")).readline)
+    previous, depth = "", 0
+    for tok in tokens:
+        if tok.type == tokenize.NUMBER and not any(ch in tok.string.lower() for ch in ".ej"):
+            yield tok.start[0], tok.string, int(tok.string, 0), depth > 0 and previous in "[:"
+        if tok.type == tokenize.OP and tok.string in "[]":
+            depth = depth + 1 if tok.string == "[" else max(0, depth - 1)
+        if tok.type not in (tokenize.NL, tokenize.COMMENT, tokenize.NEWLINE):
+            previous = tok.string
+
+
+def _opcode_offset_copies(root: Path = SRC) -> list[str]:
+    from gcu_async.protocol.commands import Opcode
+
+    opcodes = {int(o) for o in Opcode if o >= 0x10}
+    fields, boundaries = frame_offsets()
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        rel = path.relative_to(root).as_posix()
+        if rel in SCHEMA_MODULES:
+            continue
+        lines = path.read_text(encoding="utf-8").splitlines()
+        for lineno, text, value, subscript in _literals(path):
+            line = lines[lineno - 1]
+            if text.lower().startswith("0x") and value in opcodes:
+                if not any(rel == f and t in line for f, t in OPCODE_ALLOWED):
+                    found.append(f"{rel}:{lineno}: opcode {text}")
+            elif not text.lower().startswith("0x") and value in boundaries:
+                found.append(f"{rel}:{lineno}: frame boundary {text}")
+            elif subscript and value in fields and rel not in FOREIGN_LAYOUTS:
+                found.append(f"{rel}:{lineno}: byte offset {text}")
+    return found
+
+
+def test_no_opcode_or_offset_is_written_outside_the_schema() -> None:
+    copies = _opcode_offset_copies()
+    assert not copies, "opcodes or byte offsets written again outside the schema:\n" + "\n".join(
+        copies)
+
+
+def test_every_opcode_offset_allowance_is_still_needed() -> None:
+    for (rel, text), why in OPCODE_ALLOWED.items():
+        assert text in (SRC / rel).read_text(encoding="utf-8"), f"{rel}: {text!r} is gone ({why})"
+    for rel in FOREIGN_LAYOUTS:
+        fields, _ = frame_offsets()
+        assert any(s and v in fields for _, _, v, s in _literals(SRC / rel)), rel
+
+
+def test_an_opcode_or_offset_copy_is_caught(tmp_path: Path) -> None:
+    """The scan finds an opcode in hex, a frame boundary and a field offset in a subscript,
+    and skips the schema modules, docstrings, comments and small subscripts."""
+    (tmp_path / "opcode.py").write_text("def f(op):\n    return op == 0x25\n", encoding="utf-8")
+    (tmp_path / "boundary.py").write_text("END = 69\n", encoding="utf-8")
+    (tmp_path / "offset.py").write_text("def f(raw):\n    return raw[41]\n", encoding="utf-8")
+    (tmp_path / "fine.py").write_text('"""0x25 in a docstring."""\nX = raw[3]  # 0x81\n',
+                                      encoding="utf-8")  # fmt: skip
+    (tmp_path / "protocol").mkdir()
+    (tmp_path / "protocol" / "layout.py").write_text("OPCODE_OFFSET = 69\n", encoding="utf-8")
+    found = _opcode_offset_copies(tmp_path)
+    assert [f.split(":")[0] for f in found] == ["boundary.py", "offset.py", "opcode.py"], found

@@ -34,6 +34,7 @@ from gcu_async.protocol.enums import Opcode, opcode_name
 from gcu_async.protocol.fields import WIRE_RANGES
 from gcu_async.protocol.gcu_frames import UnknownSubFrame
 from gcu_async.protocol.host_frames import HOST_MAIN_SCHEMA, HostMainFrame, HostSubFrame
+from gcu_async.protocol.layout import CRC_SIZE, OPCODE_OFFSET
 from gcu_async.protocol.packets import HostPacket, decode_host_packet, version_anomalies
 
 EXAMPLES = 3
@@ -329,7 +330,7 @@ class HostConformance:
             self._end_run()
             return
         if raw:
-            params = raw[70:-2]
+            params = raw[OPCODE_OFFSET + 1 : -CRC_SIZE]
         elif isinstance(command, (AnomalousCommand, UnknownCommand)):
             params = command.params
         else:

@@ -280,8 +280,8 @@ def _check_envelope(data: bytes, header: bytes) -> None:
     if length != n:
         raise RemoteProtocolError(ProtocolErrorReason.LENGTH,
                                   f"length field says {length} bytes, packet has {n}")  # fmt: skip
-    crc = crc16_xmodem(memoryview(data)[:-2])
-    sent = CRC_STRUCT.unpack_from(data, n - 2)[0]
+    crc = crc16_xmodem(memoryview(data)[:-CRC_SIZE])
+    sent = CRC_STRUCT.unpack_from(data, n - CRC_SIZE)[0]
     if crc != sent:
         raise RemoteProtocolError(
             ProtocolErrorReason.CRC, f"CRC mismatch: computed 0x{crc:04X}, packet has 0x{sent:04X}"
