@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import enum
 import heapq
-import itertools
 import logging
 import math
 from collections import deque
@@ -213,7 +212,8 @@ class Session:
         self._state = SessionState.CLOSED
         self._queue: deque[Ticket] = deque()
         self._deadlines: list[tuple[float, int, Ticket]] = []
-        self._seq = itertools.count()
+        self._seq = 0
+        """Tie-breaker of equal deadlines: the order they were queued in."""
         self._in_flight: Ticket | None = None
         self._kick = False
         self._events: list[Event] = []
@@ -358,7 +358,8 @@ class Session:
                         recording_target=recording_target)  # fmt: skip
         self.stats.submitted += 1
         self._queue.append(ticket)
-        heapq.heappush(self._deadlines, (ticket.queue_deadline, next(self._seq), ticket))
+        self._seq += 1
+        heapq.heappush(self._deadlines, (ticket.queue_deadline, self._seq, ticket))
         self._control.submitted(ticket, control)
         if self._in_flight is None:
             self._kick = True

@@ -27,6 +27,7 @@ from typing import Any
 
 from gcu_async.capture.synth import source_address
 from gcu_async.capture.writer import PacketCapture
+from gcu_async.transport.arrival import ReadsOnDemand
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 from gcu_async.transport.serial import SerialTransport
 from gcu_async.transport.tcp import TcpTransport
@@ -43,6 +44,14 @@ def _address(value: Any) -> Address | None:
 
 class CapturingTransport(Transport):
     """``inner`` with every byte it exchanges written to ``capture``."""
+
+    def __new__(cls, inner: Transport, capture: PacketCapture) -> CapturingTransport:
+        # A runtime-checkable protocol's isinstance looks members up statically from
+        # Python 3.12 (``__getattr__`` does not count): a wrapper of a transport that
+        # reads on demand is the subclass that spells those members out.
+        if cls is CapturingTransport and isinstance(inner, ReadsOnDemand):
+            cls = _CapturingReader
+        return super().__new__(cls)
 
     def __init__(self, inner: Transport, capture: PacketCapture) -> None:
         super().__init__()
@@ -184,3 +193,21 @@ def with_capture(transport: Transport, capture: object) -> Transport:
 
     sink = as_capture(capture)
     return transport if sink is None else CapturingTransport(transport, sink)
+
+
+class _CapturingReader(CapturingTransport):
+    """A :class:`CapturingTransport` of a :class:`ReadsOnDemand` transport (what it
+    delivers on demand reaches the capture through the handlers it installed)."""
+
+    inner: Any
+
+    @property
+    def drains(self) -> bool:
+        return bool(self.inner.drains)
+
+    @property
+    def backlog(self) -> bool:
+        return bool(self.inner.backlog)
+
+    def read_pending(self) -> bool:
+        return bool(self.inner.read_pending())
