@@ -23,6 +23,28 @@ from gcu_async.transport import Transport
 
 EVERY_BYTE = bytes(range(256))
 """Every byte value: CR, LF, XON/XOFF, ^C and 0xA5 0x5A go through untouched."""
+def packet(k: int, size: int) -> bytes:
+    """Packet ``k`` of a stream in which every byte position can be checked."""
+    return (k.to_bytes(4, "big") * (size // 4 + 1))[:size]
+
+
+def send_whole_or_drop(t: Transport, sizes: list[int]) -> bytes:
+    """Send one :func:`packet` of each size to a peer that does not read; check that each
+    was accepted whole or dropped and counted (``sends_dropped``, ``bytes_sent``), and
+    return the accepted bytes, in order, which the peer must later read exactly."""
+    accepted, dropped = [], 0
+    for k, size in enumerate(sizes):
+        before = t.sends_dropped
+        t.send(packet(k, size))
+        if t.sends_dropped > before:
+            dropped += 1
+        else:
+            accepted.append(packet(k, size))
+    assert t.sends_dropped == dropped
+    assert t.bytes_sent == sum(map(len, accepted))
+    return b"".join(accepted)
+
+
 TO_PEER = [EVERY_BYTE, b"\xa5\x5a host packet"]
 """What the transport sends in the exchange test, packet by packet."""
 FROM_PEER = [bytes([i]) * (i + 1) for i in range(50)] + [EVERY_BYTE]

@@ -15,7 +15,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from _transport_contract import FROM_PEER, TO_PEER, Link, TransportContract
+from _transport_contract import (
+    FROM_PEER,
+    TO_PEER,
+    Link,
+    TransportContract,
+    packet,
+    send_whole_or_drop,
+)
 from _transport_recorder import Recorder, open_fds, other_tasks
 from gcu_async.errors import LinkLost
 from gcu_async.transport import BAUDRATES, Backoff, LinkEventKind, SerialTransport
@@ -180,8 +187,8 @@ async def one_readiness_event() -> None:
     await asyncio.sleep(0)
 
 
-def packet(k: int, size: int = 100) -> bytes:
-    return (k.to_bytes(4, "big") * (size // 4 + 1))[:size]
+PACKET_SIZE = 100
+"""Size of the packets these tests send when the size does not matter."""
 
 
 def fill_until_dropped(t: SerialTransport, limit: int = 100_000) -> list[bytes]:
@@ -189,10 +196,10 @@ def fill_until_dropped(t: SerialTransport, limit: int = 100_000) -> list[bytes]:
     accepted = []
     for k in range(limit):
         dropped = t.sends_dropped
-        t.send(packet(k))
+        t.send(packet(k, PACKET_SIZE))
         if t.sends_dropped > dropped:
             return accepted
-        accepted.append(packet(k))
+        accepted.append(packet(k, PACKET_SIZE))
     raise AssertionError(f"the pty took {limit} packets without pushing back")
 
 
@@ -258,7 +265,7 @@ async def test_backpressure_drops_whole_packets_instead_of_queueing(pty: Pty) ->
         assert len(accepted) * 100 > 4096  # the OS took what it could, the rest waits
         sent = t.bytes_sent
         for _ in range(500):  # a stalled UART under a 50 Hz heartbeat: nothing more queues
-            t.send(packet(0))
+            t.send(packet(0, PACKET_SIZE))
         assert t.sends_dropped == 501
         assert t.bytes_sent == sent == len(accepted) * 100
         # the other side resumes reading: exactly the accepted packets, whole, in order
@@ -378,18 +385,8 @@ def test_any_send_sequence_reaches_a_stalled_reader_whole_or_not_at_all(
         p = Pty()
         try:
             async with SerialTransport(p.path) as t:
-                accepted, dropped = [], 0
-                for k, size in enumerate(sizes):
-                    before = t.sends_dropped
-                    t.send(packet(k, size))
-                    if t.sends_dropped > before:
-                        dropped += 1
-                    else:
-                        accepted.append(packet(k, size))
-                assert t.sends_dropped == dropped
-                assert t.bytes_sent == sum(map(len, accepted))
+                expected = send_whole_or_drop(t, sizes)
                 assert t.bytes_sent <= PTY_HOLDS_AT_MOST + max(sizes)
-                expected = b"".join(accepted)
                 assert await p.read(len(expected), timeout=5.0) == expected
                 await asyncio.sleep(0.01)
                 assert read_now(p.controller) == b""

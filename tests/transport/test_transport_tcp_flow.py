@@ -13,6 +13,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from _transport_contract import packet, send_whole_or_drop
 from _transport_recorder import Recorder, other_tasks
 from gcu_async.errors import LinkLost
 from gcu_async.transport import Backoff, LinkEventKind, TcpTransport
@@ -113,9 +114,8 @@ async def settled_queues(conn: socket.socket, sock: socket.socket) -> tuple[int,
     raise AssertionError(f"the socket queues did not settle: {last}")
 
 
-def packet(k: int, size: int = 1000) -> bytes:
-    """Packet ``k`` of a stream in which every byte position can be checked."""
-    return (k.to_bytes(4, "big") * (size // 4 + 1))[:size]
+PACKET_SIZE = 1000
+"""Size of the packets these tests send when the size does not matter."""
 
 
 def fill_until_dropped(t: TcpTransport, size: int = 1000, limit: int = 200_000) -> list[bytes]:
@@ -153,7 +153,7 @@ async def test_backpressure_drops_new_packets_instead_of_queueing(peer: SilentPe
         # asyncio holds only the rest of the one packet the kernel took in part (or all of it)
         assert 0 < in_user_space <= 1000
         for _ in range(500):  # a stalled peer under a 50 Hz heartbeat: nothing more queues
-            t.send(packet(0))
+            t.send(packet(0, PACKET_SIZE))
         assert t.sends_dropped == 501
         assert t.bytes_sent == len(accepted) * 1000
 
@@ -324,18 +324,8 @@ def test_any_send_sequence_reaches_a_stalled_peer_whole_or_not_at_all(sizes: lis
             async with TcpTransport(LOOP, peer.port, reconnect=False) as t:
                 t.get_extra_info("socket").setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, 4096)
                 conn = await peer.accept()
-                accepted, dropped = [], 0
-                for k, size in enumerate(sizes):
-                    before = t.sends_dropped
-                    t.send(packet(k, size))
-                    if t.sends_dropped > before:
-                        dropped += 1
-                    else:
-                        accepted.append(packet(k, size))
-                assert t.sends_dropped == dropped
-                assert t.bytes_sent == sum(map(len, accepted))
+                expected = send_whole_or_drop(t, sizes)
                 assert t.bytes_sent <= KERNEL_HOLDS_AT_MOST + max(sizes)
-                expected = b"".join(accepted)
                 assert await read_n(conn, len(expected)) == expected
         finally:
             peer.close()
