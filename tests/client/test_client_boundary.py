@@ -72,7 +72,7 @@ from gcu_async.protocol import (
     ZoomTo,
 )
 from gcu_async.protocol.catalogue import CATALOGUE, Kind
-from gcu_async.protocol.gpstime import GPS_EPOCH
+from gcu_async.protocol.gpstime import GPS_EPOCH, MS_PER_WEEK
 from gcu_async.session import TelemetrySample
 from gcu_async.sim import GcuSimulator, SimulatorModel
 from gcu_async.sim.aircraft import ReceivedAircraft
@@ -99,6 +99,8 @@ class Rig:
     model: SimulatorModel
     received: list[HostPacket]
     """Every host packet the GCU decoded, in order."""
+    called_at: float = 0.0
+    """``time.monotonic()`` (the client's clock) just before the call under test."""
 
     @property
     def last_command(self) -> Command:
@@ -431,9 +433,24 @@ def sent_aircraft(attr: str, index: int | None = None) -> Callable[[Rig, Any], A
     return read
 
 
+def sent_gnss(index: int | None = None) -> Callable[[Rig, Any], Awaitable[Any]]:
+    """Read the GNSS (week, ms) of the next packet (``index``: one of the two), taken back
+    to the time given. The session advances a given time with its clock (rule 3 of
+    docs/client.md), so the packet may carry it up to the time since the call later, on
+    the client's clock (``time.monotonic``); ``result`` is the state the call returned."""
 
+    async def read(rig: Rig, result: AircraftState) -> Any:
+        sub = (await rig.probe()).sub
+        since = math.floor((time.monotonic() - rig.called_at) * 1000)
+        assert sub is not None
+        given = result.gnss_week * MS_PER_WEEK + result.gnss_ms
+        advance = sub.gnss_week * MS_PER_WEEK + sub.gnss_ms - given
+        if not 0 <= advance <= since:
+            return sub.gnss_week, sub.gnss_ms, f"advanced {advance} ms in {since} ms"
+        pair = divmod(given, MS_PER_WEEK)
+        return pair if index is None else pair[index]
 
-
+    return read
 
 
 _AIRCRAFT_TUPLES: dict[str, tuple[type[Any], Any, dict[str, tuple[float, float, bool]]]] = {
@@ -494,22 +511,17 @@ add(P("update_aircraft", "relative_altitude", "relative_altitude",
       setup=ins_valid, read=sent_aircraft("sub.satellites")),
     P("update_aircraft", "gnss_week", "gnss_week",
       lambda rig, v: rig.gcu.update_aircraft(gnss_week=v), "int", 0, 32767, valid=(0, 32767),
-      setup=ins_valid, read=sent_aircraft("sub.gnss_week")),
+      setup=ins_valid, read=sent_gnss(0)),
     P("update_aircraft", "gnss_ms", "gnss_ms",
       lambda rig, v: rig.gcu.update_aircraft(gnss_ms=v), "int", 0, 604_799_999,
-      valid=(0, 604_799_999), setup=ins_valid, read=sent_aircraft("sub.gnss_ms")),
+      valid=(0, 604_799_999), setup=ins_valid, read=sent_gnss(1)),
 )  # fmt: skip
 _T0 = datetime(2023, 9, 7, 1, 58, 38, tzinfo=UTC)
 
 
-async def _read_gnss(rig: Rig, result: Any) -> Any:
-    sub = (await rig.probe()).sub
-    return sub.gnss_week, sub.gnss_ms
-
-
 add(P("update_aircraft", "gnss_time", "gnss_time",
       lambda rig, v: rig.gcu.update_aircraft(gnss_time=v), "datetime", optional=True,
-      valid=(_T0, GPS_EPOCH + timedelta(seconds=20)), setup=ins_valid, read=_read_gnss,
+      valid=(_T0, GPS_EPOCH + timedelta(seconds=20)), setup=ins_valid, read=sent_gnss(),
       expected=AircraftState.gnss_from_utc,
       bad=(datetime(2023, 9, 7), datetime(1980, 1, 5, 23, 59, tzinfo=UTC),
            datetime.max.replace(tzinfo=UTC), datetime.min.replace(tzinfo=UTC),
@@ -898,6 +910,7 @@ async def test_misuse_is_rejected_naming_the_parameter(rig: Rig, case: Case) -> 
 async def test_boundary_values_are_accepted(rig: Rig, p: P, value: Any) -> None:
     if p.setup is not None:
         await p.setup(rig)
+    rig.called_at = time.monotonic()
     try:
         result = await attempt(rig, p.call, value)
     except CommandFailed:
