@@ -11,7 +11,9 @@ simulator per connection, on loopback (127.0.0.1, ephemeral ports). Parts (``--p
 ``cpu``
     CPU time of this process while one idle 50 Hz ``GcuClient`` runs over UDP, and while bare
     asyncio loops send the client's own heartbeat bytes to the same simulator on the same
-    deadline scheme and only read the replies; windows taken in turns, in rounds.
+    deadline scheme and only read the replies, and while a client runs with its session
+    stubbed to that schedule (the driver and transport's floor, a diagnostic); windows
+    taken in turns, in rounds.
 ``isolated``
     Commands on an otherwise idle link, each client at most one command a second (the
     rate bound's spare packet is then free again): over TCP (``reorder_guard`` 0) next to
@@ -487,6 +489,44 @@ class ClientLoop:
         await self.client.close()
 
 
+class FloorLoop(ClientLoop):
+    """Diagnostic, not a client: a ``GcuClient`` whose session is cut down to the heartbeat
+    schedule (``poll`` returns the same heartbeat bytes on the same 50 Hz slots,
+    ``next_wakeup`` the next slot, ``receive`` only counts). What is left is the driver and
+    the UDP transport: the floor below which no work in the session can bring the client."""
+
+    def __init__(self, url: str, packet: bytes) -> None:
+        super().__init__(url)
+        self.packet = packet
+        self.sent = self.received = 0
+
+    async def open(self) -> None:
+        await self.client.open()
+        session = self.client.session
+        next_slot = time.monotonic() + PERIOD
+
+        def poll(now: float) -> bytes | None:
+            nonlocal next_slot
+            if now < next_slot:
+                return None
+            next_slot += PERIOD
+            if next_slot <= now - PERIOD:  # a whole period late: restart the phase
+                next_slot = now
+            self.sent += 1
+            return self.packet
+
+        def receive(data: bytes, now: float, **_: Any) -> None:
+            self.received += 1
+
+        # instance attributes shadow the methods the driver calls
+        session.poll = poll  # type: ignore[method-assign]
+        session.next_wakeup = lambda now: next_slot  # type: ignore[method-assign]
+        session.receive = receive  # type: ignore[method-assign]
+
+    def counts(self) -> tuple[int, int]:
+        return self.sent, self.received
+
+
 @dataclass
 class CpuWindow:
     cpu: float
@@ -522,7 +562,8 @@ async def cpu_window(session: ClientLoop | BareLoop, peer: Peer, warmup: float,
 async def idle(kind: str, url: str, seconds: float) -> int:
     """``--idle``: one idle session for ``seconds``; its packet counts on stderr."""
     heartbeat = HostPacket(AircraftState().main_frame(), None, NullCommand()).encode()
-    session = ClientLoop(url) if kind == "client" else BareLoop(url, heartbeat, "recv_into")
+    session = {"client": lambda: ClientLoop(url), "floor": lambda: FloorLoop(url, heartbeat),
+               "bare": lambda: BareLoop(url, heartbeat, "recv_into")}[kind]()  # fmt: skip
     await session.open()
     try:
         await asyncio.sleep(seconds)
@@ -533,9 +574,11 @@ async def idle(kind: str, url: str, seconds: float) -> int:
     return 0
 
 
-CPU_SERIES = ("GcuClient", "bare: add_reader + recv_into", "bare: create_datagram_endpoint")
-"""The client, the baseline of the target, and asyncio's stock datagram transport (which
-allocates a 256 KiB buffer per datagram: mmap/mremap/munmap on glibc) for context."""
+CPU_SERIES = ("GcuClient", "bare: add_reader + recv_into", "bare: create_datagram_endpoint",
+              "GcuClient, session stubbed")  # fmt: skip
+"""The client, the baseline of the target, asyncio's stock datagram transport (which
+allocates a 256 KiB buffer per datagram: mmap/mremap/munmap on glibc) for context, and the
+driver + transport floor (:class:`FloorLoop`)."""
 
 
 async def part_cpu(args: argparse.Namespace, report: Report) -> None:
@@ -553,6 +596,7 @@ async def part_cpu(args: argparse.Namespace, report: Report) -> None:
             CPU_SERIES[0]: lambda: ClientLoop(url),
             CPU_SERIES[1]: lambda: BareLoop(url, heartbeat, "recv_into"),
             CPU_SERIES[2]: lambda: BareLoop(url, heartbeat, "endpoint"),
+            CPU_SERIES[3]: lambda: FloorLoop(url, heartbeat),
         }
         windows: dict[str, list[CpuWindow]] = {name: [] for name in makers}
         rng = random.Random(2006)
@@ -583,6 +627,11 @@ async def part_cpu(args: argparse.Namespace, report: Report) -> None:
             print(f"  {'':<30} GcuClient / this: {pooled:.3f}x pooled; per round"
                   f" {min(ratios):.3f}-{max(ratios):.3f}x,"
                   f" median {statistics.median(ratios):.3f}x")  # fmt: skip
+            if name == CPU_SERIES[3]:
+                bare = windows[CPU_SERIES[1]]
+                floor = (cpu / wall) / (sum(b.cpu for b in bare) / sum(b.wall for b in bare))
+                print(f"  {'':<30} this / {CPU_SERIES[1]}: {floor:.3f}x pooled (the"
+                      " driver and transport alone)")  # fmt: skip
             if name == CPU_SERIES[1]:
                 report.target(f"CPU of one idle session <= {TARGET_CPU_RATIO:g}x bare asyncio"
                               " loop", pooled <= TARGET_CPU_RATIO,
@@ -852,9 +901,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--commands", type=int,
                     help="back-to-back commands per client [1000; quick 100]")
     ap.add_argument("--serve", help=argparse.SUPPRESS)
-    ap.add_argument("--idle", choices=["client", "bare"],
-                    help="run one idle session (the client, or the add_reader + recv_into"
-                         " loop) against --url for --seconds, then print its packet counts:"
+    ap.add_argument("--idle", choices=["client", "floor", "bare"],
+                    help="run one idle session (the client, the client with its session"
+                         " stubbed, or the add_reader + recv_into loop) against --url for"
+                         " --seconds, then print its packet counts:"
                          " for an instruction count (valgrind --tool=callgrind), the"
                          " difference of two lengths")  # fmt: skip
     ap.add_argument("--url", help="with --idle: the simulator's UDP URL")
