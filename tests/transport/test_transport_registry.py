@@ -120,7 +120,7 @@ def test_only_transports_that_read_on_demand_have_the_capability(tmp_path: Path)
 
     a, _ = MemoryTransport.pair()
     assert not isinstance(a, ReadsOnDemand)
-    assert not any(hasattr(a, name) for name in ("drains", "backlog", "read_pending"))
+    assert not any(hasattr(a, name) for name in ("drains", "empty_at_poll", "read_pending"))
     udp = UdpTransport("127.0.0.1", 9, local_port=0)
     assert isinstance(udp, ReadsOnDemand)
     capture = PacketCapture(tmp_path / "c.pcapng")
@@ -135,7 +135,10 @@ class _Link(Transport):
 
     def __init__(self, drains: bool, empty: bool) -> None:
         super().__init__()
-        self.drains, self.backlog, self.empty, self.reads = drains, False, empty, 0
+        self.drains, self.was_empty, self.empty, self.reads = drains, True, empty, 0
+
+    def empty_at_poll(self, due: float) -> bool:
+        return self.was_empty
 
     def read_pending(self) -> bool:
         self.reads += 1
@@ -169,8 +172,8 @@ def test_arrival_bound_picks_the_loop_then_reading_then_none() -> None:
         assert isinstance(bound, ArrivalBound) and bound.from_loop and link.reads == 0
         bound.timer_ran(50.0)
         assert bound.value < 50.0 and bound.value >= 50.0 - 0.01
-        link.backlog = True
-        bound.timer_ran(60.0)  # stopped before the queue was empty: no new bound
+        link.was_empty = False
+        bound.timer_ran(60.0)  # not known empty at the poll: no new bound
         assert bound.value < 50.0
         bound.before_send()  # the loop's bound: no reads
         assert link.reads == 0

@@ -1,4 +1,5 @@
-"""UdpTransport reads every queued datagram per readiness event: real sockets on loopback.
+"""UdpTransport reads every queued datagram per readiness event (but the first after a quiet
+spell: one datagram): real sockets on loopback.
 
 "One event" is made exact with asyncio's loop order: after ``await asyncio.sleep(0)`` twice,
 the loop has run exactly one select() that saw the pre-filled socket, hence exactly one
@@ -246,3 +247,86 @@ async def test_busy_loop_does_not_fall_behind(sender: socket.socket) -> None:
     assert statistics.median(last) < statistics.median(first) + 0.05
     assert statistics.median(last) < 0.1
     assert len(arrivals) >= peer.sent - 2  # nothing was left behind in the kernel
+
+
+async def quiet_now(t: UdpTransport) -> None:
+    """A timer's iteration in which the reader did not run: the socket was empty at its poll
+    (``empty_at_poll`` proves it without reading), so the next event reads one datagram."""
+    loop = asyncio.get_running_loop()
+    answers: list[bool] = []
+    due = loop.time()
+    loop.call_at(due, lambda: answers.append(t.empty_at_poll(due)))
+    await asyncio.sleep(0.01)
+    assert answers == [True]
+
+
+async def test_after_a_quiet_timer_one_datagram_then_the_rest(sender: socket.socket) -> None:
+    async with transport_for(sender) as t:
+        rec = Recorder(t)
+        roomy(t)
+        assert t.local_address is not None
+        await quiet_now(t)
+        packets = [bytes([i]) * 10 for i in range(50)]
+        for p in packets:
+            sender.sendto(p, t.local_address)
+        block_loop(0.05)
+        await one_readiness_event()
+        assert rec.chunks == packets[:1]
+        await asyncio.sleep(0)
+        assert rec.chunks == packets
+
+
+async def test_a_timer_knows_the_socket_was_empty_without_reading_it(
+    sender: socket.socket, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A reply read alone in an earlier iteration: a later timer's iteration would have run
+    the reader again had it left anything, so ``empty_at_poll`` answers without a read."""
+    reads: list[int] = []
+    original = datagram_module.DrainingDatagramTransport.read_all
+
+    def counting(self: datagram_module.DrainingDatagramTransport) -> bool:
+        reads.append(1)
+        return original(self)
+
+    monkeypatch.setattr(datagram_module.DrainingDatagramTransport, "read_all", counting)
+    async with transport_for(sender) as t:
+        rec = Recorder(t)
+        assert t.local_address is not None
+        for n in range(3):  # the heartbeat's rhythm: a timer, then a reply read alone
+            await quiet_now(t)
+            sender.sendto(b"reply", t.local_address)
+            block_loop(0.01)
+            await one_readiness_event()
+            assert rec.chunks == [b"reply"] * (n + 1)
+        await quiet_now(t)
+        assert reads == []
+
+
+async def test_a_timer_in_the_readers_iteration_reads_what_it_left(
+    sender: socket.socket,
+) -> None:
+    """The reader read one of three datagrams in the timer's own iteration: the timer's
+    ``empty_at_poll`` reads the other two before it answers, and the socket is empty."""
+    async with transport_for(sender) as t:
+        rec = Recorder(t)
+        assert t.local_address is not None
+        loop = asyncio.get_running_loop()
+        seen: list[tuple[int, bool, int]] = []
+        sock = t.get_extra_info("socket")
+
+        def timer(due: float) -> None:
+            before = len(rec.chunks)
+            answer = t.empty_at_poll(due)
+            with pytest.raises(BlockingIOError):
+                sock.recv(1, socket.MSG_PEEK | socket.MSG_DONTWAIT)
+            seen.append((before, answer, len(rec.chunks)))
+
+        await quiet_now(t)
+        due = loop.time()
+        loop.call_at(due, timer, due)
+        for p in (b"1", b"2", b"3"):
+            sender.sendto(p, t.local_address)
+        block_loop(0.02)  # all three queued, and the timer due, before the next select
+        await asyncio.sleep(0.02)
+        assert seen == [(1, True, 3)]
+        assert rec.chunks == [b"1", b"2", b"3"]

@@ -1,11 +1,16 @@
-"""A datagram transport that reads every queued datagram per readiness event (not public API).
+"""A datagram transport that drains its socket whenever it may be falling behind (not public API).
 
 asyncio's selector datagram transport reads ONE datagram per readiness event. When the loop
 is busy (a 20 ms iteration, say) and the peer sends at least one datagram per iteration, the
 kernel queue grows without bound and every reply arrives later than the one before. This
-transport registers its own reader (``loop.add_reader``) and, per event, calls ``recvfrom``
-until the socket is empty (``BlockingIOError``) or :data:`MAX_PER_EVENT` datagrams were read,
-so one busy socket cannot starve the loop either.
+transport registers its own reader (``loop.add_reader``), which per readiness event calls
+``recvfrom`` until the socket is empty (``BlockingIOError``) or :data:`MAX_PER_EVENT`
+datagrams were read (so one busy socket cannot starve the loop either). One event reads a
+single datagram instead: the first after a timer found the socket empty without reading it
+(:meth:`~DrainingDatagramTransport.empty_at_poll`, which tells a timer callback whether the
+socket was empty when its loop iteration polled the OS: ``gcu_async.transport.arrival``).
+That is a reply after a quiet spell, the heartbeat's usual case, and it then costs no
+failing ``recvfrom``; whatever else is queued is drained by the next event.
 
 Sends go straight to ``sock.sendto`` (non-blocking); every ``OSError``, ``BlockingIOError``
 (send buffer full: the datagram is dropped, never queued) included, goes to the protocol's
@@ -39,11 +44,14 @@ import os
 import socket
 import struct
 import sys
+import time
 from collections.abc import Callable
 from typing import Any
 
 MAX_PER_EVENT = 10_000
 """Most datagrams read per readiness event; the rest wait for the next loop iteration."""
+RESOLUTION = time.get_clock_info("monotonic").resolution
+"""Seconds: the monotonic clock's resolution, by which asyncio runs a timer before its time."""
 
 # Linux's <linux/in.h>, <linux/in6.h>, <linux/errqueue.h>, <sys/socket.h> (Python 3.10-3.13
 # define none of these names in the socket module).
@@ -144,21 +152,53 @@ class DrainingDatagramTransport(asyncio.DatagramTransport):
         self.error_queue = enable_error_queue(sock)
         """Whether ICMP errors are read from the socket's error queue (Linux)."""
         self.max_per_event = MAX_PER_EVENT
-        self.backlog = False
-        """True when the last read stopped at :attr:`max_per_event` (or on an error) with
-        datagrams possibly left in the socket."""
+        self.unread_since: float | None = None
+        """None: the last read found the socket empty (or a timer's iteration proved it was,
+        :meth:`empty_at_poll`); else the ``time.monotonic()`` at which that read began (it
+        stopped after one datagram, at :attr:`max_per_event` or on an error, with datagrams
+        possibly left in the socket)."""
+        self._quiet = False
+        """A timer found the socket empty at its poll since the last readiness event, without
+        reading it (:meth:`empty_at_poll`): the next event reads one datagram."""
         loop.add_reader(sock.fileno(), self._read_ready)  # NotImplementedError: no selector
 
     def _read_ready(self) -> None:
-        self.backlog = not self.read_all(woken=True)
+        # a reply after a quiet spell: one datagram; otherwise drain (never fall behind)
+        limit = 1 if self._quiet else self.max_per_event
+        self._quiet = False
+        self._read(time.monotonic(), limit, woken=True)
 
-    def read_all(self, *, woken: bool = False) -> bool:
+    def read_all(self) -> bool:
         """Read and deliver every queued datagram (at most :attr:`max_per_event`); True if
-        the socket was found empty at the end. ``woken``: called for a readiness event (one
-        that finds no datagram then reads the error queue)."""
+        the socket was found empty at the end."""
+        return self._read(time.monotonic(), self.max_per_event, woken=False)
+
+    def empty_at_poll(self, due: float) -> bool:
+        """Call first thing in a timer callback whose timer was due at ``due`` (the loop's
+        time, ``time.monotonic`` on asyncio's loops): True if nothing that reached the
+        socket before this loop iteration polled the OS is still unread.
+
+        asyncio's selector is level-triggered and runs this iteration's I/O callbacks before
+        its timers, and a timer due at ``due`` runs only in an iteration whose poll returned
+        after ``due - RESOLUTION``. A read that began no later than that was an earlier
+        iteration's: had it left a datagram, this iteration's poll would have run the reader
+        again. Otherwise (the reader ran in this iteration and may have left some), the
+        socket is read empty now."""
+        since = self.unread_since
+        if since is None or since <= due - RESOLUTION:
+            self.unread_since = None
+            self._quiet = True
+            return True
+        return self.read_all()
+
+    def _read(self, start: float, limit: int, *, woken: bool) -> bool:
+        """Read and deliver up to ``limit`` datagrams; True if the socket was found empty.
+        ``woken``: called for a readiness event (one that finds no datagram then reads the
+        error queue)."""
+        self.unread_since = start
         recv, view, protocol = self._sock.recvfrom_into, self._view, self._protocol
         deliver = self._deliver
-        for i in range(self.max_per_event):
+        for i in range(limit):
             if self._closing:  # a handler closed us: the socket may be gone already
                 return False
             try:
@@ -166,6 +206,7 @@ class DrainingDatagramTransport(asyncio.DatagramTransport):
             except BlockingIOError:
                 if i == 0 and woken and self.error_queue:  # nothing to read: the error queue
                     self.read_errors()
+                self.unread_since = None
                 return True  # drained
             except InterruptedError:
                 return False

@@ -17,12 +17,10 @@ import time
 from collections.abc import Callable
 from typing import Protocol, runtime_checkable
 
+from gcu_async.transport._datagram import RESOLUTION
 from gcu_async.transport.base import Transport
 
 log = logging.getLogger("gcu_async.client")
-
-RESOLUTION = time.get_clock_info("monotonic").resolution
-"""Seconds: the monotonic clock's resolution, by which a timer may run before its time."""
 
 
 @runtime_checkable
@@ -31,13 +29,14 @@ class ReadsOnDemand(Protocol):
 
     @property
     def drains(self) -> bool:
-        """True when every readiness event delivers everything the OS holds for this
-        transport (unless :attr:`backlog`): then whatever is delivered in a later event-loop
-        iteration arrived after this iteration's poll of the OS returned."""
+        """True when the transport reads on the loop's (level-triggered) readiness events and
+        :meth:`empty_at_poll` can tell, in a timer callback, whether the OS queue was empty
+        when the loop iteration polled the OS."""
 
-    @property
-    def backlog(self) -> bool:
-        """True when the last readiness event stopped before the OS queue was empty."""
+    def empty_at_poll(self, due: float) -> bool:
+        """Called first thing in a timer callback whose timer was due at ``due`` (the loop's
+        time): True if nothing that reached the OS queue before this iteration polled the
+        OS is still undelivered (it may read the queue, delivering, to make sure)."""
 
     def read_pending(self) -> bool:
         """Read and deliver, right now and synchronously, everything the OS holds; True if
@@ -64,10 +63,11 @@ class ArrivalBound:
         a loop that keeps the driver's time); False: from reading the link empty."""
 
     def timer_ran(self, when: float) -> None:
-        """A timer due at ``when`` (the loop's clock) runs now. asyncio runs I/O callbacks
-        before timers, so this iteration's poll of the OS returned at ``when`` minus the
-        clock's resolution or later: what is delivered from now on arrived after it."""
-        if self.from_loop and not self._link.backlog:
+        """A timer due at ``when`` (the loop's clock) runs now, so this iteration's poll of
+        the OS returned at ``when`` minus the clock's resolution or later: once nothing that
+        arrived before it is undelivered (:meth:`ReadsOnDemand.empty_at_poll`), what is
+        delivered from now on arrived after it."""
+        if self.from_loop and self._link.empty_at_poll(when):
             self.value = when - RESOLUTION
 
     def before_send(self) -> None:

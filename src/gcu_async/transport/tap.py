@@ -205,9 +205,8 @@ class _CapturingReader(CapturingTransport):
     def drains(self) -> bool:
         return bool(self.inner.drains)
 
-    @property
-    def backlog(self) -> bool:
-        return bool(self.inner.backlog)
+    def empty_at_poll(self, due: float) -> bool:
+        return bool(self.inner.empty_at_poll(due))
 
     def read_pending(self) -> bool:
         return bool(self.inner.read_pending())

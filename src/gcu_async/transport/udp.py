@@ -351,16 +351,16 @@ class UdpTransport(Reopening, Transport):
 
     @property
     def drains(self) -> bool:
-        """True on the draining reader (:attr:`draining`): each readiness event reads every
-        queued datagram."""
+        """True on the draining reader (:attr:`draining`): it never falls behind the socket,
+        and knows at a timer whether the socket was empty (:meth:`empty_at_poll`)."""
         return self.draining
 
-    @property
-    def backlog(self) -> bool:
-        """True when the last readiness event stopped before the socket was empty (the
-        per-event cap)."""
+    def empty_at_poll(self, due: float) -> bool:
+        """On the draining reader, called first thing in a timer callback due at ``due``:
+        True if nothing that arrived before this loop iteration polled the OS is unread
+        (it may read the socket to make sure). False on the fallback path."""
         dtransport = self._dtransport
-        return isinstance(dtransport, DrainingDatagramTransport) and dtransport.backlog
+        return isinstance(dtransport, DrainingDatagramTransport) and dtransport.empty_at_poll(due)
 
     def read_pending(self) -> bool:
         """Read and deliver every datagram the OS holds now; True if the socket was then
