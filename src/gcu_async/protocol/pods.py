@@ -9,51 +9,43 @@ from gcu_async._checks import check_int, type_error
 from gcu_async.protocol.commands import COMMAND_TYPES, Opcode
 from gcu_async.protocol.enums import PodModel
 
-POD_NAMES: dict[PodModel, str] = {
-    PodModel.Z_6A: "Z-6A", PodModel.Z_6C: "Z-6C", PodModel.Z_8RB: "Z-8RB",
-    PodModel.Z_8RC: "Z-8RC", PodModel.Z_9B_V3: "Z-9B_V3", PodModel.D_80AI: "D-80AI",
-    PodModel.D_90AI: "D-90AI", PodModel.D_80PRO: "D-80Pro", PodModel.D_90PRO_TA: "D-90Pro(TA)",
-    PodModel.Z_1PRO: "Z-1Pro", PodModel.Z_1MINI: "Z-1Mini", PodModel.Z_2MINI: "Z-2Mini",
-    PodModel.D_125AI_T: "D-125AI(T)", PodModel.D_90DE: "D-90DE", PodModel.D_125AI_V: "D-125AI(V)",
-    PodModel.Z_9B_V4_T: "Z-9B_V4(T)", PodModel.Z_9B_V4_V: "Z-9B_V4(V)",
-    PodModel.D_90PRO_VA: "D-90Pro(VA)", PodModel.D_90PRO_T: "D-90Pro(T)",
-    PodModel.D_90PRO_V: "D-90Pro(V)",
-}  # fmt: skip
-"""Vendor spelling of each model. (T) thermometric, (V) observation, (TA)/(VA) + AI core."""
-
 MATRIX_COMMANDS: tuple[Opcode, ...] = tuple(
     c.OPCODE for c in sorted((c for c in COMMAND_TYPES.values() if c.SCHEMA.matrix_row is not None),
                              key=lambda c: c.SCHEMA.matrix_row or 0)
 )  # fmt: skip
 """The rows of Appendix 8, in the document's order."""
 
-# One string per model, one character per MATRIX_COMMANDS row: 1 = ● supported, 0 = ○.
-_MATRIX: dict[PodModel, str] = {
-    PodModel.Z_6A: "100001010000000000",
-    PodModel.Z_6C: "000001010000000000",
-    PodModel.Z_8RB: "100001010000000001",
-    PodModel.Z_8RC: "000001010000000001",
-    PodModel.Z_9B_V3: "100001110000010011",
-    PodModel.D_80AI: "100011010000110010",
-    PodModel.D_90AI: "100011110000110001",
-    PodModel.D_80PRO: "100011010000000010",
-    PodModel.D_90PRO_TA: "111111111111111101",
-    PodModel.Z_1PRO: "111110000000101000",
-    PodModel.Z_1MINI: "111110000000101000",
-    PodModel.Z_2MINI: "111110100000111000",
-    PodModel.D_125AI_T: "111111111111111101",
-    PodModel.D_90DE: "100011010000110001",
-    PodModel.D_125AI_V: "111111110000111101",
-    PodModel.Z_9B_V4_T: "111111111111111111",
-    PodModel.Z_9B_V4_V: "111111110000111111",
-    PodModel.D_90PRO_VA: "111111110000111101",
-    PodModel.D_90PRO_T: "011111111111110101",
-    PodModel.D_90PRO_V: "011111110000110101",
-}
+# Each model: its vendor spelling ((T) thermometric, (V) observation, (TA)/(VA) + AI core)
+# and its Appendix 8 column, one character per MATRIX_COMMANDS row: 1 = ● supported, 0 = ○.
+_PODS: dict[PodModel, tuple[str, str]] = {
+    PodModel.Z_6A:       ("Z-6A",         "100001010000000000"),
+    PodModel.Z_6C:       ("Z-6C",         "000001010000000000"),
+    PodModel.Z_8RB:      ("Z-8RB",        "100001010000000001"),
+    PodModel.Z_8RC:      ("Z-8RC",        "000001010000000001"),
+    PodModel.Z_9B_V3:    ("Z-9B_V3",      "100001110000010011"),
+    PodModel.D_80AI:     ("D-80AI",       "100011010000110010"),
+    PodModel.D_90AI:     ("D-90AI",       "100011110000110001"),
+    PodModel.D_80PRO:    ("D-80Pro",      "100011010000000010"),
+    PodModel.D_90PRO_TA: ("D-90Pro(TA)",  "111111111111111101"),
+    PodModel.Z_1PRO:     ("Z-1Pro",       "111110000000101000"),
+    PodModel.Z_1MINI:    ("Z-1Mini",      "111110000000101000"),
+    PodModel.Z_2MINI:    ("Z-2Mini",      "111110100000111000"),
+    PodModel.D_125AI_T:  ("D-125AI(T)",   "111111111111111101"),
+    PodModel.D_90DE:     ("D-90DE",       "100011010000110001"),
+    PodModel.D_125AI_V:  ("D-125AI(V)",   "111111110000111101"),
+    PodModel.Z_9B_V4_T:  ("Z-9B_V4(T)",   "111111111111111111"),
+    PodModel.Z_9B_V4_V:  ("Z-9B_V4(V)",   "111111110000111111"),
+    PodModel.D_90PRO_VA: ("D-90Pro(VA)",  "111111110000111101"),
+    PodModel.D_90PRO_T:  ("D-90Pro(T)",   "011111111111110101"),
+    PodModel.D_90PRO_V:  ("D-90Pro(V)",   "011111110000110101"),
+}  # fmt: skip
+
+POD_NAMES: dict[PodModel, str] = {model: name for model, (name, _) in _PODS.items()}
+"""Vendor spelling of each model (Appendix 7)."""
 
 SUPPORT: dict[PodModel, frozenset[Opcode]] = {
     model: frozenset(op for op, bit in zip(MATRIX_COMMANDS, row, strict=True) if bit == "1")
-    for model, row in _MATRIX.items()
+    for model, (_, row) in _PODS.items()
 }
 """For each model, the Appendix 8 commands it supports."""
 
