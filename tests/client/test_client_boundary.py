@@ -46,6 +46,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from _boundary import MESSAGE, case_id
 from _scale import scaled
 from gcu_async import GcuClient
 from gcu_async.client.connect import CLIENT_OPTIONS, connect
@@ -86,10 +87,6 @@ UTC = timezone.utc
 WAIT = 5.0
 """Seconds: the bound on every wait (a case never hangs)."""
 UDP_URL, TCP_URL, SERIAL_URL = "udp://127.0.0.1:9", "tcp://127.0.0.1:9", "serial:///dev/null"
-MESSAGE = re.compile(
-    r"^(?P<field>.+?): (?P<value>.+?) is outside the allowed range "
-    r"\[(?P<low>[^,]+), (?P<high>[^\]\)]+)(?P<close>[\]\)])"
-)
 
 
 # --- the rig: a fresh simulator and client over the in-memory transport -----------------------
@@ -797,14 +794,8 @@ CATALOGUE = [c for p in PARAMS for c in misuse(p)]
 POSITIVE = [(p, v) for p in PARAMS for v in p.valid]
 
 
-_ADDRESS = re.compile(r" at 0x[0-9a-f]+")
-"""Memory addresses in reprs: left out of test ids, which must be the same in every process
-(pytest-xdist's workers collect separately and compare)."""
-
-
 def _id(p: P, v: Any) -> str:
-    text = repr(v) if not callable(v) or isinstance(v, type) else getattr(v, "__name__", "fn")
-    return f"{p.owner}.{p.param}={_ADDRESS.sub('', text)[:40]}"
+    return case_id(p.owner, p.param, v)
 
 
 def _shown(v: Any) -> list[str]:

@@ -18,7 +18,6 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import math
-import re
 from collections.abc import Callable
 from datetime import date, datetime, timedelta, timezone
 from decimal import Decimal
@@ -29,6 +28,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from _boundary import MESSAGE, case_id
 from _catalogue_samples import required_samples
 from _protocol_strategies import FRAME_SCHEMAS, RAW_RANGES
 from _scale import scaled
@@ -105,10 +105,6 @@ from gcu_async.protocol.gpstime import GPS_EPOCH, gps_minus_utc
 
 INF, NAN = math.inf, math.nan
 UTC = timezone.utc
-MESSAGE = re.compile(
-    r"^(?P<field>.+?): (?P<value>.+?) is outside the allowed range "
-    r"\[(?P<low>[^,]+), (?P<high>[^\]\)]+)(?P<close>[\]\)])"
-)
 
 
 class P(NamedTuple):
@@ -692,14 +688,8 @@ CATALOGUE = [c for p in PARAMS for c in misuse(p)]
 POSITIVE = [(p, v) for p in PARAMS for v in p.valid]
 
 
-_ADDRESS = re.compile(r" at 0x[0-9a-f]+")
-"""Memory addresses in reprs: left out of test ids, which must be the same in every process
-(pytest-xdist's workers collect separately and compare)."""
-
-
 def _id(p: P, v: Any) -> str:
-    text = repr(v)
-    return f"{p.owner}.{p.param}={_ADDRESS.sub('', text)[:40]}"
+    return case_id(p.owner, p.param, v)
 
 
 def _shown(v: Any) -> list[str]:
