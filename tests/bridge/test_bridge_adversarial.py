@@ -39,6 +39,7 @@ from pathlib import Path
 import pytest
 
 from _bridge_rig import AUTOPILOT, CAMERA, GCS, GIMBAL, Peer
+from _link_rig import RATE_HIGH, RATE_LOW
 from gcu_async.bridge import CameraConfig, MavlinkBridge, admission
 from gcu_async.bridge._mavlink import mavlink
 from gcu_async.bridge.commands import CANCELLED
@@ -54,8 +55,6 @@ ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
 IN_PROGRESS = mavlink.MAV_RESULT_IN_PROGRESS
 REJECTED = mavlink.MAV_RESULT_TEMPORARILY_REJECTED
 FAILED = mavlink.MAV_RESULT_FAILED
-RATE_LOW, RATE_HIGH = 45, 51
-"""Host packets the simulator receives in any whole second (50 Hz; G4's floor(50) + 1)."""
 FLOOD = Path(__file__).parent.parent / "_mavlink_flood.py"
 SIM = Path(__file__).parent.parent / "_bridge_sim_process.py"
 ENV = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
