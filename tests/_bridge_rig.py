@@ -11,7 +11,9 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import math
+import socket
 import time
+from collections import Counter
 from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass
 from typing import Any
@@ -37,6 +39,10 @@ class Peer:
     def __init__(self, system: int, component: int) -> None:
         self.conn = mavutil.mavlink_connection("udpin:127.0.0.1:0", source_system=system,
                                                source_component=component)  # fmt: skip
+        # pymavlink's udpin sets SO_REUSEADDR, and Linux hands port 0 to two such sockets
+        # alike (the later one then takes every unicast datagram): once bound, the port is
+        # this peer's alone.
+        self.conn.port.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 0)
         self.port: int = self.conn.port.getsockname()[1]
         self.messages: list[Any] = []
         self._seen = 0
@@ -65,7 +71,9 @@ class Peer:
                     return msg
             index = len(self.messages)
             if time.monotonic() > deadline:
-                raise TimeoutError(f"no {kind} within {timeout} s")
+                seen = Counter(m.get_type() for m in self.messages[start:])
+                raise TimeoutError(f"no {kind} matching within {timeout} s on port {self.port}; "
+                                   f"received meanwhile: {dict(seen) or 'nothing'}")
             await asyncio.sleep(0.005)
 
     async def collect(self, seconds: float) -> list[Any]:

@@ -70,6 +70,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_bridge_mapping.py": FAST,
     "test_bridge_mavsdk.py": "realtime",
     "test_bridge_qgc.py": "realtime",
+    "test_bridge_rig.py": "realtime",
     "test_capture_blocks.py": FAST,
     "test_capture_independent.py": ("tshark", ALONE),  # 200 packets/s, counted
     "test_capture_library.py": "tshark",
