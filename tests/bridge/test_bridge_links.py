@@ -79,10 +79,7 @@ async def until(predicate: Any, peers: list[Any], timeout: float, what: str,
 
 
 def udpin_port(rig: Any) -> int:
-    link = rig.bridge.links[0]
-    if not hasattr(link, "local_address"):  # the pymavlink-connection links before issue 17
-        return int(link._conn.port.getsockname()[1])
-    return int(link.local_address[1])
+    return int(rig.bridge.links[0].local_address[1])
 
 
 def junk_socket() -> socket.socket:
