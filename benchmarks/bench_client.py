@@ -541,6 +541,11 @@ class CpuWindow:
         return self.cpu / self.wall * 100.0
 
 
+def pooled_share(windows: list[CpuWindow]) -> float:
+    """CPU seconds per wall second over all ``windows`` together."""
+    return sum(w.cpu for w in windows) / sum(w.wall for w in windows)
+
+
 async def cpu_window(session: ClientLoop | BareLoop, peer: Peer, warmup: float,
                      seconds: float) -> CpuWindow:  # fmt: skip
     await session.open()
@@ -623,13 +628,12 @@ async def part_cpu(args: argparse.Namespace, report: Report) -> None:
               f" {sent} sent, {received} replies in {wall:.1f} s{sim}")  # fmt: skip
         print(f"  {'':<30} per-window % {' '.join(f'{w.pct:.3f}' for w in ws)}")
         if name != CPU_SERIES[0]:
-            pooled = (sum(c.cpu for c in client) / sum(c.wall for c in client)) / (cpu / wall)
+            pooled = pooled_share(client) / pooled_share(ws)
             print(f"  {'':<30} GcuClient / this: {pooled:.3f}x pooled; per round"
                   f" {min(ratios):.3f}-{max(ratios):.3f}x,"
                   f" median {statistics.median(ratios):.3f}x")  # fmt: skip
             if name == CPU_SERIES[3]:
-                bare = windows[CPU_SERIES[1]]
-                floor = (cpu / wall) / (sum(b.cpu for b in bare) / sum(b.wall for b in bare))
+                floor = pooled_share(ws) / pooled_share(windows[CPU_SERIES[1]])
                 print(f"  {'':<30} this / {CPU_SERIES[1]}: {floor:.3f}x pooled (the"
                       " driver and transport alone)")  # fmt: skip
             if name == CPU_SERIES[1]:
