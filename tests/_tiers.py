@@ -84,6 +84,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_cli_demo.py": "subprocess",
     "test_cli_exit_status.py": "subprocess",
     "test_cli_monitor.py": "subprocess",
+    "test_cli_negative_values.py": FAST,
     "test_cli_new_user.py": "subprocess",
     "test_cli_send_monitor.py": "subprocess",
     "test_client_behaviour.py": "realtime",

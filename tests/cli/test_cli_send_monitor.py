@@ -106,6 +106,17 @@ def test_send_euler_holds_the_control_values_until_the_camera_arrives(sim_url: s
     assert abs(out["attitude_deg"]["yaw"] - 30) < 1.0
 
 
+@pytest.mark.parametrize("aircraft", [["--aircraft", "-33.85,151.2,50"],
+                                      ["--aircraft=-33.85,151.2,50"]], ids=["space", "equals"])
+def test_send_gaze_at_a_southern_coordinate(sim_url: str, aircraft: list[str]) -> None:
+    """The command line a user south of the equator types, as given: `--aircraft` followed
+    by a value starting with a minus."""
+    result = run("send", f"{sim_url}?local_port=0", "gaze-at", "-33.86", "151.21", "20",
+                 *aircraft)
+    assert result.returncode == 0, result.stderr
+    assert json.loads(result.stdout)["opcode"] == 0x15
+
+
 def test_send_failure_exits_1_with_status(sim_url: str) -> None:
     result = run("send", f"{sim_url}?local_port=0", "set-fill-light", "100")  # not on this pod
     assert result.returncode == 1

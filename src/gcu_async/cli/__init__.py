@@ -11,12 +11,13 @@ from typing import NoReturn
 from gcu_async import __version__
 from gcu_async.cli import decode, demo, mavlink_bridge, monitor, send, sim, wireshark
 from gcu_async.cli._exit import EXIT_USAGE
+from gcu_async.cli._parser import CliParser
 
 VERBOSE_HELP = ("log the library's lifecycle to stderr (INFO); -vv: every packet in and out "
                 "too (DEBUG, the gcu_async.wire logger)")  # fmt: skip
 
 
-class OneLineParser(argparse.ArgumentParser):
+class OneLineParser(CliParser):
     """A parser whose usage errors are one line on stderr, exit status 2 (docs/cli.md, "Exit
     status"); its sub-command parsers are of the same class."""
 

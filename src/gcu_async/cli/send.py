@@ -34,6 +34,7 @@ from gcu_async.cli._exit import (
     check_seconds,
     interruptible,
 )
+from gcu_async.cli._parser import CliParser
 from gcu_async.cli.send_commands import (
     COMMANDS,
     AircraftFix,
@@ -122,7 +123,7 @@ def register(sub: Any) -> None:
     p.set_defaults(run=run)  # fmt: skip
 
 
-class CommandParser(argparse.ArgumentParser):
+class CommandParser(CliParser):
     """The parser of one ``send`` command: a usage error is one line on stderr, status 2."""
 
     def __init__(self, command: str, **kwargs: Any) -> None:
