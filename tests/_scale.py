@@ -8,8 +8,9 @@ the 500-command bad-link test one seed instead of two, the UDP exactly-once test
 sockets 200 commands at the 10 ms hold instead of 500 at each of 5 and 10 ms, the boundary
 properties (arbitrary values accepted iff valid) a tenth of their examples, the deframer's
 split and byte-by-byte contracts 25 examples instead of 200, the session contract's boundary
-tests find their violation without shrinking it, and Hypothesis tests without their own
-``max_examples`` 25 examples instead of 100."""
+tests find their violation without shrinking it, Hypothesis tests without their own
+``max_examples`` 25 examples instead of 100, and those with their own a tenth of them (at
+least 25)."""
 
 from __future__ import annotations
 

@@ -15,6 +15,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from _scale import scaled
 from gcu_async.bridge import MavlinkBridge
 from gcu_async.bridge._mavlink import mavlink
 from gcu_async.client.connect import connect
@@ -68,7 +69,7 @@ def bridge() -> MavlinkBridge:
     return MavlinkBridge(client, ["udpout:127.0.0.1:9"], system_id=1)
 
 
-@settings(max_examples=200, suppress_health_check=[HealthCheck.function_scoped_fixture],
+@settings(max_examples=scaled(200, 25), suppress_health_check=[HealthCheck.function_scoped_fixture],
           deadline=None)  # fmt: skip
 @given(msgs=st.lists(message(), min_size=1, max_size=8))
 def test_no_autopilot_value_escapes_the_feed(bridge: MavlinkBridge, msgs: list[Any],

@@ -8,6 +8,7 @@ import itertools
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from _scale import scaled
 from gcu_async.capture.reader import Record
 from gcu_async.capture.reassembly import Reassembler
 
@@ -27,7 +28,7 @@ def segment_schedules(draw: st.DrawFn) -> tuple[bytes, list[tuple[int, int]]]:
     return stream, order
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=scaled(300, 30), deadline=None)
 @given(schedule=segment_schedules(), isn=st.integers(0, 2**32 - 1))
 def test_tcp_segments_in_any_order_give_the_stream_once(
     schedule: tuple[bytes, list[tuple[int, int]]], isn: int

@@ -7,6 +7,7 @@ import itertools
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from _scale import scaled
 from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
 from gcu_async.capture.scan import PacketScanner
 from gcu_async.protocol import GCU_HEADER, HOST_HEADER
@@ -18,7 +19,7 @@ pieces = st.sampled_from(
 )
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=scaled(300, 30), deadline=None)
 @given(parts=st.lists(st.one_of(pieces, st.binary(max_size=8)), max_size=40),
        cuts=st.lists(st.integers(0, 3000), max_size=10))  # fmt: skip
 def test_any_split_gives_the_deframers_packets_at_their_offsets(

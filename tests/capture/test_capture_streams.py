@@ -22,6 +22,7 @@ import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
+from _scale import scaled
 from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
 from _xfgcu_corpus import corpus, write_capture
 from gcu_async.capture.synth import TcpFlow, udp_packet
@@ -199,7 +200,7 @@ def mutate(data: bytes, kind: str, where: int, arg: int) -> tuple[bytes, int]:
     return data[:at] + struct.pack("<I", arg) + data[at + 4 :], at
 
 
-@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=scaled(200, 25), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(kind=st.sampled_from(["pcap", "pcapng"]), mutation=mutations)
 def test_mutated_captures_give_packets_or_one_clear_error(
     kind: str, mutation: tuple[str, int, int], tmp_path_factory: pytest.TempPathFactory

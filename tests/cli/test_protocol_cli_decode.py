@@ -18,6 +18,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from _scale import scaled
 from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
 from gcu_async.cli import decode as decode_cli
 from gcu_async.protocol import (
@@ -305,7 +306,7 @@ def _whole_text_parse(text: str) -> bytes:
     return bytes(out)
 
 
-@settings(max_examples=300, deadline=None,
+@settings(max_examples=scaled(300, 30), deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(tokens=st.lists(st.sampled_from(["8a", "5E", "0x49", "0X0", "f", "abcd", "0", "x", "7",
                                          " ", ",", ";", ":", "\n", "\t", "  ", "0x"]),

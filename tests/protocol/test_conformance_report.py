@@ -13,6 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from _protocol_strategies import seal
+from _scale import scaled
 from gcu_async import connect
 from gcu_async.protocol import (
     AngleControl,
@@ -233,7 +234,7 @@ def test_examples_argument_is_checked(examples: int) -> None:
         HostConformance(examples=examples)
 
 
-@settings(max_examples=200, suppress_health_check=[HealthCheck.too_slow], deadline=None)
+@settings(max_examples=scaled(200, 25), suppress_health_check=[HealthCheck.too_slow], deadline=None)
 @given(
     bodies=st.lists(
         st.tuples(st.binary(min_size=64, max_size=64), st.integers(0, 255),

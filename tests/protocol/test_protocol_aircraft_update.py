@@ -16,6 +16,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from _scale import scaled
 from gcu_async import GcuClient
 from gcu_async.protocol.aircraft import AIRCRAFT_UPDATE_FIELDS, aircraft_update
 from gcu_async.transport.memory import MemoryTransport
@@ -74,7 +75,7 @@ def _same(kwargs: dict[str, Any]) -> None:
     assert got == expected, kwargs
 
 
-@settings(max_examples=3000, deadline=None)
+@settings(max_examples=scaled(3000, 300), deadline=None)
 @given(_arguments())
 def test_aircraft_update_raises_and_changes_what_the_client_does(kwargs: dict[str, Any]) -> None:
     _same(kwargs)

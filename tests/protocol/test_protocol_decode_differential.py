@@ -17,6 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from _protocol_strategies import gcu_packets, host_packets
+from _scale import scaled
 from gcu_async.errors import RemoteProtocolError
 from gcu_async.protocol import (
     Feedback,
@@ -126,13 +127,13 @@ def _hostile(draw: st.DrawFn, packets: st.SearchStrategy[Any]) -> bytes:
     return bytes(wire)
 
 
-@settings(max_examples=1500, deadline=None)
+@settings(max_examples=scaled(1500, 150), deadline=None)
 @given(_hostile(gcu_packets))
 def test_gcu_decode_is_the_old_decode(data: bytes) -> None:
     assert _outcome(decode_gcu_packet, data) == _outcome(old_decode_gcu_packet, data)
 
 
-@settings(max_examples=1500, deadline=None)
+@settings(max_examples=scaled(1500, 150), deadline=None)
 @given(_hostile(host_packets))
 def test_host_decode_is_the_old_decode(data: bytes) -> None:
     assert _outcome(decode_host_packet, data) == _outcome(old_decode_host_packet, data)

@@ -20,6 +20,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from _protocol_strategies import FRAME_SCHEMAS
+from _scale import scaled
 from gcu_async.protocol import (
     GcuMainFrame,
     GcuPacket,
@@ -107,7 +108,7 @@ def _outcome(call: Any) -> Any:
 
 
 @pytest.mark.parametrize("cls", list(FRAME_SCHEMAS), ids=lambda c: c.__name__)
-@settings(max_examples=400, deadline=None)
+@settings(max_examples=scaled(400, 40), deadline=None)
 @given(data=st.data())
 def test_generated_validate_is_the_field_by_field_check(cls: type[Any], data: Any) -> None:
     schema = FRAME_SCHEMAS[cls]
@@ -120,7 +121,7 @@ def test_generated_validate_is_the_field_by_field_check(cls: type[Any], data: An
 
 
 @pytest.mark.parametrize("cls", list(FRAME_SCHEMAS), ids=lambda c: c.__name__)
-@settings(max_examples=400, deadline=None)
+@settings(max_examples=scaled(400, 40), deadline=None)
 @given(data=st.data())
 def test_generated_anomalies_are_the_field_by_field_ones(cls: type[Any], data: Any) -> None:
     schema = FRAME_SCHEMAS[cls]

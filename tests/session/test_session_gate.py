@@ -19,6 +19,7 @@ from typing import Any
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from _scale import scaled
 from _vtime import Direction, Rig, tagged_commands
 from gcu_async.protocol import Record, TakePhoto
 from gcu_async.session import LinkDown, Session, SessionState, TicketDone
@@ -84,7 +85,7 @@ actions = st.lists(
 )  # fmt: skip
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=scaled(150, 25), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     rate=st.sampled_from([2.0, 7.5, 30.0, 50.0, 200.0]),
     guard=st.sampled_from([0.0, 0.015, 0.1]),
