@@ -226,10 +226,12 @@ def resolve(args: argparse.Namespace) -> Invocation:
 
 
 def _unknown(name: str) -> str:
-    """The message for an unknown command: a did-you-mean (``zoom_to`` → ``zoom-to``)."""
-    close = difflib.get_close_matches(name.replace("_", "-").lower(), COMMANDS, n=1)
-    hint = f"did you mean {close[0]!r}? " if close else ""
-    return f"unknown command {name!r}; {hint}one of: {', '.join(COMMANDS)}"
+    """The message for an unknown command, one short line: up to three close names
+    (``zoom_to`` → ``zoom-to``) and where the whole list is."""
+    spelt = name.replace("_", "-").lower()
+    close = [spelt] if spelt in COMMANDS else difflib.get_close_matches(spelt, COMMANDS, n=3)
+    hint = f"did you mean {' or '.join(map(repr, close))}? " if close else ""
+    return f"unknown command {name!r}; {hint}{PROG} --help lists all {len(COMMANDS)}"
 
 
 async def _feed_aircraft(gcu: GcuClient, fix: AircraftFix) -> None:
