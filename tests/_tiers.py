@@ -101,6 +101,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_docs_architecture.py": FAST,
     "test_docs_as_dict.py": FAST,
     "test_docs_commands.py": FAST,
+    "test_docs_error_tree.py": FAST,
     "test_docs_examples.py": "subprocess",
     "test_docs_snippets.py": "subprocess",
     "test_errors_structured.py": FAST,
