@@ -34,15 +34,23 @@ HOME_MSL = 50.0
 
 
 class Peer:
-    """A pymavlink endpoint on 127.0.0.1 (port 0) that keeps every message it receives."""
+    """A pymavlink endpoint on 127.0.0.1 (port 0) that keeps every message it receives;
+    with ``bridge_port``, a ground station sending to the bridge's ``udpin`` link on that
+    port (pymavlink ``udpout``; its first HEARTBEAT, sent at once, binds its port)."""
 
-    def __init__(self, system: int, component: int) -> None:
-        self.conn = mavutil.mavlink_connection("udpin:127.0.0.1:0", source_system=system,
-                                               source_component=component)  # fmt: skip
-        # pymavlink's udpin sets SO_REUSEADDR, and Linux hands port 0 to two such sockets
-        # alike (the later one then takes every unicast datagram): once bound, the port is
-        # this peer's alone.
-        self.conn.port.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 0)
+    def __init__(self, system: int, component: int, *, bridge_port: int | None = None) -> None:
+        if bridge_port is None:
+            self.conn = mavutil.mavlink_connection("udpin:127.0.0.1:0", source_system=system,
+                                                   source_component=component)  # fmt: skip
+            # pymavlink's udpin sets SO_REUSEADDR, and Linux hands port 0 to two such
+            # sockets alike (the later one then takes every unicast datagram): once bound,
+            # the port is this peer's alone.
+            self.conn.port.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 0)
+        else:
+            self.conn = mavutil.mavlink_connection(f"udpout:127.0.0.1:{bridge_port}",
+                                                   source_system=system,
+                                                   source_component=component)  # fmt: skip
+            self.heartbeat()
         self.port: int = self.conn.port.getsockname()[1]
         self.messages: list[Any] = []
         self._seen = 0
@@ -88,6 +96,43 @@ class Peer:
 
     def send(self, msg: Any) -> None:
         self.conn.mav.send(msg)
+
+    def heartbeat(self) -> None:
+        self.conn.mav.heartbeat_send(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0,
+                                     mavlink.MAV_STATE_ACTIVE)  # fmt: skip
+
+    async def heartbeats(self, period: float = 1.0) -> None:
+        """A HEARTBEAT every ``period`` seconds, as ground stations send (until cancelled)."""
+        while True:
+            self.heartbeat()
+            await asyncio.sleep(period)
+
+    async def command_retried(self, component: int, command: int, *params: float,
+                              retransmissions: int = 5,
+                              interval: float = 1.0) -> tuple[Any, int]:  # fmt: skip
+        """Send a COMMAND_LONG as a ground station does: again with ``confirmation`` one
+        higher every ``interval`` seconds while no answer came, at most ``retransmissions``
+        times; the first final COMMAND_ACK addressed to this station's ids and how many
+        times the command went out (TimeoutError ``interval`` after the last try)."""
+        start = len(self.messages)
+        me = (self.conn.mav.srcSystem, self.conn.mav.srcComponent)
+        answered = False
+        for confirmation in range(retransmissions + 1):
+            if not answered:
+                self.command(component, command, *params, confirmation=confirmation)
+            end = time.monotonic() + interval
+            while time.monotonic() < end:
+                self.poll()
+                acks = [m for m in self.messages[start:] if m.get_type() == "COMMAND_ACK"
+                        and m.get_srcComponent() == component and m.command == command
+                        and (m.target_system, m.target_component) == me]  # fmt: skip
+                for m in acks:
+                    if m.result != mavlink.MAV_RESULT_IN_PROGRESS:
+                        return m, confirmation + 1
+                answered = answered or bool(acks)  # IN_PROGRESS: stop repeating, wait
+                await asyncio.sleep(0.005)
+        raise TimeoutError(f"no final answer to command {command} within "
+                           f"{(retransmissions + 1) * interval:g} s")
 
     def command(self, component: int, command: int, *params: float, system: int = SYSTEM,
                 confirmation: int = 0) -> None:  # fmt: skip

@@ -1,7 +1,7 @@
 """The bridge's admission rules, pure (gcu_async.bridge.admission; docs/mavlink-bridge.md,
 "The bridge contract", rules 1, 3, 5, 6): the retransmission rule, what a new command
-supersedes, the bounds, the memory's eviction order, round-robin between links, the
-command budget and the log limiter."""
+supersedes (in its share only), the bounds, the memory's eviction order, the shares' turns,
+the command budget and the log limiter."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from gcu_async.bridge import admission
 from gcu_async.bridge._mavlink import mavlink
-from gcu_async.bridge.admission import Budget, Entry, Memory, Queue, is_retransmission
+from gcu_async.bridge.admission import Budget, Entry, Memory, Queue, Share, is_retransmission
 from gcu_async.bridge.commands import CommandIn
 from gcu_async.bridge.lograte import LogLimiter
 
@@ -30,8 +30,8 @@ def cmd(command: int = ZOOM, *params: float, source: tuple[int, int] = (255, 190
                      confirmation)  # fmt: skip
 
 
-def entry(c: CommandIn, link: object = "a", at: float = 0.0) -> Entry:
-    return Entry(c, CAMERA, link, at, admission.SLOTS.get(c.command),
+def entry(c: CommandIn, share: object = "a", at: float = 0.0) -> Entry:
+    return Entry(c, CAMERA, share, at, admission.SLOTS.get(c.command),
                  stop=admission.is_stop(c), confirmation=c.confirmation)  # fmt: skip
 
 
@@ -71,29 +71,121 @@ def test_a_stop_is_never_superseded_and_a_new_intent_replaces_the_waiting_one() 
     assert q.superseded_by(entry(cmd(PHOTO, 0, 0, 1))) == []  # photos have no slot
 
 
-def test_bounds() -> None:
+def test_a_share_supersedes_only_its_own_waiting_commands() -> None:
+    """Another share's newer zoom (a flood's, say) does not cancel a station's waiting zoom:
+    each share's latest intent gets its turn."""
     q = Queue()
-    for _ in range(admission.MAX_WAITING_PER_SOURCE):
-        q.push(entry(cmd(PHOTO, 0, 0, 1, source=(9, 9))))
-    assert "from (9, 9)" in (q.refusal(entry(cmd(PHOTO, source=(9, 9)))) or "")
-    while q.size < admission.MAX_WAITING_PER_LINK:
-        q.push(entry(cmd(PHOTO, source=(q.size, 1))))
-    assert "this link" in (q.refusal(entry(cmd(PHOTO, source=(200, 1)))) or "")
-    while q.size < admission.MAX_WAITING:
-        q.push(entry(cmd(PHOTO, source=(q.size, 1)), link=("b", q.size)))
-    assert "commands are waiting" in (q.refusal(entry(cmd(PHOTO), link="c")) or "")
+    station_zoom = entry(cmd(ZOOM, mavlink.ZOOM_TYPE_RANGE, 10), share="station")
+    q.push(station_zoom)
+    assert q.superseded_by(entry(cmd(ZOOM, mavlink.ZOOM_TYPE_RANGE, 90), share="flood")) == []
+    assert q.superseded_by(entry(cmd(ZOOM, mavlink.ZOOM_TYPE_RANGE, 20),
+                                 share="station")) == [station_zoom]  # fmt: skip
 
 
-def test_links_take_turns() -> None:
+def test_bounds_are_per_share_and_none_is_common() -> None:
+    q = Queue()
+    for n in range(admission.MAX_WAITING_PER_SHARE):
+        q.push(entry(cmd(PHOTO, 0, 0, 1, source=(n, n)), share="flood"))
+    assert "from this sender" in (q.refusal(entry(cmd(PHOTO), share="flood")) or "")
+    for flood in range(50):  # any number of other full shares leave a station its room
+        for _ in range(admission.MAX_WAITING_PER_SHARE):
+            q.push(entry(cmd(PHOTO), share=("other", flood)))
+    assert q.refusal(entry(cmd(PHOTO), share="station")) is None
+
+
+def test_expiry_and_the_next_deadline() -> None:
+    q = Queue()
+    assert q.next_deadline() == math.inf
+    early, late = entry(cmd(PHOTO), at=0.0), entry(cmd(PHOTO), share="b", at=1.0)
+    q.push(late)
+    q.push(early)
+    assert q.next_deadline() == admission.COMMAND_WAIT
+    assert q.expired(admission.COMMAND_WAIT - 0.001) == []
+    assert q.expired(admission.COMMAND_WAIT) == [early]
+
+
+def test_shares_take_turns() -> None:
     q = Queue()
     for n in range(5):
-        q.push(entry(cmd(PHOTO, n), link="flood"))
-    q.push(entry(cmd(PHOTO, 99), link="gcs"))
+        q.push(entry(cmd(PHOTO, n), share="flood"))
+    q.push(entry(cmd(PHOTO, 99), share="gcs"))
     order = []
     while (e := q.pop()) is not None:
-        order.append((e.link, e.cmd.params[0] if e.cmd else None))
+        order.append((e.share, e.cmd.params[0] if e.cmd else None))
     assert order[:2] == [("flood", 0), ("gcs", 99)]
-    assert q.size == 0 and not q.links
+    assert q.size == 0 and not q.shares
+
+
+def test_a_station_that_sends_now_and_then_goes_ahead_of_busy_shares() -> None:
+    """Twenty flood shares keep commands waiting all the time; a station's occasional
+    command is next (it was served longer ago than any of them), where a plain rotation
+    would put it behind all twenty."""
+    q = Queue()
+    for turn in range(200):
+        for flood in range(20):
+            while q.refusal(e := entry(cmd(PHOTO), share=flood)) is None:
+                q.push(e)
+        if turn == 100:
+            q.push(entry(cmd(PHOTO, 1), share="station"))
+        e = q.pop()
+        assert e is not None
+        if turn == 100:
+            assert e.share == "station"
+        if turn == 105:  # served 5 turns ago: the 15 floods served before it go first
+            q.push(entry(cmd(PHOTO, 2), share="station"))
+            order = [q.pop().share for _ in range(16)]  # type: ignore[union-attr]
+            assert order.index("station") == 15 and len(set(order)) == 16
+    assert len(q.served) <= len(q.shares) + admission.REMEMBERED_TURNS
+
+
+def test_idle_shares_are_forgotten_oldest_first() -> None:
+    q = Queue()
+    for n in range(admission.REMEMBERED_TURNS + 50):
+        q.push(entry(cmd(PHOTO), share=n))
+        q.pop()
+    assert len(q.served) == admission.REMEMBERED_TURNS
+    assert min(q.served) == 50  # the 50 served longest ago are the ones forgotten
+
+
+@given(st.lists(st.tuples(st.booleans(), st.integers(0, 5)), max_size=300))
+def test_a_share_waits_at_most_one_turn_of_each_other_share(
+        ops: list[tuple[bool, int]]) -> None:  # fmt: skip
+    """Whatever the others push and whenever, between a command of share 0 reaching the
+    queue and its turn, each other share runs at most one command more than share 0 had
+    waiting ahead of it (rule 3: the shares take turns)."""
+    q = Queue()
+    pushed = 0
+    waiting: list[int] = []
+    ahead: dict[int, int] = {}
+    runs_since: dict[int, dict[object, int]] = {}
+    for is_pop, share in ops:
+        if not is_pop:
+            e = entry(cmd(PHOTO, pushed), share=share)
+            if q.refusal(e) is None:
+                q.push(e)
+                if share == 0:
+                    ahead[pushed], runs_since[pushed] = len(waiting), {}
+                    waiting.append(pushed)
+            pushed += 1
+            continue
+        e = q.pop()
+        if e is None:
+            continue
+        number = int(e.cmd.params[0])  # type: ignore[union-attr]
+        if e.share == 0:
+            assert waiting.pop(0) == number  # its own in order
+            for other, count in runs_since.pop(number).items():
+                assert count <= ahead[number] + 1, (other, count, ahead[number])
+        else:
+            for seen in runs_since.values():
+                seen[e.share] = seen.get(e.share, 0) + 1
+
+
+def test_shares_are_independent() -> None:
+    a, b = Share("a"), Share("b")
+    assert sum(a.budget.take(0.0) for _ in range(10_000)) == admission.COMMAND_BURST
+    assert b.budget.take(0.0)  # a's flood took nothing from b
+    assert a.memory is not b.memory
 
 
 @given(st.lists(st.tuples(st.integers(0, 3000), st.booleans(), st.floats(0, 0.01)),
@@ -144,13 +236,21 @@ def test_the_contract_states_the_bounds_the_code_uses() -> None:
 
     text = " ".join((Path(__file__).parents[2] / "docs" / "mavlink-bridge.md").read_text(
         encoding="utf-8").split())
+    from gcu_async.bridge import links, stream_link, udp_link
+    from gcu_async.session import Session
+
     a = admission
     for phrase in (
         f"within **{a.COMMAND_WAIT:g} s**",
-        f"At most {a.MAX_WAITING} commands wait ({a.MAX_WAITING_PER_LINK} from one link, "
-        f"{a.MAX_WAITING_PER_SOURCE} from one sender)",
-        f"bring {a.COMMANDS_PER_SECOND:g} commands/s (a burst of {a.COMMAND_BURST:g})",
-        f"{a.MAX_REMEMBERED:,} (sender, component, command) keys × {a.PER_KEY} per link",
+        f"At most {a.MAX_WAITING_PER_SHARE} commands waiting per share",
+        f"Each share may bring {a.COMMANDS_PER_SECOND:g} commands/s (a burst of "
+        f"{a.COMMAND_BURST:g})",
+        f"at most {udp_link.MAX_DESTINATIONS} on a `udpin` link, "
+        f"{stream_link.MAX_TCP_CLIENTS} on `tcpin`",
+        f"HEARTBEAT within the last {links.STATION_SECONDS:g} s and is one of the link's "
+        "destinations",
+        f"the last reply is at most {Session().control_silence:g} s old",
+        f"{a.MAX_REMEMBERED:,} (sender, component, command) keys × {a.PER_KEY} per share",
         f"taken at most {1 / a.CONTROL_INTERVAL:g} times a second",
         f"for {a.RECENT_SECONDS:g} s after its answer",
     ):

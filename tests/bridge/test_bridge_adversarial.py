@@ -274,9 +274,10 @@ async def run_step(rig: Rig, schedule: Schedule, figures: dict[str, list[int]],
         assert isinstance(moves[-1].command, ZoomStop)
     for r in runs:  # nothing later than the bound (counted from before the first send)
         assert r.time - step.started <= bound, r
-    assert rig.bridge._queue.size <= admission.MAX_WAITING
-    for memory in rig.bridge._memory.values():
-        assert len(memory.keys) <= admission.MAX_REMEMBERED + 1
+    assert all(len(waiting) <= admission.MAX_WAITING_PER_SHARE
+               for waiting in rig.bridge._queue.shares.values())  # fmt: skip
+    for share in rig.bridge.shares():
+        assert len(share.memory.keys) <= admission.MAX_REMEMBERED + 1
 
 
 def flood(port: int, kind: str, rate: int, seconds: float, pairs: int) -> subprocess.Popen[str]:
@@ -332,7 +333,8 @@ async def test_floods_from_thousands_of_senders(kind: str, rate: int, pairs: int
         assert threading.active_count() <= threads + THREAD_GROWTH
         growth = rss_mib() - rss
         assert growth < RSS_GROWTH_MIB
-        assert rig.bridge._queue.size <= admission.MAX_WAITING
+        assert all(len(waiting) <= admission.MAX_WAITING_PER_SHARE
+                   for waiting in rig.bridge._queue.shares.values())  # fmt: skip
         print(f"\n{kind} flood: {out.strip()} sent, {rig.bridge.stats['messages']} received, "
               f"rate/s {figures['rate']}, mode changes {len(modes)}, RSS +{growth:.1f} MiB, "
               f"stats {rig.bridge.stats}")

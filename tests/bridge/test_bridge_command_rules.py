@@ -109,7 +109,7 @@ BURST = int(admission.COMMAND_BURST) - 5
 
 
 async def test_a_burst_from_many_senders_waits_at_most_the_bound() -> None:
-    """95 photos from 95 senders at once: the queue holds at most MAX_WAITING, every
+    """95 photos from 95 senders at once: the queue holds at most MAX_WAITING_PER_SHARE, every
     photo is answered (once) within COMMAND_WAIT + the wire timeout, none executes after
     that, and ACCEPTED counts the executions exactly. Main waited and executed up to the
     client's 30 s queue timeout."""
@@ -222,3 +222,34 @@ async def test_a_retransmitted_request_gets_its_message_again() -> None:
         rig.gcs.command(CAMERA, request, info, confirmation=1)
         await rig.gcs.wait("CAMERA_INFORMATION")
         assert rig.bridge.stats["retransmissions"] == 1
+
+
+async def test_answers_are_logged_by_name_at_the_level_they_matter(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """A refusal the user must see (DENIED here) is a warning naming the MAV_CMD, the sender
+    and the MAV_RESULT, at most 5 lines per 10 s; a routine one (UNSUPPORTED) is INFO; a link
+    whose traffic starts is INFO, not a warning. Main: "command 1000 refused (2)" at INFO,
+    "traffic started" at WARNING."""
+    caplog.set_level(logging.INFO, logger="gcu_async.bridge")
+    async with bridge_rig() as rig:
+        caplog.clear()
+        pitchyaw = mavlink.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW
+        start = len(rig.gcs.messages)
+        for _ in range(20):  # gimbal device 7: not this gimbal
+            rig.gcs.command(GIMBAL, pitchyaw, -20, 0, math.nan, math.nan, 0, 0, 7)
+        rig.gcs.command(CAMERA, ZOOM, mavlink.ZOOM_TYPE_FOCAL_LENGTH, 50)
+        acks = await final_acks(rig, pitchyaw, 20, start)
+        assert {a.result for a in acks} == {mavlink.MAV_RESULT_DENIED}
+        await final_acks(rig, ZOOM, 1, start)
+    lines = [r for r in caplog.records if r.name == "gcu_async.bridge"]
+    started = [r for r in lines if "traffic started" in r.getMessage()]
+    assert started and {r.levelno for r in started} == {logging.INFO}
+    denied = [r for r in lines if "MAV_RESULT_DENIED" in r.getMessage()]
+    assert 1 <= len(denied) <= 5
+    for r in denied:
+        assert r.levelno == logging.WARNING
+        assert "MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW from 255/190" in r.getMessage()
+    unsupported = [r for r in lines if "MAV_RESULT_UNSUPPORTED" in r.getMessage()]
+    assert len(unsupported) == 1 and unsupported[0].levelno == logging.INFO
+    assert "MAV_CMD_SET_CAMERA_ZOOM" in unsupported[0].getMessage()

@@ -452,7 +452,7 @@ async def test_a_hung_name_lookup_costs_one_thread_and_never_delays_close(
     link = links.make_link("tcp:gimbal-gcs.example:5760")
     before = thread_count()
     try:
-        await link.open(lambda link, msg: None)
+        await link.open(lambda link, peer, msg: None)
         await asyncio.sleep(1.5)  # several attempts time out meanwhile
         assert len(calls) == 1  # the later attempts wait for the first lookup's thread
         assert thread_count() == before + 1

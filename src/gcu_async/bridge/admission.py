@@ -1,19 +1,24 @@
 """Which commands the bridge runs, in what order, and which it answers without running
 (pure; docs/mavlink-bridge.md, "The bridge contract").
 
+- **Shares** (fair admission): each *station* — a peer the link can tell apart and that
+  proved itself a ground station (:meth:`~gcu_async.bridge.links.MavlinkLink.own_share`) —
+  has a :class:`Share` of its own: a command budget, room for waiting commands, a memory of
+  its commands and a turn; every other peer of a link shares the link's pool, one share.
+  What one share sends never spends another's.
 - **Retransmission** (MAVLink's command protocol): a COMMAND_LONG is a retransmission of
-  an earlier one from the same sender to the same component when the command id and all
-  seven parameters are identical and its ``confirmation`` is above 0 and at least the
-  earlier one's. Any differing parameter, or ``confirmation`` 0, makes a new command.
+  an earlier one from the same share and sender to the same component when the command id
+  and all seven parameters are identical and its ``confirmation`` is above 0 and at least
+  the earlier one's. Any differing parameter, or ``confirmation`` 0, makes a new command.
   COMMAND_INT has no ``confirmation``: an identical COMMAND_INT (frame included) within
   :data:`RECENT_SECONDS` of the first is its retransmission.
 - **Kinds**: commands acting on one function of the GCU (the zoom, the pointing, tracking,
   recording, focus, the picture source) share a *slot*. A new command of a slot
-  supersedes the commands of that slot still waiting — except a *stop*: nothing
-  supersedes a stop, it always gets its turn. Photos have no slot: every one waits its turn.
-- **Bounds**: at most :data:`MAX_WAITING` commands wait in all, :data:`MAX_WAITING_PER_LINK`
-  from one link, :data:`MAX_WAITING_PER_SOURCE` from one sender; a command waits at most
-  :data:`COMMAND_WAIT` seconds for its first packet to the GCU.
+  supersedes the commands of that slot still waiting in its share — except a *stop*:
+  nothing supersedes a stop, it always gets its turn. Photos have no slot: every one waits
+  its turn.
+- **Bounds**: at most :data:`MAX_WAITING_PER_SHARE` commands wait per share; a command waits
+  at most :data:`COMMAND_WAIT` seconds for its first packet to the GCU.
 """
 
 from __future__ import annotations
@@ -31,20 +36,19 @@ COMMAND_WAIT = 2.0
 """Seconds a command may wait, from its arrival at the bridge, for its first packet to the
 GCU; after that it is answered TEMPORARILY_REJECTED and never sent (ground stations retry
 after 1–3 s: by then they have retried or given up)."""
-MAX_WAITING = 32
-"""Commands waiting for the GCU, all links together (more: TEMPORARILY_REJECTED at once)."""
-MAX_WAITING_PER_LINK = 24
-"""Commands waiting from one MAVLink link (the others keep room)."""
-MAX_WAITING_PER_SOURCE = 4
-"""Commands waiting from one (system, component)."""
+MAX_WAITING_PER_SHARE = 8
+"""Commands waiting from one share (more: TEMPORARILY_REJECTED at once). No bound is
+common to all shares, so none can fill another's room; the shares themselves are bounded
+(a link's stations and its pool: :meth:`~gcu_async.bridge.links.MavlinkLink.own_share`)."""
 RECENT_SECONDS = 5.0
 """How long a finished command is remembered, so that a retransmission of it gets its
 answer again instead of running again."""
-MAX_REMEMBERED = 1024
-"""(source, component, command) keys remembered per link. Beyond it the oldest key whose
+MAX_REMEMBERED = 256
+"""(source, component, command) keys remembered per share. Beyond it the oldest key whose
 commands all ended without running is forgotten first; a key with a command that ran (or
 may have) is kept for :data:`RECENT_SECONDS` after its answer. (The GCU runs at most one
-command per host packet, so those keys stay few: at most 50/s × 5 s, plus the waiting.)"""
+command per host packet, so those keys stay few: at most 50/s × 5 s over all shares, plus
+the waiting.)"""
 PER_KEY = 4
 """Commands remembered per (source, component, command) key."""
 
@@ -94,10 +98,13 @@ class Entry:
 
     cmd: CommandIn | None
     component: int
-    link: Hashable
+    share: Hashable
+    """The :class:`Share` it came by (its turn, its bound, what it supersedes)."""
     arrival: float
     slot: str | None
     stop: bool = False
+    reply: Any = None
+    """Where its answers go (the bridge's (link, peer))."""
     call: GcuCall | None = None
     """A control message's call (commands are planned again when their turn comes)."""
     state: str = "waiting"
@@ -187,63 +194,91 @@ class Memory:
 
 @dataclass
 class Queue:
-    """The waiting commands: one FIFO per link, served round-robin (a flood on one link
-    cannot starve another), bounded (:data:`MAX_WAITING` …)."""
+    """The waiting commands: one FIFO per share, at most :data:`MAX_WAITING_PER_SHARE` in
+    each. The next command is the oldest of the share served least recently (a share never
+    served first; ties: the share waiting longest): every share with commands waiting gets
+    a turn before any gets a second, and a station that sends now and then goes ahead of
+    shares a flood keeps busy."""
 
-    links: OrderedDict[Hashable, deque[Entry]] = field(default_factory=OrderedDict)
+    shares: dict[Hashable, deque[Entry]] = field(default_factory=dict)
+    """Share → its waiting entries, in the order the shares began waiting."""
+    served: dict[Hashable, int] = field(default_factory=dict)
+    """Share → the turn it was last served in (at most :data:`REMEMBERED_TURNS` idle ones)."""
+    turns: int = 0
     size: int = 0
 
     def __iter__(self) -> Iterator[Entry]:
-        for entries in self.links.values():
+        for entries in self.shares.values():
             yield from entries
 
     def refusal(self, entry: Entry) -> str | None:
-        """Why ``entry`` cannot wait (a bound is full), or None."""
-        if self.size >= MAX_WAITING:
-            return f"{MAX_WAITING} commands are waiting for the GCU"
-        entries = self.links.get(entry.link, ())
-        if len(entries) >= MAX_WAITING_PER_LINK:
-            return f"{MAX_WAITING_PER_LINK} commands from this link are waiting"
-        if entry.source is not None and sum(
-                e.source == entry.source for e in entries) >= MAX_WAITING_PER_SOURCE:
-            return f"{MAX_WAITING_PER_SOURCE} commands from {entry.source} are waiting"
+        """Why ``entry`` cannot wait (its share's room is full), or None."""
+        if len(self.shares.get(entry.share, ())) >= MAX_WAITING_PER_SHARE:
+            return f"{MAX_WAITING_PER_SHARE} commands from this sender are waiting"
         return None
 
     def superseded_by(self, entry: Entry) -> list[Entry]:
-        """The waiting entries of ``entry``'s slot it replaces (never a stop)."""
+        """The waiting entries of ``entry``'s share and slot it replaces (never a stop)."""
         if entry.slot is None:
             return []
-        return [e for e in self if e.slot == entry.slot and e.component == entry.component
-                and not e.stop]  # fmt: skip
+        return [e for e in self.shares.get(entry.share, ()) if e.slot == entry.slot
+                and e.component == entry.component and not e.stop]  # fmt: skip
+
+    def expired(self, now: float) -> list[Entry]:
+        """The waiting entries whose :data:`COMMAND_WAIT` is over at ``now``."""
+        return [e for e in self if e.deadline <= now]
+
+    def next_deadline(self) -> float:
+        """The earliest deadline of a waiting entry (``math.inf``: none waits)."""
+        return min((e.deadline for e in self), default=math.inf)
 
     def push(self, entry: Entry) -> None:
-        self.links.setdefault(entry.link, deque()).append(entry)
+        self.shares.setdefault(entry.share, deque()).append(entry)
         self.size += 1
 
     def remove(self, entry: Entry) -> None:
-        entries = self.links[entry.link]
+        entries = self.shares[entry.share]
         entries.remove(entry)
         self.size -= 1
         if not entries:
-            del self.links[entry.link]
+            del self.shares[entry.share]
 
     def pop(self) -> Entry | None:
-        """The next entry: the oldest of the next link in turn."""
-        for link, entries in self.links.items():
-            entry = entries.popleft()
-            self.size -= 1
-            del self.links[link]
-            if entries:
-                self.links[link] = entries  # to the back: the next link's turn
-            return entry
-        return None
+        """The next entry (the class docstring's order)."""
+        if not self.shares:
+            return None
+        served = self.served
+        share = min(self.shares, key=lambda s: served.get(s, -1))
+        entries = self.shares[share]
+        entry = entries.popleft()
+        self.size -= 1
+        if not entries:
+            del self.shares[share]
+        self.turns += 1
+        served.pop(share, None)
+        served[share] = self.turns  # (so the dict is in the order of service)
+        if len(served) > len(self.shares) + REMEMBERED_TURNS:
+            self._forget()
+        return entry
+
+    def _forget(self) -> None:
+        """Forget the idle shares served longest ago: back, they go first, as they would
+        have anyway (everyone else was served since)."""
+        excess = len(self.served) - len(self.shares) - REMEMBERED_TURNS
+        for share in [s for s in self.served if s not in self.shares][:excess]:
+            del self.served[share]
 
 
-COMMANDS_PER_SECOND = 200.0
-"""Commands one link may bring per second (sustained); beyond it (and a burst of
+REMEMBERED_TURNS = 256
+"""Idle shares whose last turn the :class:`Queue` remembers."""
+
+
+COMMANDS_PER_SECOND = 20.0
+"""Commands one share may bring per second (sustained); beyond it (and a burst of
 :data:`COMMAND_BURST`) a command is dropped unanswered, as a lossy link would lose it, so a
-flood costs the bridge a bounded amount of work; ground stations retransmit."""
-COMMAND_BURST = 100.0
+flood costs the bridge a bounded amount of work however many shares it holds; ground
+stations retransmit. (The GCU runs about 20 commands a second, whoever sends them.)"""
+COMMAND_BURST = 40.0
 CONTROL_INTERVAL = 0.02
 """Gimbal control messages are taken at most once per this many seconds (50 Hz, the GCU's
 own rate): the latest one received meanwhile wins, the others are counted, not used."""
@@ -273,3 +308,18 @@ class Budget:
             self.tokens -= 1.0
             return True
         return False
+
+
+@dataclass(eq=False)
+class Share:
+    """What one station (or a link's pool of other peers) is given: its command budget, a
+    memory of its commands, and (as a key of the :class:`Queue`) its room and turn."""
+
+    name: str
+    """Who it is, for the log (the link and the peer's address, or the link's pool)."""
+    budget: Budget = field(default_factory=Budget)
+    memory: Memory = field(default_factory=Memory)
+    shed: int = 0
+    """Its commands dropped over its budget."""
+    refused: int = 0
+    """Its commands answered TEMPORARILY_REJECTED at once: its room was full."""

@@ -2,9 +2,9 @@
 :class:`~gcu_async.bridge.view.GcuView` when it needs one, and carries out what the pure
 planners decide on a :class:`~gcu_async.client.GcuClient` (docs/mavlink-bridge.md).
 
-Everything it sends goes to every link: HEARTBEAT of both components at 1 Hz, the streams
-of :mod:`~gcu_async.bridge.streams` (adjustable with MAV_CMD_SET_MESSAGE_INTERVAL),
-acknowledgements and requested messages.
+Streams go to every link: HEARTBEAT of both components at 1 Hz, the streams of
+:mod:`~gcu_async.bridge.streams` (adjustable with MAV_CMD_SET_MESSAGE_INTERVAL);
+acknowledgements and requested messages go to the peer that sent the command.
 """
 
 from __future__ import annotations
@@ -20,13 +20,14 @@ from dataclasses import replace
 from types import TracebackType
 from typing import Any
 
-from gcu_async.bridge import admission, camera, dispatch, gimbal, streams
+from gcu_async.bridge import admission, camera, dispatch, gcu_link, gimbal, streams
 from gcu_async.bridge._mavlink import mavlink
 from gcu_async.bridge.autopilot import AutopilotFeed
 from gcu_async.bridge.camera import CameraConfig
 from gcu_async.bridge.commands import (
     ACCEPTED,
     CANCELLED,
+    DENIED,
     FAILED,
     IN_PROGRESS,
     NO_STATUS,
@@ -34,14 +35,17 @@ from gcu_async.bridge.commands import (
     CommandIn,
     GcuCall,
     Plan,
+    command_name,
     result_for,
+    result_name,
 )
-from gcu_async.bridge.links import MavlinkLink, make_link
+from gcu_async.bridge.links import MavlinkLink, Peer, make_link
 from gcu_async.bridge.lograte import LogLimiter
 from gcu_async.bridge.view import Control, GcuView
 from gcu_async.client.client import ClientState, GcuClient
 from gcu_async.errors import GcuError
 from gcu_async.protocol.enums import Mode
+from gcu_async.transport.base import LinkEvent
 
 log = logging.getLogger("gcu_async.bridge")
 
@@ -49,6 +53,12 @@ IN_PROGRESS_AFTER = 0.5
 """Seconds a GCU command may take before the bridge acknowledges IN_PROGRESS."""
 OPEN_RETRY_SECONDS = 2.0
 """Pause between attempts to open the GCU link."""
+WARN_RESULTS = frozenset({TEMPORARILY_REJECTED, FAILED, DENIED})
+"""Answers logged as warnings (seen without ``-v``): the command was not carried out and
+the user may want to know why; UNSUPPORTED and CANCELLED are routine (INFO)."""
+
+Origin = tuple[MavlinkLink, Peer]
+"""Where a command came from, and so where its answers go."""
 
 
 class MavlinkBridge:
@@ -106,28 +116,27 @@ class MavlinkBridge:
         self._recording: bool | None = None
         self._recording_since: int | None = None
         self._was_tracking = False
-        self._memory: dict[Any, admission.Memory] = {}
-        """Link → the commands it brought (retransmissions are told per link)."""
         self._queue = admission.Queue()
         self._wake = asyncio.Event()
         self._logs = LogLimiter(log)
-        self._budgets: dict[Any, admission.Budget] = {}
-        self._latest_control: tuple[Any, Any] | None = None
+        self._latest_control: tuple[admission.Share, Origin, Any] | None = None
         self._control_timer: asyncio.TimerHandle | None = None
         self._control_at = -math.inf
         self._mode_message_at = -math.inf
         self._tasks: set[asyncio.Task[Any]] = set()
         self._main: asyncio.Task[None] | None = None
         self._aircraft_errors: set[str] = set()
+        self._unsubscribe: Any = None
+        self._reopening = False
         self.stats = dict.fromkeys(
             ("messages", "commands", "acks", "sent", "handler_errors", "retransmissions",
              "superseded",
              "rejected", "expired", "shed", "control_messages", "control_coalesced"),
             0)  # fmt: skip
         """Counters: messages and commands received, retransmissions answered without running,
-        commands superseded (CANCELLED), rejected because a bound was full, expired
-        (waited :data:`~gcu_async.bridge.admission.COMMAND_WAIT`), shed (over a link's
-        command rate, dropped unanswered), control messages received and coalesced
+        commands superseded (CANCELLED), rejected because their share's room was full,
+        expired (waited :data:`~gcu_async.bridge.admission.COMMAND_WAIT`), shed (over their
+        share's command rate, dropped unanswered), control messages received and coalesced
         (replaced by a newer one before they were taken)."""
 
     # -- lifecycle ------------------------------------------------------------------------
@@ -151,6 +160,7 @@ class MavlinkBridge:
             for link in opened:
                 await link.close()
             raise
+        self._unsubscribe = self.client.on_link_change(self._on_gcu_event)
         self._main = asyncio.ensure_future(self._run())
         self._spawn(self._executor())
 
@@ -167,6 +177,9 @@ class MavlinkBridge:
             with contextlib.suppress(asyncio.CancelledError, Exception):
                 await task
         self._main = None
+        if self._unsubscribe is not None:
+            self._unsubscribe()
+            self._unsubscribe = None
         for entry in list(self._queue):  # never sent: say so before the links close
             self._queue.remove(entry)
             self._finish(entry, TEMPORARILY_REJECTED)
@@ -184,6 +197,8 @@ class MavlinkBridge:
                 if now >= next_heartbeat:
                     self._heartbeat(now)
                     next_heartbeat = max(next_heartbeat + 1.0, now)
+                    if gcu_link.failed(self.client):
+                        self._start_reopen()
                 self._stream(now)
             except Exception:
                 self.stats["handler_errors"] += 1
@@ -208,6 +223,32 @@ class MavlinkBridge:
                 if failed:
                     log.warning("bridge: GCU link up")
                 return
+
+    def _start_reopen(self) -> None:
+        if not self._reopening:
+            self._reopening = True
+            self._spawn(self._reopen_client())
+
+    async def _reopen_client(self) -> None:
+        """The client's transport gave up reconnecting: close the client and open it again
+        the bridge's way (retrying until the GCU answers)."""
+        try:
+            log.warning("bridge: the GCU link gave up; reopening it")
+            await self.client.close()
+            await self._open_client()
+        finally:
+            self._reopening = False
+
+    def _on_gcu_event(self, event: LinkEvent) -> None:
+        """Link events of the GCU client: a transport that gave up is reopened; after a
+        restart the pod is in its power-on mode, so the bridge forgets the mode and the
+        tracking it had set (the next request sends its mode command again)."""
+        if gcu_link.gave_up(event):
+            self._start_reopen()
+        elif gcu_link.restarted(event):
+            self._bridge_mode = None
+            self._tracking_mode = 0
+            self._tracking_box = None
 
     # -- the view ---------------------------------------------------------------------------
     def view(self) -> GcuView:
@@ -271,27 +312,67 @@ class MavlinkBridge:
                 if message is not None:
                     self.send(component, message)
 
-    def _ack(self, component: int, cmd: CommandIn, link: Any, result: int, param2: int = 0,
-             progress: int = 0) -> None:  # fmt: skip
-        """COMMAND_ACK to the sender, on the link the command came by (a flood on one link
-        is not echoed to the others)."""
+    def reply(self, component: int, message: Any, origin: Origin) -> None:
+        """Pack ``message`` as ``component`` and write it to the peer ``origin`` names alone
+        (an answer is nobody else's business: on a shared ``udpin`` port, a flood's answers
+        never reach a ground station, nor a spoofer's answers addressed with its ids)."""
+        packer = self._packers[component]
+        data = message.pack(packer)
+        packer.seq = (packer.seq + 1) % 256
+        self.stats["sent"] += 1
+        link, peer = origin
+        link.send_to(peer, data)
+
+    def _ack(self, component: int, cmd: CommandIn, origin: Origin, result: int,
+             param2: int = 0, progress: int = 0) -> None:  # fmt: skip
+        """COMMAND_ACK to the sender, on the peer the command came from."""
         self.stats["acks"] += 1
-        self.send(component, mavlink.MAVLink_command_ack_message(
-            cmd.command, result, progress, param2, *cmd.source), link)
+        self.reply(component, mavlink.MAVLink_command_ack_message(
+            cmd.command, result, progress, param2, *cmd.source), origin)
+
+    def _log_answer(self, entry: admission.Entry, result: int, reason: str) -> None:
+        """One rate-limited line naming the command, the sender and the answer."""
+        assert entry.cmd is not None
+        name = result_name(result)
+        level = logging.WARNING if result in WARN_RESULTS else logging.INFO
+        link, peer = entry.reply
+        self._logs.log(level, name, "bridge: %s from %d/%d (%s): %s: %s",
+                       command_name(entry.cmd.command), *entry.cmd.source,
+                       link.peer_name(peer), name, reason)  # fmt: skip
 
     # -- receiving --------------------------------------------------------------------------
-    def _on_message(self, link: Any, msg: Any) -> None:
+    def _on_message(self, link: MavlinkLink, peer: Peer, msg: Any) -> None:
         now = time.monotonic()
         link.note_message(now)
         self.stats["messages"] += 1
         try:
-            self._handle(link, msg, now)
+            self._handle((link, peer), msg, now)
         except Exception:  # hostile input must never stop the bridge
             self.stats["handler_errors"] += 1
             self._logs.log(logging.ERROR, "handler failure", "bridge: handling %s failed",
                            msg.get_type(), exc_info=True)  # fmt: skip
 
-    def _handle(self, link: Any, msg: Any, now: float) -> None:
+    def share_of(self, link: MavlinkLink, peer: Peer, now: float) -> admission.Share:
+        """The :class:`~gcu_async.bridge.admission.Share` ``peer`` sends in: its own while
+        the link says it holds one (a station), else the link's pool."""
+        if link.own_share(peer, now):
+            if peer.share is None:
+                peer.share = admission.Share(link.peer_name(peer))
+            share: admission.Share = peer.share
+            return share
+        if link.pool is None:
+            link.pool = admission.Share(f"{link.url}, senders without a share")
+        pool: admission.Share = link.pool
+        return pool
+
+    def shares(self) -> list[admission.Share]:
+        """The shares in use: each link's pool and its stations' own (for inspection)."""
+        pools = [link.pool for link in self.links if link.pool is not None]
+        own = [peer.share for link in self.links for peer in link.destinations()
+               if peer.share is not None]  # fmt: skip
+        return [*pools, *own]
+
+    def _handle(self, origin: Origin, msg: Any, now: float) -> None:
         source = (msg.get_srcSystem(), msg.get_srcComponent())
         if source[0] == self.system_id and source[1] in dispatch.COMPONENTS:
             return  # our own messages echoed by a router
@@ -302,26 +383,26 @@ class MavlinkBridge:
             if (msg.target_system not in (0, self.system_id)
                     or msg.target_component not in (0, *dispatch.COMPONENTS)):  # fmt: skip
                 return  # for another system or component: costs this link no budget
-            budget = self._budgets.get(link)
-            if budget is None:
-                budget = self._budgets[link] = admission.Budget()
-            if not budget.take(now):
+            share = self.share_of(*origin, now)
+            if not share.budget.take(now):
                 self.stats["shed"] += 1
+                share.shed += 1
                 self._logs.log(logging.WARNING, "shed command", "bridge: more than %g "
-                               "commands/s on %s: dropped unanswered", budget.rate,
-                               getattr(link, "url", link))  # fmt: skip
+                               "commands/s from %s: %s dropped unanswered", share.budget.rate,
+                               share.name, command_name(msg.command))  # fmt: skip
                 return
             cmd = CommandIn.from_message(msg)
             assert cmd is not None
             for component in dispatch.components_for(cmd, self.system_id, self.camera):
-                self._command(cmd, component, link, now)
+                self._command(cmd, component, share, origin, now)
             return
         if kind in gimbal.CONTROL_MESSAGES:
             target = (msg.target_system, msg.target_component)
             if target[0] in (0, self.system_id) and target[1] in (0, gimbal.COMPONENT):
-                self._coalesce_control(link, msg, now)
+                self._coalesce_control(self.share_of(*origin, now), origin, msg, now)
 
-    def _coalesce_control(self, link: Any, msg: Any, now: float) -> None:
+    def _coalesce_control(self, share: admission.Share, origin: Origin, msg: Any,
+                          now: float) -> None:  # fmt: skip
         """Keep the latest control message; take one per :data:`admission.CONTROL_INTERVAL`
         (a flood costs a store per message, not a mode change)."""
         self.stats["control_messages"] += 1
@@ -329,7 +410,7 @@ class MavlinkBridge:
             return  # another component holds control (checked here: before coalescing)
         if self._latest_control is not None:
             self.stats["control_coalesced"] += 1
-        self._latest_control = (link, msg)
+        self._latest_control = (share, origin, msg)
         if self._control_timer is None:
             self._control_later(self._control_at + admission.CONTROL_INTERVAL - now)
 
@@ -342,7 +423,7 @@ class MavlinkBridge:
         latest, self._latest_control = self._latest_control, None
         if latest is None:
             return
-        link, msg = latest
+        share, origin, msg = latest
         now = self._control_at = time.monotonic()
         try:
             call = gimbal.message_call(msg, self.view())
@@ -365,7 +446,7 @@ class MavlinkBridge:
                 self._control_later(due - now)
                 return
             self._mode_message_at = now
-        self._control_message(call, link, now)
+        self._control_message(call, share, origin, now)
 
     def _aircraft(self, msg: Any, now: float) -> None:
         kind = msg.get_type()
@@ -381,44 +462,46 @@ class MavlinkBridge:
             return
         self._aircraft_errors.discard(kind)
 
-    def _control_message(self, call: GcuCall, link: Any, now: float) -> None:
-        """A gimbal control message's call: new control values apply at once; a mode
-        change waits its turn in the pointing slot, where the latest replaces any waiting."""
+    def _control_message(self, call: GcuCall, share: admission.Share, origin: Origin,
+                         now: float) -> None:  # fmt: skip
+        """A gimbal control message's call: new control values apply at once while the GCU
+        is ready and no pointing command waits; otherwise the call waits its turn in the
+        pointing slot (the latest of its share replacing the one waiting), within
+        :data:`~gcu_async.bridge.admission.COMMAND_WAIT` like a command."""
         immediate = call.method in admission.IMMEDIATE_CALLS
         waiting = any(e.slot == admission.POINTING for e in self._queue)
-        if immediate and not waiting:
+        if immediate and not waiting and gcu_link.ready(self.client):
             try:
                 getattr(self.client, call.method)(**call.kwargs)
             except ValueError as exc:
                 self._logs.log(logging.INFO, "control message failure",
                                "bridge: %s failed: %s", call.method, exc)  # fmt: skip
             return
-        entry = admission.Entry(None, gimbal.COMPONENT, link, now, admission.POINTING,
-                                call=call)  # fmt: skip
+        entry = admission.Entry(None, gimbal.COMPONENT, share, now, admission.POINTING,
+                                call=call, reply=origin)  # fmt: skip
         self._admit(entry)
 
-    def _command(self, cmd: CommandIn, component: int, link: Any, now: float) -> None:
+    def _command(self, cmd: CommandIn, component: int, share: admission.Share,
+                 origin: Origin, now: float) -> None:  # fmt: skip
         self.stats["commands"] += 1
-        memory = self._memory.get(link)
-        if memory is None:
-            memory = self._memory[link] = admission.Memory()
+        memory = share.memory
         old = memory.find(cmd, component, now)
         if old is not None:  # a retransmission: answered, never run again
             self.stats["retransmissions"] += 1
             old.confirmation = max(old.confirmation, cmd.confirmation)
             if old.result is not None:
-                self._ack(component, cmd, link, old.result, old.param2)
+                self._ack(component, cmd, origin, old.result, old.param2)
                 if old.result == ACCEPTED and dispatch.requested_id(cmd) is not None:
                     # its message may be what was lost: send it again (a request runs
                     # nothing on the GCU)
                     plan = dispatch.plan(cmd, component, self.view(), self.camera)
                     for reply in plan.replies:
-                        self.send(component, reply, link)
+                        self.reply(component, reply, origin)
             else:
-                self._ack(component, cmd, link, IN_PROGRESS, progress=255)
+                self._ack(component, cmd, origin, IN_PROGRESS, progress=255)
             return
-        entry = admission.Entry(cmd, component, link, now, admission.SLOTS.get(cmd.command),
-                                stop=admission.is_stop(cmd),
+        entry = admission.Entry(cmd, component, share, now, admission.SLOTS.get(cmd.command),
+                                stop=admission.is_stop(cmd), reply=origin,
                                 confirmation=cmd.confirmation)  # fmt: skip
         memory.add(entry, now)
         plan = dispatch.plan(cmd, component, self.view(), self.camera)
@@ -430,27 +513,30 @@ class MavlinkBridge:
     def _answer_plan(self, entry: admission.Entry, plan: Plan) -> None:
         """Answer a command whose plan needs no GCU call (a refusal or a reply)."""
         assert plan.result is not None
-        assert entry.cmd is not None
         if plan.reason:
-            self._logs.log(logging.INFO, "refused command", "bridge: command %d refused (%d): %s",
-                           entry.cmd.command, plan.result, plan.reason)  # fmt: skip
+            self._log_answer(entry, plan.result, plan.reason)
         if plan.result == ACCEPTED:
             self._take(plan, entry.component)
         self._finish(entry, plan.result)
         for reply in plan.replies:
-            self.send(entry.component, reply, entry.link)
+            self.reply(entry.component, reply, entry.reply)
 
     def _admit(self, entry: admission.Entry) -> None:
-        """Queue ``entry``: it replaces what waits in its slot (answered CANCELLED), or is
-        refused (TEMPORARILY_REJECTED) when a bound is full."""
+        """Queue ``entry``: it replaces what waits in its share's slot (answered CANCELLED),
+        or is refused (TEMPORARILY_REJECTED) when its share's room is full."""
         for old in self._queue.superseded_by(entry):
             self._queue.remove(old)
             self.stats["superseded"] += 1
+            if old.cmd is not None:
+                self._log_answer(old, CANCELLED, "a newer command of its kind replaced it")
             self._finish(old, CANCELLED)
         refusal = self._queue.refusal(entry)
         if refusal is not None:
             self.stats["rejected"] += 1
-            self._logs.log(logging.INFO, "queue full", "bridge: command refused: %s", refusal)
+            if isinstance(entry.share, admission.Share):
+                entry.share.refused += 1
+            if entry.cmd is not None:
+                self._log_answer(entry, TEMPORARILY_REJECTED, refusal)
             self._finish(entry, TEMPORARILY_REJECTED)
             return
         self._queue.push(entry)
@@ -461,7 +547,7 @@ class MavlinkBridge:
 
     def _in_progress(self, entry: admission.Entry) -> None:
         if entry.result is None and entry.cmd is not None:
-            self._ack(entry.component, entry.cmd, entry.link, IN_PROGRESS, progress=255)
+            self._ack(entry.component, entry.cmd, entry.reply, IN_PROGRESS, progress=255)
 
     def _finish(self, entry: admission.Entry, result: int, param2: int = 0) -> None:
         """The final answer of ``entry`` (once; a retransmission gets it again)."""
@@ -472,7 +558,7 @@ class MavlinkBridge:
             entry.timer.cancel()
             entry.timer = None
         if entry.cmd is not None:
-            self._ack(entry.component, entry.cmd, entry.link, result, param2)
+            self._ack(entry.component, entry.cmd, entry.reply, result, param2)
 
     def _take(self, plan: Plan, component: int) -> None:
         if plan.interval is not None:
@@ -484,13 +570,26 @@ class MavlinkBridge:
 
     # -- running commands, one at a time ----------------------------------------------------
     async def _executor(self) -> None:
-        """Run the waiting entries one at a time, in turn per link."""
+        """Run the waiting entries one at a time, the shares taking turns, each once the
+        GCU is ready (:func:`~gcu_async.bridge.gcu_link.ready`); what waits past its
+        :data:`~gcu_async.bridge.admission.COMMAND_WAIT` is answered TEMPORARILY_REJECTED."""
         while True:
-            entry = self._queue.pop()
-            if entry is None:
+            if not self._queue.size:
                 self._wake.clear()
                 await self._wake.wait()
                 continue
+            self._expire(time.monotonic())
+            if not self._queue.size:
+                continue
+            if not gcu_link.ready(self.client):
+                # readiness changes with a reply or the client's timers: look again each
+                # host packet period, and at the next deadline at the latest
+                wait = min(1.0 / self.client.rate_hz,
+                           self._queue.next_deadline() - time.monotonic())  # fmt: skip
+                await asyncio.sleep(max(0.0, wait))
+                continue
+            entry = self._queue.pop()
+            assert entry is not None
             try:
                 await self._run_entry(entry)
             except asyncio.CancelledError:
@@ -502,12 +601,30 @@ class MavlinkBridge:
                 if entry.result is None:
                     self._finish(entry, FAILED, NO_STATUS)
 
+    def _expire(self, now: float) -> None:
+        """Answer the entries that waited their :data:`~gcu_async.bridge.admission.COMMAND_WAIT`
+        TEMPORARILY_REJECTED: never sent, never will be."""
+        expired = self._queue.expired(now)
+        if not expired:
+            return
+        reason = (f"not sent within {admission.COMMAND_WAIT:g} s: "
+                  + ("other commands went first" if gcu_link.ready(self.client) else
+                     "the GCU does not answer" if gcu_link.opened(self.client) else
+                     "the GCU link is not open yet"))  # fmt: skip
+        for entry in expired:
+            self._queue.remove(entry)
+            self.stats["expired"] += 1
+            if entry.cmd is not None:
+                self._log_answer(entry, TEMPORARILY_REJECTED, reason)
+            self._finish(entry, TEMPORARILY_REJECTED)
+
     async def _run_entry(self, entry: admission.Entry) -> None:
         remaining = entry.deadline - time.monotonic()
-        if remaining <= 0:
+        if remaining <= 0:  # (its deadline passed since the executor looked)
             self.stats["expired"] += 1
-            self._logs.log(logging.INFO, "expired command", "bridge: command waited %g s "
-                           "without reaching the GCU: not run", admission.COMMAND_WAIT)
+            if entry.cmd is not None:
+                self._log_answer(entry, TEMPORARILY_REJECTED, f"not sent within "
+                                 f"{admission.COMMAND_WAIT:g} s")  # fmt: skip
             self._finish(entry, TEMPORARILY_REJECTED)
             return
         if entry.cmd is None:
@@ -537,12 +654,12 @@ class MavlinkBridge:
         try:
             result, param2 = result_for(error)
         except Exception:
-            self._logs.log(logging.ERROR, "handler failure", "bridge: command %d failed "
-                           "unexpectedly", entry.cmd.command, exc_info=True)  # fmt: skip
+            self._logs.log(logging.ERROR, "handler failure", "bridge: %s failed "
+                           "unexpectedly", command_name(entry.cmd.command),
+                           exc_info=True)  # fmt: skip
             result, param2 = FAILED, NO_STATUS
         if error is not None:
-            self._logs.log(logging.INFO, "failed command", "bridge: command %d -> %d: %s",
-                           entry.cmd.command, result, error)  # fmt: skip
+            self._log_answer(entry, result, str(error))
         self._finish(entry, result, param2)
         if result == ACCEPTED and call.then == "image_captured":
             self.send(camera.COMPONENT, camera.image_captured(self.view(), self._images))

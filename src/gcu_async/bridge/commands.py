@@ -37,6 +37,20 @@ NO_STATUS = -1
 """COMMAND_ACK result_param2 of a FAILED command without a GCU status (timed out)."""
 
 
+def command_name(command: int) -> str:
+    """The MAV_CMD name of ``command`` for the log (``MAV_CMD 31999`` for an unknown id)."""
+    entry = mavlink.enums["MAV_CMD"].get(command)
+    return str(entry.name) if entry is not None else f"MAV_CMD {command}"
+
+
+def result_name(result: int) -> str:
+    """The MAV_RESULT name of ``result`` for the log (``MAV_RESULT_CANCELLED`` too)."""
+    entry = mavlink.enums["MAV_RESULT"].get(result)
+    if entry is not None:
+        return str(entry.name)
+    return "MAV_RESULT_CANCELLED" if result == CANCELLED else f"MAV_RESULT {result}"
+
+
 @dataclass(frozen=True)
 class CommandIn:
     """One MAVLink command: COMMAND_LONG (``frame`` None, param5/6 as sent) or COMMAND_INT

@@ -56,14 +56,21 @@ SEND_BUFFER_BYTES = 64 * 1024
 LOG_INTERVAL = 10.0
 """A repeating log line of one kind appears at most once per this many seconds per link."""
 
-OnMessage = Callable[["MavlinkLink", Any], None]
+STATION_SECONDS = 5.0
+"""A ``udpin`` sender is a station for this long after its last HEARTBEAT (ground stations
+send one a second; MAVLink counts a peer lost after about five missed)."""
+
+OnMessage = Callable[["MavlinkLink", "Peer", Any], None]
+HEARTBEAT = mavlink.MAVLINK_MSG_ID_HEARTBEAT
 
 
 class Peer:
     """One source of bytes with its own parser: a UDP sender address, a TCP connection, the
-    serial port. ``valid_at`` is when it last sent a valid MAVLink message."""
+    serial port. ``valid_at`` is when it last sent a valid MAVLink message, ``heartbeat_at``
+    a HEARTBEAT; ``share`` is the bridge's bookkeeping for it while it holds a share of its
+    own (:meth:`MavlinkLink.own_share`), which goes when the link forgets the peer."""
 
-    __slots__ = ("addr", "parser", "stream", "transport", "valid_at")
+    __slots__ = ("addr", "heartbeat_at", "parser", "share", "stream", "transport", "valid_at")
 
     def __init__(self, transport: Any, addr: Any = None, *, stream: bool = False) -> None:
         self.transport = transport
@@ -71,6 +78,12 @@ class Peer:
         self.stream = stream
         self.parser = new_parser()
         self.valid_at: float | None = None
+        self.heartbeat_at: float | None = None
+        self.share: Any = None
+
+    def heartbeating(self, now: float) -> bool:
+        """A HEARTBEAT came from it within :data:`STATION_SECONDS`."""
+        return self.heartbeat_at is not None and now - self.heartbeat_at <= STATION_SECONDS
 
 
 class MavlinkLink:
@@ -95,10 +108,13 @@ class MavlinkLink:
         """Connections the owner task made after a loss or a failed attempt."""
         self.last_message: float | None = None
         self.up = False
+        self.pool: Any = None
+        """The bridge's bookkeeping for the peers without a share of their own."""
         self._on_message: OnMessage | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
         self._owner: asyncio.Task[None] | None = None
-        self._inbox: deque[list[Any]] = deque()
+        self._inbox: dict[Peer, deque[list[Any]]] = {}
+        """Peer → its received byte runs ([bytes, parsing begun]), peers in turn order."""
         self._inbox_bytes = 0
         self._paused: set[Any] = set()
         self._drain_handle: asyncio.Handle | None = None
@@ -184,7 +200,10 @@ class MavlinkLink:
         if not stream and self._inbox_bytes + len(data) > INBOX_BYTES:
             self.dropped_in += 1
             return
-        self._inbox.append([peer, data, False])
+        runs = self._inbox.get(peer)
+        if runs is None:
+            runs = self._inbox[peer] = deque()
+        runs.append([data, False])
         self._inbox_bytes += len(data)
         if stream and self._inbox_bytes > INBOX_BYTES and peer.transport not in self._paused:
             with contextlib.suppress(RuntimeError, AttributeError):
@@ -194,18 +213,25 @@ class MavlinkLink:
             self._drain_handle = self._loop.call_soon(self._drain)
 
     def _drain(self) -> None:
+        """Parse and deliver for at most :data:`DRAIN_SECONDS`, one message per peer in
+        turn: a peer with a backlog (a flood) delays another peer's next message by one
+        message of each peer with bytes waiting, not by its whole backlog."""
         self._drain_handle = None
         deadline = time.monotonic() + DRAIN_SECONDS
         inbox = self._inbox
         while inbox:
-            entry = inbox[0]
-            peer, data, fed = entry
-            entry[2] = True
-            msg = self._parse(peer, b"" if fed else data)
+            peer = next(iter(inbox))
+            runs = inbox.pop(peer)
+            run = runs[0]
+            data, begun = run
+            run[1] = True
+            msg = self._parse(peer, b"" if begun else data)
             if msg is None:
-                inbox.popleft()
+                runs.popleft()
                 self._inbox_bytes -= len(data)
-            else:
+            if runs:
+                inbox[peer] = runs  # to the back: the next peer's turn
+            if msg is not None:
                 self._deliver(peer, msg)
             if time.monotonic() >= deadline:
                 break
@@ -234,10 +260,12 @@ class MavlinkLink:
             return
         now = time.monotonic()
         peer.valid_at = now
+        if msg.get_msgId() == HEARTBEAT:
+            peer.heartbeat_at = now
         self.heard_valid(peer, now)
         assert self._on_message is not None
         try:
-            self._on_message(self, msg)
+            self._on_message(self, peer, msg)
         except Exception as exc:  # the receiver's fault; the link goes on
             self.log_every("handler", logging.WARNING, "handling %s failed: %r",
                            msg.get_type(), exc)  # fmt: skip
@@ -245,24 +273,39 @@ class MavlinkLink:
     def heard_valid(self, peer: Peer, now: float) -> None:
         """``peer`` sent a valid message (a listener may make it a destination)."""
 
+    def own_share(self, peer: Peer, now: float) -> bool:
+        """Does ``peer`` hold a command share of its own (a *station*), or share the link's
+        pool with the others? Here: the one peer of a ``udpout``, ``tcp`` or serial link,
+        which the operator named (``udpin`` and ``tcpin`` say otherwise)."""
+        return True
+
+    def peer_name(self, peer: Peer) -> str:
+        """``peer`` for the log: the link, and the sender's address where there are many."""
+        return self.url if peer.addr is None else f"{self.url} from {peer.addr}"
+
     # -- sending ----------------------------------------------------------------------------
     def send(self, data: bytes) -> None:
         """Write one packed message to every destination, never waiting."""
         for peer in self.destinations():
-            transport = peer.transport
-            if transport is None or transport.is_closing():
-                continue
-            if transport.get_write_buffer_size() > SEND_BUFFER_BYTES:
-                self.dropped_out += 1
-                continue
-            try:
-                if peer.stream:
-                    transport.write(data)
-                else:
-                    transport.sendto(data, peer.addr)
-            except (OSError, ValueError, RuntimeError) as exc:
-                self.send_errors += 1
-                self.log_every("send", logging.DEBUG, "send failed: %s", exc)
+            self.send_to(peer, data)
+
+    def send_to(self, peer: Peer, data: bytes) -> None:
+        """Write one packed message to ``peer`` alone, never waiting (an answer goes to the
+        peer that asked, whether or not it is a destination: it sent a valid message)."""
+        transport = peer.transport
+        if transport is None or transport.is_closing():
+            return
+        if transport.get_write_buffer_size() > SEND_BUFFER_BYTES:
+            self.dropped_out += 1
+            return
+        try:
+            if peer.stream:
+                transport.write(data)
+            else:
+                transport.sendto(data, peer.addr)
+        except (OSError, ValueError, RuntimeError) as exc:
+            self.send_errors += 1
+            self.log_every("send", logging.DEBUG, "send failed: %s", exc)
 
     def destinations(self) -> list[Peer]:
         """The peers :meth:`send` writes to now (a snapshot)."""
@@ -275,8 +318,10 @@ class MavlinkLink:
         self.last_message = now
         if not self.up:
             self.up = True
-            log.warning("mavlink %s: traffic %s", self.url,
-                        "restored" if self.received > 1 else "started")  # fmt: skip
+            if self.received > 1:  # after a loss, which was a warning
+                log.warning("mavlink %s: traffic restored", self.url)
+            else:
+                log.info("mavlink %s: traffic started", self.url)
 
     def check_silence(self, now: float) -> None:
         """Log the link as lost after :data:`SILENCE_SECONDS` without a message."""

@@ -5,9 +5,17 @@ policy) — docs/mavlink-bridge.md, "Links".
 messages. A sender becomes a **destination** (gets what the bridge sends) only after a valid
 MAVLink message from it — a spoofed or junk datagram never turns the bridge into a reflector
 — and stops being one after :data:`DESTINATION_EXPIRY_SECONDS` without a valid message. At
-most :data:`MAX_DESTINATIONS` destinations are kept (a valid sender beyond them is heard but
-not written to until one expires: the ground stations already there cannot be pushed out) and
-at most :data:`MAX_SENDERS` other senders' parsers (least recently heard dropped first).
+most :data:`MAX_DESTINATIONS` destinations are kept and at most :data:`MAX_SENDERS` other
+senders' parsers (least recently heard dropped first). A valid sender beyond the
+destinations is heard but not written to until one expires — except a *station* (a
+HEARTBEAT within :data:`~gcu_async.bridge.links.STATION_SECONDS`), which takes the place of
+the longest-silent destination that is not one: stations already there cannot be pushed
+out, and senders that never heartbeat cannot keep a station out.
+
+A destination that heartbeats is a station: it holds a command share of its own
+(:meth:`UdpInLink.own_share`), and while the inbox is more than half full only stations'
+datagrams are queued, so a flood from other addresses cannot crowd them out of the inbox
+either (the kernel's socket buffer, before it, drops every sender's alike).
 """
 
 from __future__ import annotations
@@ -19,7 +27,7 @@ import time
 from collections import OrderedDict
 from typing import Any
 
-from gcu_async.bridge.links import MavlinkLink, Peer
+from gcu_async.bridge.links import INBOX_BYTES, MavlinkLink, Peer
 
 log = logging.getLogger("gcu_async.bridge")
 
@@ -117,6 +125,10 @@ class UdpInLink(_UdpLink):
 
     def datagram(self, data: bytes, addr: Any) -> None:
         peer = self._destinations.get(addr)
+        if (self._inbox_bytes > INBOX_BYTES // 2
+                and (peer is None or not peer.heartbeating(time.monotonic()))):  # fmt: skip
+            self.dropped_in += 1  # the rest of the inbox is the stations'
+            return
         if peer is None:
             peer = self._senders.get(addr)
             if peer is None:
@@ -134,6 +146,8 @@ class UdpInLink(_UdpLink):
             return
         if len(self._destinations) >= MAX_DESTINATIONS:
             self._sweep(now)
+        if len(self._destinations) >= MAX_DESTINATIONS and peer.heartbeating(now):
+            self._make_room_for_station(now)
         if len(self._destinations) >= MAX_DESTINATIONS:
             self.destinations_refused += 1
             self.log_every("full", logging.WARNING, "%d destinations already; not writing to "
@@ -142,6 +156,29 @@ class UdpInLink(_UdpLink):
         self._senders.pop(addr, None)
         self._destinations[addr] = peer
         self.log_every("new", logging.INFO, "writing to %s", addr)
+
+    def _make_room_for_station(self, now: float) -> None:
+        """Demote the longest-silent destination that is not a station (it stays a heard
+        sender, its parser kept)."""
+        others = [p for p in self._destinations.values() if not p.heartbeating(now)]
+        if not others:
+            return
+        victim = min(others, key=lambda p: p.valid_at or 0.0)
+        del self._destinations[victim.addr]
+        victim.share = None
+        if len(self._senders) >= MAX_SENDERS:
+            self._senders.popitem(last=False)
+            self.senders_dropped += 1
+        self._senders[victim.addr] = victim
+        self.log_every("demoted", logging.INFO, "%s sends no HEARTBEAT: its place goes to a "
+                       "station", victim.addr)  # fmt: skip
+
+    def own_share(self, peer: Peer, now: float) -> bool:
+        """A destination that sent a HEARTBEAT within
+        :data:`~gcu_async.bridge.links.STATION_SECONDS` holds a share of its own; every other
+        sender shares the link's pool. (The source address is what identifies a sender:
+        system and component ids are written by the sender, so any sender can write any.)"""
+        return peer.heartbeating(now) and self._destinations.get(peer.addr) is peer
 
     def _sweep(self, now: float) -> None:
         self._next_sweep = now + 1.0

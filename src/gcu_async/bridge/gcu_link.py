@@ -1,0 +1,54 @@
+"""The GCU link as the bridge reads it: may a command go to the GCU now, and has the
+client given up (docs/mavlink-bridge.md, "The bridge contract", BG4 and BG9).
+
+**Ready** means the client is open, its session counts the link up, and the last reply is
+at most the session's ``control_silence`` old: new control values then go out valid from
+the next host packet, and a command goes to a GCU that answered a moment ago. While not
+ready, commands wait (within their 2 s), and a setpoint is not taken: a GCU that stopped
+answering would get it, valid, whenever replies return.
+
+This module is also the one place the bridge names the client's states and link events
+that report a transport that gave up and a restart; they are looked up by name, so the
+bridge works with clients that have them and with clients that do not.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from gcu_async.client.client import ClientState, GcuClient
+from gcu_async.transport.base import LinkEvent, LinkEventKind
+
+FAILED: Any = getattr(ClientState, "FAILED", None)
+"""The client's state once its transport gave up reconnecting (``None``: no such state)."""
+GAVE_UP: Any = getattr(LinkEventKind, "GAVE_UP", None)
+"""The link event of a transport that gave up reconnecting (``None``: no such event)."""
+RESTARTED: Any = getattr(LinkEventKind, "RESTARTED", None)
+"""The link event of a GCU or link that restarted (``None``: no such event)."""
+
+
+def ready(client: GcuClient) -> bool:
+    """May a command or new control values go to the GCU now (module docstring)?"""
+    if client.state is not ClientState.OPEN:
+        return False
+    health = client.link
+    age = health.last_reply_age
+    return health.up and age is not None and age <= client.session.control_silence
+
+
+def opened(client: GcuClient) -> bool:
+    """Is the client open (its heartbeat running), whether or not replies arrive?"""
+    return client.state is ClientState.OPEN
+
+
+def failed(client: GcuClient) -> bool:
+    """Has the client's transport given up reconnecting (the bridge then reopens it)?"""
+    return FAILED is not None and client.state is FAILED
+
+
+def gave_up(event: LinkEvent) -> bool:
+    return GAVE_UP is not None and event.kind is GAVE_UP
+
+
+def restarted(event: LinkEvent) -> bool:
+    return RESTARTED is not None and event.kind is RESTARTED

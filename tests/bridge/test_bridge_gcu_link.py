@@ -1,0 +1,113 @@
+"""How the bridge reads the GCU link (gcu_async.bridge.gcu_link; docs/mavlink-bridge.md, "The
+bridge contract", BG9, and "Robustness"): when the GCU is ready for a command, and what the
+bridge does when the client's transport gave up or the link restarted. The client's
+"gave up" state and events are looked up by name; here they are stood in for, so the
+bridge's reaction is tested whether or not the client has them yet. No I/O."""
+
+from __future__ import annotations
+
+import asyncio
+import enum
+from dataclasses import dataclass, field
+from typing import Any
+
+import pytest
+
+from gcu_async.bridge import MavlinkBridge, gcu_link
+from gcu_async.client.client import ClientState
+from gcu_async.protocol.enums import Mode
+from gcu_async.transport.base import LinkEvent
+
+
+class Stand(enum.Enum):
+    """Stand-ins for the client's FAILED state and GAVE_UP / RESTARTED events."""
+
+    FAILED = "failed"
+    GAVE_UP = "gave up"
+    RESTARTED = "restarted"
+
+
+@dataclass
+class Health:
+    up: bool = True
+    last_reply_age: float | None = 0.05
+
+
+@dataclass
+class Session:
+    control_silence: float = 0.2
+
+
+@dataclass
+class FakeClient:
+    """What the bridge reads of a client, and its open/close calls."""
+
+    state: Any = ClientState.OPEN
+    link: Health = field(default_factory=Health)
+    session: Session = field(default_factory=Session)
+    calls: list[str] = field(default_factory=list)
+
+    async def close(self) -> None:
+        self.calls.append("close")
+        self.state = ClientState.CLOSED
+
+    async def open(self) -> None:
+        self.calls.append("open")
+        self.state = ClientState.OPEN
+
+
+@pytest.fixture
+def stand_ins(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(gcu_link, "FAILED", Stand.FAILED)
+    monkeypatch.setattr(gcu_link, "GAVE_UP", Stand.GAVE_UP)
+    monkeypatch.setattr(gcu_link, "RESTARTED", Stand.RESTARTED)
+
+
+@pytest.mark.parametrize(("client", "ready"), [
+    (FakeClient(), True),
+    (FakeClient(link=Health(last_reply_age=0.2)), True),
+    (FakeClient(link=Health(last_reply_age=0.21)), False),  # silent: values would go invalid
+    (FakeClient(link=Health(last_reply_age=None)), False),  # no reply yet
+    (FakeClient(link=Health(up=False)), False),
+    (FakeClient(state=ClientState.OPENING), False),
+    (FakeClient(state=ClientState.CLOSED), False),
+])  # fmt: skip
+def test_ready_means_open_up_and_a_reply_within_control_silence(client: FakeClient,
+                                                                ready: bool) -> None:  # fmt: skip
+    assert gcu_link.ready(client) is ready  # type: ignore[arg-type]
+
+
+def test_without_the_names_nothing_counts_as_failed_gave_up_or_restarted() -> None:
+    client = FakeClient(state=Stand.FAILED)
+    event = LinkEvent(Stand.GAVE_UP)  # type: ignore[arg-type]
+    if gcu_link.FAILED is None:
+        assert not gcu_link.failed(client)  # type: ignore[arg-type]
+    if gcu_link.GAVE_UP is None:
+        assert not gcu_link.gave_up(event)
+        assert not gcu_link.restarted(LinkEvent(Stand.RESTARTED))  # type: ignore[arg-type]
+
+
+def bridge_for(client: FakeClient) -> MavlinkBridge:
+    return MavlinkBridge(client, ["udpout:127.0.0.1:9"])  # type: ignore[arg-type]
+
+
+async def test_a_transport_that_gave_up_is_closed_and_opened_again_once(stand_ins: None) -> None:
+    client = FakeClient(state=Stand.FAILED)
+    bridge = bridge_for(client)
+    assert gcu_link.failed(client)  # type: ignore[arg-type]
+    bridge._on_gcu_event(LinkEvent(Stand.GAVE_UP))  # type: ignore[arg-type]
+    bridge._on_gcu_event(LinkEvent(Stand.GAVE_UP))  # type: ignore[arg-type]
+    bridge._start_reopen()  # (what the heartbeat step does on seeing FAILED)
+    for _ in range(5):
+        await asyncio.sleep(0)
+    assert client.calls == ["close", "open"]
+    assert client.state is ClientState.OPEN and not bridge._reopening
+
+
+async def test_after_a_restart_the_bridge_forgets_the_mode_it_set(stand_ins: None) -> None:
+    bridge = bridge_for(FakeClient())
+    bridge._bridge_mode = Mode.EULER_CONTROL
+    bridge._tracking_mode, bridge._tracking_box = 2, (0.4, 0.4, 0.6, 0.6)
+    bridge._on_gcu_event(LinkEvent(Stand.RESTARTED))  # type: ignore[arg-type]
+    assert bridge._bridge_mode is None
+    assert (bridge._tracking_mode, bridge._tracking_box) == (0, None)
