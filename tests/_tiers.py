@@ -131,6 +131,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_protocol_gpstime.py": FAST,
     "test_protocol_liberal.py": (FAST, HEAVY),
     "test_protocol_liberal_frames.py": FAST,
+    "test_protocol_headings.py": FAST,
     "test_protocol_pods.py": FAST,
     "test_protocol_ranges.py": FAST,
     "test_protocol_roundtrip.py": (FAST, HEAVY),
