@@ -65,6 +65,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_bridge_cli.py": "subprocess",
     "test_bridge_command_rules.py": "realtime",
     "test_bridge_gimbal.py": "realtime",
+    "test_bridge_z1pro.py": "realtime",
     "test_bridge_links.py": ("realtime", ALONE),
     "test_bridge_links_endpoint.py": FAST,
     "test_bridge_mapping.py": FAST,
@@ -94,6 +95,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_client_robustness.py": ("realtime", ALONE),  # exactly once needs delays < the guard
     "test_client_session.py": "realtime",
     "test_client_waiting.py": "realtime",
+    "test_client_firmware.py": "realtime",
     "test_client_wirelog.py": "subprocess",
     "test_conformance_report.py": FAST,
     "test_connect_signature.py": FAST,
@@ -150,6 +152,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_session_sockets.py": ("realtime", ALONE),  # reordering below the 15 ms guard
     "test_sim_cli.py": "subprocess",
     "test_sim_cli_report.py": "subprocess",
+    "test_sim_firmware.py": FAST,
     "test_sim_execution_log.py": FAST,
     "test_sim_fault_bounds.py": FAST,
     "test_sim_faults.py": "realtime",

@@ -44,7 +44,7 @@ def test_every_raw_yaw_reads_as_a_heading_in_0_360_and_keeps_its_raw_value() -> 
             assert details == [SIGNED_DETAIL if raw >= 47536 else PAST_TURN_DETAIL], raw
 
 
-@pytest.mark.parametrize("raw, reading", [
+@pytest.mark.parametrize(("raw", "reading"), [
     (0, Reading.U16), (17999, Reading.U16), (18000, Reading.U16), (35999, Reading.U16),
     (36000, Reading.PAST_TURN), (47535, Reading.PAST_TURN),
     (47536, Reading.SIGNED), (65535, Reading.SIGNED),
