@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass
+from functools import cached_property
 
 from gcu_async.protocol.fields import WIRE_RANGES, WireField
 
@@ -55,17 +56,17 @@ class HeadingRule:
             raise ValueError(f"{f.name}: a heading is a U16 field from 0, not {f.fmt!r} "
                              f"from {f.raw_low}")  # fmt: skip
 
-    @property
+    @cached_property
     def turn(self) -> int:
         """Raw steps in a full turn: the field's range, 36000."""
         return self.field.raw_high + 1
 
-    @property
+    @cached_property
     def span(self) -> int:
         """Raw values the wire type carries: 65536."""
         return WIRE_RANGES[self.field.fmt][1] + 1
 
-    @property
+    @cached_property
     def signed_low(self) -> int:
         """The first raw value only a signed reading explains: −18000 as a U16, 47536."""
         return self.span - self.turn // 2
@@ -82,7 +83,10 @@ class HeadingRule:
 
     def degrees(self, raw: int) -> float:
         """The heading in [0°, 360°) of any raw value 0 … 65535."""
-        return (self.signed(raw) % self.turn) / self.field.scale
+        turn = self.turn
+        if raw < turn:  # the document's range: most values
+            return raw / self.field.scale
+        return (self.signed(raw) % turn) / self.field.scale
 
     def signed_raw(self, degrees: float) -> int:
         """What a device sending the signed S16 puts in the field for the heading ``degrees``
