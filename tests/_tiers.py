@@ -184,6 +184,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_transport_url.py": FAST,  # its loopback end-to-end tests are marked realtime
     "test_wireshark_dissector.py": "tshark",
     "test_wireshark_property.py": "tshark",
+    "test_wireshark_headings.py": "tshark",
     "test_wireshark_new_command.py": "tshark",
     "test_wireshark_tables.py": "subprocess",
 }
