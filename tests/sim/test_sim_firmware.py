@@ -61,9 +61,10 @@ def test_z1pro_sends_the_logged_values() -> None:
     reply = turned(rig, -140.0)
     sub = sub_of(reply)
     assert reply.version == _z1pro.VERSION
-    for name, value in _z1pro.SUB.items():
-        if name in ("hardware_version_raw", "firmware_version_raw", "pod_code", "fault_raw"):
-            assert getattr(sub, name) == value, name
+    for name in ("hardware_version_raw", "firmware_version_raw", "pod_code", "fault_raw",
+                 "camera1_zoom_raw", "camera2_zoom_raw", "thermal_flags_raw",
+                 "target_distance_raw"):  # fmt: skip
+        assert getattr(sub, name) == _z1pro.SUB[name], name
     assert reply.main.mode_raw == _z1pro.MAIN["mode_raw"]
     assert reply.main.yaw_raw == 51536  # −140.00° as a signed S16
     assert reply.main.attitude.yaw == 220.0
@@ -83,6 +84,7 @@ def test_the_document_sends_u16_and_the_profile_versions() -> None:
     assert reply.main.yaw_raw == 22000 and reply.main.attitude.yaw == 220.0
     assert reply.anomalies == ()
     sub = sub_of(reply)
+    assert sub.camera2_zoom_raw == 0  # no camera 2
     assert (sub.hardware_version, sub.firmware_version) == (
         rig.model.profile.hardware_version, rig.model.profile.firmware_version)
     assert sub.fault_raw == 0

@@ -34,6 +34,9 @@ class Firmware:
     """(hardware, firmware) versions the sub frame reports; ``None``: the pod profile's."""
     gnss_fault: bool = False
     """Fault bit 14 (GNSS not fixed) set until a host sub frame reports satellites."""
+    missing_camera_zoom: float = 0.0
+    """The zoom ratio the sub frame reports for a camera the pod does not have (camera 2 of
+    a pod without a thermal camera): 0 (none) in the simulator's reading of the document."""
     centre_ignored_ok: bool = False
     """Centre (0x03) in a mode that ignores it (angle control, Euler control, FPV …) is
     answered 0x00 (success) instead of 0x01; the camera stays where it is."""
@@ -54,12 +57,14 @@ FIRMWARES: dict[str, Firmware] = {f.name: f for f in (
         "z1pro-6.7", "a Z-1Pro reporting hardware 0.1, firmware 6.7",
         "68 CRC-valid replies of a Z-1Pro logged by crb12546/gogoguard_dog_end "
         "(z1pro_*_test/status.txt): signed camera yaw, hardware raw 1 and firmware raw 67, "
-        "fault 0x4000 while the host sent no aircraft data, centre in angle-control mode "
-        "answered 0x00 with the camera left at -15 deg relative yaw",
+        "fault 0x4000 while the host sent no aircraft data, camera 2 (the Z-1Pro has none) "
+        "at zoom 1x, centre in angle-control mode answered 0x00 with the camera left at -15 "
+        "deg relative yaw",
         "that a host sub frame with satellites clears the GNSS fault (every logged host packet "
         "had none); that centre is answered so in every mode that ignores it (only angle "
         "control was logged)",
-        signed_yaw=True, versions=(0.1, 6.7), gnss_fault=True, centre_ignored_ok=True,
+        signed_yaw=True, versions=(0.1, 6.7), gnss_fault=True, missing_camera_zoom=1.0,
+        centre_ignored_ok=True,
     ),
 )}  # fmt: skip
 """Every firmware the simulator plays, by name (docs/simulator.md: adding one)."""

@@ -99,7 +99,7 @@ def sub_frame(state: SimState, profile: PodProfile, firmware: Firmware) -> GcuSu
         lat,
         alt,
         _clamped(_S["camera1_zoom_raw"], zoom.get(1, 0.0)),
-        _clamped(_S["camera2_zoom_raw"], zoom.get(2, 0.0)),
+        _clamped(_S["camera2_zoom_raw"], zoom.get(2, firmware.missing_camera_zoom)),
         cam.thermal_flags(profile.radiometric),
         cam.camera_flags() | (cam.pip_mode & PIP_MODE_MASK),
         _clamped(_S["time_zone"], cam.time_zone),
