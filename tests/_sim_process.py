@@ -31,6 +31,8 @@ class SimProcess:
                 self.kill()
                 raise TimeoutError("the simulator printed nothing")
         line = self.proc.stdout.readline()
+        self.banner = line
+        """Its first line: ``gcu-async sim: POD listening on URL``."""
         match = re.search(r"listening on (\S+)", line)
         if not match:
             self.kill()

@@ -68,6 +68,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_bridge_gcu_link.py": FAST,
     "test_bridge_gcu_outage.py": "realtime",
     "test_bridge_gimbal.py": "realtime",
+    "test_bridge_z1pro.py": "realtime",
     "test_bridge_links.py": ("realtime", ALONE),
     "test_bridge_links_endpoint.py": FAST,
     "test_bridge_mapping.py": FAST,
@@ -88,6 +89,8 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_cli_exit_status.py": "subprocess",
     "test_cli_monitor.py": "subprocess",
     "test_cli_negative_values.py": FAST,
+    "test_cli_gcu_report.py": "subprocess",
+    "test_cli_decode_report.py": "subprocess",
     "test_cli_new_user.py": "subprocess",
     "test_cli_send_monitor.py": "subprocess",
     "test_client_behaviour.py": "realtime",
@@ -98,8 +101,10 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_client_robustness.py": ("realtime", ALONE),  # exactly once needs delays < the guard
     "test_client_session.py": "realtime",
     "test_client_waiting.py": "realtime",
+    "test_client_firmware.py": "realtime",
     "test_client_wirelog.py": "subprocess",
     "test_conformance_report.py": FAST,
+    "test_conformance_gcu.py": FAST,
     "test_connect_signature.py": FAST,
     "test_docs_architecture.py": FAST,
     "test_docs_as_dict.py": FAST,
@@ -136,6 +141,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_protocol_gpstime.py": FAST,
     "test_protocol_liberal.py": (FAST, HEAVY),
     "test_protocol_liberal_frames.py": FAST,
+    "test_protocol_headings.py": FAST,
     "test_protocol_pods.py": FAST,
     "test_protocol_ranges.py": FAST,
     "test_protocol_roundtrip.py": (FAST, HEAVY),
@@ -154,6 +160,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_session_sockets.py": ("realtime", ALONE),  # reordering below the 15 ms guard
     "test_sim_cli.py": "subprocess",
     "test_sim_cli_report.py": "subprocess",
+    "test_sim_firmware.py": FAST,
     "test_sim_execution_log.py": FAST,
     "test_sim_fault_bounds.py": FAST,
     "test_sim_faults.py": "realtime",
@@ -182,6 +189,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_transport_url.py": FAST,  # its loopback end-to-end tests are marked realtime
     "test_wireshark_dissector.py": "tshark",
     "test_wireshark_property.py": "tshark",
+    "test_wireshark_headings.py": "tshark",
     "test_wireshark_new_command.py": "tshark",
     "test_wireshark_tables.py": "subprocess",
 }

@@ -9,8 +9,10 @@ Fixtures:
 
 Choose the endpoint by overriding (or parametrizing) these fixtures:
 ``gcu_sim_transport`` (``"udp"`` default, ``"tcp"``, ``"serial"`` (a pty), ``"memory"``),
-``gcu_sim_pod`` (default ``"D-90Pro(TA)"``), ``gcu_sim_faults`` (``None`` or a
-:class:`~gcu_async.sim.FaultPlan` / :class:`~gcu_async.sim.FaultConfig`), ``gcu_sim_seed``,
+``gcu_sim_pod`` (default ``"D-90Pro(TA)"``), ``gcu_sim_firmware`` (default ``"v2.0.6"``,
+the document; ``"z1pro-6.7"`` with the pod ``"Z-1Pro"`` plays a real Z-1Pro),
+``gcu_sim_faults`` (``None`` or a :class:`~gcu_async.sim.FaultPlan` /
+:class:`~gcu_async.sim.FaultConfig`), ``gcu_sim_seed``,
 ``gcu_sim_model_options`` (keyword arguments for :class:`~gcu_async.sim.SimulatorModel`,
 e.g. ``calibration_seconds``), ``gcu_client_options`` (keyword arguments for the client).
 Everything binds to 127.0.0.1 on ephemeral ports. The async fixtures need pytest-asyncio;
@@ -31,6 +33,7 @@ import pytest
 from gcu_async.client.client import GcuClient
 from gcu_async.client.connect import connect
 from gcu_async.sim.faults import FaultConfig, FaultPlan
+from gcu_async.sim.firmware import DEFAULT_FIRMWARE
 from gcu_async.sim.memory import MemoryServer
 from gcu_async.sim.model import SimulatorModel
 from gcu_async.sim.server import SimServer
@@ -106,6 +109,13 @@ def gcu_sim_pod() -> str:
 
 
 @pytest.fixture
+def gcu_sim_firmware() -> str:
+    """How the simulator fills its replies (:data:`gcu_async.sim.FIRMWARES`): the document,
+    or a real device's firmware, e.g. ``"z1pro-6.7"`` (with ``gcu_sim_pod`` ``"Z-1Pro"``)."""
+    return DEFAULT_FIRMWARE
+
+
+@pytest.fixture
 def gcu_sim_faults() -> FaultPlan | FaultConfig | None:
     """Fault injection for the simulator (``None``: a perfect link)."""
     return None
@@ -156,6 +166,7 @@ def _async_fixture(func: Any) -> Any:
 async def gcu_sim(
     gcu_sim_transport: str,
     gcu_sim_pod: str,
+    gcu_sim_firmware: str,
     gcu_sim_faults: FaultPlan | FaultConfig | None,
     gcu_sim_seed: int,
     gcu_sim_model_options: dict[str, Any],
@@ -164,7 +175,8 @@ async def gcu_sim(
     is a pseudo-terminal, and both ends need POSIX: on Windows the test is skipped."""
     if gcu_sim_transport == "serial" and not PTY_AVAILABLE:
         pytest.skip("gcu_sim_transport 'serial' is a pseudo-terminal: POSIX only (not Windows)")
-    model = SimulatorModel(gcu_sim_pod, seed=gcu_sim_seed, **gcu_sim_model_options)
+    model = SimulatorModel(gcu_sim_pod, seed=gcu_sim_seed, firmware=gcu_sim_firmware,
+                           **gcu_sim_model_options)  # fmt: skip
     sim = GcuSimulator(model, faults=gcu_sim_faults)
     server = start_endpoint(sim, gcu_sim_transport)
     await server.open()

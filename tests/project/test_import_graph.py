@@ -35,14 +35,15 @@ ALLOWED: Mapping[str, frozenset[str]] = {
     "transport": FOUNDATION | {"protocol", "capture"},
     "mavlink": FOUNDATION | {"protocol"},
     "wireshark": FOUNDATION | {"protocol"},
-    "client": FOUNDATION | {"protocol", "session", "transport", "capture"},
-    "sim": FOUNDATION | {"protocol", "transport", "capture"},
+    "conformance": FOUNDATION | {"protocol"},
+    "client": FOUNDATION | {"protocol", "session", "transport", "capture", "conformance"},
+    "sim": FOUNDATION | {"protocol", "transport", "capture", "conformance"},
     "pytest_plugin": FOUNDATION | {"protocol", "transport", "client", "sim"},
     "bridge": FOUNDATION | {"protocol", "session", "transport", "capture", "client", "mavlink"},
     "gcu_async": FOUNDATION | {"protocol", "session", "transport", "client"},
     "cli": FOUNDATION | {
         "protocol", "session", "transport", "capture", "client", "sim", "mavlink", "wireshark",
-        "bridge", "gcu_async",
+        "bridge", "gcu_async", "conformance",
     },
     "__main__": frozenset({"cli"}),
 }  # fmt: skip

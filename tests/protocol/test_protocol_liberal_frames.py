@@ -30,6 +30,7 @@ from gcu_async.protocol import (
     decode_host_packet,
     decode_packet,
 )
+from gcu_async.protocol.headings import PAST_TURN_DETAIL
 
 HOST_FLAG_BITS = 0x05
 """Byte 11's defined bits (control valid, INS valid): the rest are reserved."""
@@ -81,10 +82,12 @@ def test_the_issue_style_examples_keep_their_values() -> None:
     raw[8:10] = (2000).to_bytes(2, "little", signed=True)  # miss distance x
     raw[22:24] = (36000).to_bytes(2, "little")  # camera yaw 360.00°
     packet = decode_gcu_packet(seal(GCU_HEADER, bytes(raw[5:-2])))
-    assert packet.main.miss_x == 2000 and packet.main.attitude.yaw == 360.0
+    # the raw value stays; the heading wraps (neither U16 nor S16 explains it)
+    assert packet.main.miss_x == 2000 and packet.main.yaw_raw == 36000
+    assert packet.main.attitude.yaw == 0.0
     assert [str(a) for a in packet.anomalies] == [
         "miss_x: 2000 is outside the allowed range [-1000, 1000]",
-        "yaw_raw: 36000 is outside the allowed range [0, 35999] 0.01 deg",
+        f"yaw_raw: 36000 is outside the allowed range [0, 35999] 0.01 deg ({PAST_TURN_DETAIL})",
     ]
     host = bytearray(64 + 1)
     host[14 - 5 : 16 - 5] = (9500).to_bytes(2, "little", signed=True)  # aircraft pitch 95°

@@ -1,9 +1,10 @@
 """Every packet of a pcap or pcapng capture, decoded as the file is read.
 
 Each packet's JSON object gets a ``capture`` object: the ``frame`` (1-based, as in
-Wireshark) that brought its last byte, its ``link`` (udp, tcp, serial), ``src`` and ``dst``,
-and the ``stream`` it belongs to. UDP datagrams are decoded one by one; the bytes of each
-TCP or serial direction are put in order first (:mod:`~gcu_async.capture.reassembly`).
+Wireshark) that brought its last byte and that frame's ``time`` (seconds since the epoch),
+its ``link`` (udp, tcp, serial), ``src`` and ``dst``, and the ``stream`` it belongs to.
+UDP datagrams are decoded one by one; the bytes of each TCP or serial direction are put in
+order first (:mod:`~gcu_async.capture.reassembly`).
 
 **Order.** By frame, then by the order the streams started, then by position in the stream
 — exactly, as long as fewer than :data:`MAX_HELD` packets wait behind a packet that an
@@ -40,15 +41,19 @@ MAX_HELD = 1024
 class _UnitState:
     __slots__ = ("marks", "number", "scanner")
 
-    def __init__(self, number: int) -> None:
+    def __init__(self, number: int, keep: bool) -> None:
         self.number = number
-        self.scanner = PacketScanner()
-        self.marks: list[tuple[int, int]] = []
-        """(stream offset, frame) where each piece's bytes begin: those the scanner may
-        still need (fewer than its deframers' longest packet, plus the last piece)."""
+        self.scanner = PacketScanner(keep=keep)
+        self.marks: list[tuple[int, int, float]] = []
+        """(stream offset, frame, its time) where each piece's bytes begin: those the
+        scanner may still need (fewer than its deframers' longest packet, plus the last
+        piece)."""
+
+    def mark_of(self, offset: int) -> tuple[int, int, float]:
+        return self.marks[bisect.bisect_right(self.marks, offset, key=_offset) - 1]
 
     def frame_of(self, offset: int) -> int:
-        return self.marks[bisect.bisect_right(self.marks, offset, key=_offset) - 1][1]
+        return self.mark_of(offset)[1]
 
     def trim(self) -> None:
         """Forget the marks before the one that covers the scanner's lowest offset."""
@@ -57,15 +62,17 @@ class _UnitState:
             del self.marks[:drop]
 
 
-def _offset(mark: tuple[int, int]) -> int:
+def _offset(mark: tuple[int, int, float]) -> int:
     return mark[0]
 
 
 class CaptureDecoder:
-    """Iterate to get every packet's JSON object (see the module's contract)."""
+    """Iterate to get every packet's JSON object (see the module's contract; ``keep``: each
+    a :class:`~gcu_async.capture.scan.DecodedPacket`, with its bytes and packet)."""
 
-    def __init__(self, source: Source) -> None:
+    def __init__(self, source: Source, *, keep: bool = False) -> None:
         self._source = source
+        self._keep = keep
         self._units: dict[Unit, _UnitState] = {}
         self._numbers = itertools.count()
         self._held: list[tuple[int, int, int, int, dict[str, Any]]] = []
@@ -82,7 +89,7 @@ class CaptureDecoder:
         records = read_records(self._source)
         try:
             for record in records:
-                self._pieces(reassembler.push(record))
+                self._pieces(reassembler.push(record), record.time)
                 yield from self._release(self._watermark(record.frame + 1))
         except CaptureError:  # damage ends every stream as the end of the file would
             self._pieces(reassembler.finish())
@@ -91,30 +98,31 @@ class CaptureDecoder:
         self._pieces(reassembler.finish())
         yield from self._release(None)
 
-    def _pieces(self, pieces: list[Piece]) -> None:
+    def _pieces(self, pieces: list[Piece], time: float = 0.0) -> None:
+        """Feed the pieces one record (at ``time``) made readable; at the end of the file,
+        the end of every unit."""
         for piece in pieces:
             state = self._units.get(piece.unit)
             if state is None:
                 if piece.end:
                     continue
-                state = self._units[piece.unit] = _UnitState(next(self._numbers))
+                state = self._units[piece.unit] = _UnitState(next(self._numbers), self._keep)
             if piece.end:
                 self._found(piece.unit, state, state.scanner.flush())
                 self._note(piece.unit, state)
                 del self._units[piece.unit]
                 continue
-            state.marks.append((state.scanner.fed, piece.frame))
+            state.marks.append((state.scanner.fed, piece.frame, time))
             self._found(piece.unit, state, state.scanner.feed(piece.data))
             state.trim()
 
     def _found(self, unit: Unit, state: _UnitState,
                found: list[tuple[int, int, dict[str, Any]]]) -> None:  # fmt: skip
         for offset, length, obj in found:
-            frame = state.frame_of(offset + length - 1)
-            where = {"frame": frame, "link": unit.link, "src": unit.src, "dst": unit.dst,
-                     "stream": unit.name}  # fmt: skip
-            heapq.heappush(self._held, (frame, state.number, offset, next(self._order),
-                                        {**obj, "capture": where}))  # fmt: skip
+            _, frame, time = state.mark_of(offset + length - 1)
+            obj["capture"] = {"frame": frame, "time": time, "link": unit.link, "src": unit.src,
+                              "dst": unit.dst, "stream": unit.name}  # fmt: skip
+            heapq.heappush(self._held, (frame, state.number, offset, next(self._order), obj))
 
     def _note(self, unit: Unit, state: _UnitState) -> None:
         rejection = state.scanner.rejection

@@ -50,6 +50,18 @@ class Rejection:
         return _PRIORITY[self.kind] < _PRIORITY[other.kind]
 
 
+class DecodedPacket(dict[str, Any]):
+    """A packet's JSON object that also holds its bytes and the decoded packet
+    (``PacketScanner(keep=True)``), e.g. to feed a conformance report."""
+
+    __slots__ = ("packet", "raw")
+
+    def __init__(self, raw: bytes, packet: Any) -> None:
+        super().__init__(packet.as_dict())
+        self.raw = raw
+        self.packet = packet
+
+
 class _Direction:
     __slots__ = ("decode", "deframer", "header", "name")
 
@@ -61,9 +73,11 @@ class _Direction:
 
 
 class PacketScanner:
-    """Feed bytes, get ``(offset, length, JSON object)`` of each packet, in stream order."""
+    """Feed bytes, get ``(offset, length, JSON object)`` of each packet, in stream order
+    (``keep``: each object a :class:`DecodedPacket`, with its bytes and packet)."""
 
-    def __init__(self) -> None:
+    def __init__(self, *, keep: bool = False) -> None:
+        self.keep = keep
         self._directions = (
             _Direction(GCU_HEADER, decode_gcu_packet, "GCU reply"),
             _Direction(HOST_HEADER, decode_host_packet, "host packet"),
@@ -119,7 +133,9 @@ class PacketScanner:
                 # the reference parse emits the first valid span after the previous packet:
                 # the first occurrence of these bytes from there is that span
                 at = window.find(raw, pos)
-                self._ready.append((begin + at, len(raw), direction.decode(raw).as_dict()))
+                packet = direction.decode(raw)
+                obj = DecodedPacket(raw, packet) if self.keep else packet.as_dict()
+                self._ready.append((begin + at, len(raw), obj))
                 spans.append((at, at + len(raw)))
                 pos = at + len(raw)
             now = deframer.stats.crc_errors + deframer.stats.length_errors

@@ -3,8 +3,12 @@ object per packet out, read as a stream (bounded memory whatever the input; docs
 "Input read as a stream").
 
 Every packet that frames (header, length, CRC) decodes: values V2.0.6 does not expect are
-shown as an ``anomalies`` list in its JSON object and one line each on stderr, and do not
-change the exit status (docs/client.md, "Liberal receive, strict send")."""
+shown as an ``anomalies`` list in its JSON object and do not change the exit status
+(docs/client.md, "Liberal receive, strict send"). Stderr says each kind of anomaly (its
+direction, field and detail) once, at the first packet that has it, and at the end how many
+packets had each kind that came more than once. ``--report FILE`` writes the conformance
+report of the GCU packets in the input, and of its host packets when there are any
+(docs/conformance.md)."""
 
 from __future__ import annotations
 
@@ -27,6 +31,11 @@ from gcu_async.cli._exit import (
     EXIT_USAGE,
     missing_extra,
 )
+from gcu_async.cli._report import GCU_REPORT_HELP, add_report_option, write_report
+from gcu_async.conformance import GcuConformance
+from gcu_async.protocol.commands import command_code
+from gcu_async.protocol.conformance import HostConformance
+from gcu_async.protocol.packets import GcuPacket
 
 _HEX_TOKEN = re.compile(r"0x|[\s,;:]+", re.IGNORECASE)
 CHUNK = 1 << 16
@@ -36,6 +45,9 @@ HEX_TOKEN_HOLD = 1 << 16
 RAW_PROBE = 1 << 20
 """A file that is not a capture and holds no packet in this many bytes is not a GCU byte
 stream: an error (``/dev/zero``, a sparse file), not a read to its end."""
+MAX_KINDS = 1000
+"""Kinds of anomaly stderr remembers having shown; past that, new kinds are shown at every
+packet (never dropped)."""
 
 
 def register(sub: Any) -> None:
@@ -54,6 +66,9 @@ def register(sub: Any) -> None:
         "as it comes",
     )
     p.add_argument("--indent", type=int, default=None, help="pretty-print JSON with this indent")
+    add_report_option(p, f"{GCU_REPORT_HELP}: of the GCU packets in the input, and the host "
+                      "conformance report of its host packets after it when there are any; "
+                      "a capture's times time them (hex and raw bytes have none)")  # fmt: skip
     p.set_defaults(run=run)
 
 
@@ -160,20 +175,76 @@ def _silence_stdout() -> None:
 
 
 class _Output:
-    """Prints each packet as it is found: one JSON line (stdout), one line per anomaly
-    (stderr)."""
+    """Prints each packet as it is found: one JSON line (stdout); each kind of anomaly once
+    (stderr), counted; feeds the conformance reports (``--report``)."""
 
-    def __init__(self, indent: int | None) -> None:
+    def __init__(self, indent: int | None, reports: _Reports | None = None) -> None:
         self.indent = indent
         self.count = 0
+        self.reports = reports
+        self.kinds: dict[tuple[str, str, str], list[int]] = {}
+        """(direction, field, detail) → [its first packet, packets with it]."""
 
     def __call__(self, obj: dict[str, Any]) -> None:
         self.count += 1
         sys.stdout.write(json.dumps(obj, indent=self.indent) + "\n")
         sys.stdout.flush()  # a live pipe or device: each packet as soon as it is read
+        if self.reports is not None:
+            self.reports.add(obj)
+        kinds = self.kinds
         for anomaly in obj.get("anomalies", ()):
+            key = (obj["direction"], anomaly["field"], anomaly["detail"])
+            seen = kinds.get(key)
+            if seen is not None:
+                seen[1] += 1
+                continue
+            if len(kinds) < MAX_KINDS:
+                kinds[key] = [self.count, 1]
             print(f"gcu-async decode: packet {self.count} ({obj['direction']}): flagged: "
                   f"{anomaly['message']}", file=sys.stderr)  # fmt: skip
+
+    def summary(self) -> None:
+        """One stderr line per kind of anomaly more than one packet had."""
+        for (direction, field, _), (first, n) in self.kinds.items():
+            if n > 1:
+                print(f"gcu-async decode: {n} packets ({direction}): flagged: {field}, "
+                      f"shown once, at packet {first}", file=sys.stderr)  # fmt: skip
+
+
+class _Reports:
+    """The conformance reports of ``--report``: the GCU's, and the host's when the input has
+    host packets. Times from the capture, when there is one."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.gcu = GcuConformance()
+        self.host = HostConformance()
+        self.timed = True
+
+    def add(self, obj: dict[str, Any]) -> None:
+        raw: bytes = getattr(obj, "raw", b"")
+        packet = getattr(obj, "packet", None)
+        capture = obj.get("capture")
+        time = capture["time"] if capture is not None else None
+        self.timed = self.timed and time is not None
+        if isinstance(packet, GcuPacket):
+            self.gcu.add_packet(packet, time, raw=raw)
+        elif packet is not None:
+            self.host.add_packet(packet, time if time is not None else 0.0, raw=raw)
+            self.gcu.host_sent(command_code(packet.command), time)
+
+    def write(self) -> None:
+        parts = []
+        if not self.timed:
+            parts.append("The input has no times (hex or raw bytes): rates, silences and "
+                         "feedback timing are not measured.")  # fmt: skip
+        parts.append(self.gcu.report().text())
+        if self.host.packets:
+            parts.append(self.host.report().text())
+        try:
+            write_report(self.path, "\n\n".join(parts) + "\n")
+        except OSError as exc:
+            print(f"gcu-async decode: cannot write the report: {exc}", file=sys.stderr)
 
 
 def _why(rejection: Rejection | None, stream: str | None = None) -> str:
@@ -187,7 +258,7 @@ def _scan_bytes(chunks: Iterable[bytes], output: _Output, *, probe: int | None =
                 what: str = "input") -> int:  # fmt: skip
     """Decode a raw byte stream as it comes; returns the bytes read. With ``probe``, give up
     (an error) when its first ``probe`` bytes hold no packet: not a GCU byte stream."""
-    scanner = PacketScanner()
+    scanner = PacketScanner(keep=output.reports is not None)
     for chunk in chunks:
         for _, _, obj in scanner.feed(chunk):
             output(obj)
@@ -232,7 +303,7 @@ def _decode_file(path: Path, output: _Output) -> None:
             return
         from gcu_async.capture.decoding import CaptureDecoder
 
-        decoder = CaptureDecoder(Source(stream, head))
+        decoder = CaptureDecoder(Source(stream, head), keep=output.reports is not None)
         try:
             for obj in decoder:
                 output(obj)
@@ -245,7 +316,17 @@ def _decode_file(path: Path, output: _Output) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    output = _Output(args.indent)
+    reports = _Reports(args.report) if args.report is not None else None
+    output = _Output(args.indent, reports)
+    try:
+        return _run(args, output)
+    finally:
+        output.summary()
+        if reports is not None and output.count:
+            reports.write()
+
+
+def _run(args: argparse.Namespace, output: _Output) -> int:
     try:
         if args.file is not None:
             _decode_file(args.file, output)

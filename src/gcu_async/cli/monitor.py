@@ -1,4 +1,5 @@
-"""``gcu-async monitor URL``: live telemetry — mode, angles, zoom, flags, link health."""
+"""``gcu-async monitor URL``: live telemetry — mode, angles, zoom, flags, link health; with
+``--report FILE``, the GCU conformance report of the replies (docs/conformance.md)."""
 
 from __future__ import annotations
 
@@ -23,10 +24,12 @@ from gcu_async.cli._exit import (
     check_seconds,
     interruptible,
 )
+from gcu_async.cli._report import GCU_REPORT_HELP, add_report_option, write_report
 from gcu_async.cli.liveview import relative_attitude
 from gcu_async.client.client import GcuClient
 from gcu_async.client.connect import connect
 from gcu_async.client.telemetry import TelemetrySample
+from gcu_async.conformance import GcuConformance
 from gcu_async.errors import GcuError, LinkLost
 
 
@@ -52,6 +55,8 @@ def register(sub: Any) -> None:
     p.add_argument("--capture", type=Path, metavar="FILE",
                    help="write the packets exchanged to FILE (pcapng; open it in Wireshark "
                    "with the dissector: gcu-async wireshark --install; default: none)")
+    add_report_option(p, f"{GCU_REPORT_HELP} when it ends (Ctrl-C, --count): every reply "
+                      "of the live link")  # fmt: skip
     p.set_defaults(run=run)
 
 
@@ -109,7 +114,23 @@ def down_line(gcu: GcuClient) -> str:
 
 
 async def _monitor(url: str, interval: float, count: int, timeout: float, as_json: bool,
-                   capture: PacketCapture | None = None) -> int:  # fmt: skip
+                   capture: PacketCapture | None = None,
+                   report: Path | None = None) -> int:  # fmt: skip
+    if report is None:
+        return await _watch(url, interval, count, timeout, as_json, capture, None)
+    conformance = GcuConformance()
+    try:
+        return await _watch(url, interval, count, timeout, as_json, capture, conformance)
+    finally:  # an interrupt too: the report of what came
+        try:
+            write_report(report, conformance.report().text() + "\n")
+        except OSError as exc:
+            print(f"gcu-async monitor: cannot write the report: {exc}", file=sys.stderr)
+
+
+async def _watch(url: str, interval: float, count: int, timeout: float, as_json: bool,
+                 capture: PacketCapture | None,
+                 conformance: GcuConformance | None) -> int:  # fmt: skip
     async with connect(url, connect_timeout=timeout, capture=capture) as gcu:
         latest: list[TelemetrySample] = []
         fresh = asyncio.Event()
@@ -119,6 +140,10 @@ async def _monitor(url: str, interval: float, count: int, timeout: float, as_jso
             fresh.set()
 
         unsubscribe = gcu.on_telemetry(on_sample)
+        if conformance is not None:
+            add = conformance.add_reply
+            stop_report = gcu.on_telemetry(
+                lambda s: add(s.status, s.info, s.feedback, s.received_at))
         loop = asyncio.get_running_loop()
         lines = 0
         try:
@@ -137,6 +162,8 @@ async def _monitor(url: str, interval: float, count: int, timeout: float, as_jso
                 lines += 1
         finally:
             unsubscribe()
+            if conformance is not None:
+                stop_report()
     return EXIT_OK
 
 
@@ -153,7 +180,8 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_USAGE
     try:
         return asyncio.run(interruptible(_monitor(
-            args.url, args.interval, args.count, args.timeout, args.json, capture)))  # fmt: skip
+            args.url, args.interval, args.count, args.timeout, args.json, capture,
+            args.report)))  # fmt: skip
     except (Interrupted, KeyboardInterrupt):  # KeyboardInterrupt: no loop signal handlers
         return EXIT_INTERRUPTED
     except (LinkLost, GcuError, OSError) as exc:

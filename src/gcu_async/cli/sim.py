@@ -22,7 +22,6 @@ import asyncio
 import contextlib
 import json
 import logging
-import os
 import signal
 import sys
 from pathlib import Path
@@ -30,9 +29,11 @@ from typing import Any
 
 from gcu_async.capture import CaptureUnavailable, as_capture
 from gcu_async.cli._exit import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_USAGE
+from gcu_async.cli._report import HOST_REPORT_HELP, add_report_option, write_report
 from gcu_async.protocol.enums import opcode_name
 from gcu_async.protocol.links import HOST_UDP_PORT
 from gcu_async.sim.faults import FaultConfig, FaultPlan
+from gcu_async.sim.firmware import DEFAULT_FIRMWARE, FIRMWARES
 from gcu_async.sim.listen import ListenSpec, parse_hostport, parse_listen_url
 from gcu_async.sim.model import DEFAULT_POD, SimulatorModel
 from gcu_async.sim.serialport import SerialServer
@@ -80,6 +81,11 @@ def register(sub: Any) -> None:
                    help=f"where to listen (default {DEFAULT_LISTEN})")  # fmt: skip
     p.add_argument("--pod", default=DEFAULT_POD, metavar="NAME",
                    help=f"pod model, Appendix 7 name or code (default {DEFAULT_POD})")  # fmt: skip
+    p.add_argument("--firmware", default=DEFAULT_FIRMWARE, choices=sorted(FIRMWARES),
+                   metavar="NAME", help="how the replies are filled: "
+                   + "; ".join(f"{f.name}: {f.summary}" for f in FIRMWARES.values())
+                   + f" (default {DEFAULT_FIRMWARE}; --pod Z-1Pro --firmware z1pro-6.7 plays "
+                   "the logged Z-1Pro)")  # fmt: skip
     p.add_argument("--reply-to", metavar="HOST:PORT",
                    help="UDP: send every reply here (e.g. the broadcast address, port 2338) "
                    "instead of to the sender; 'broadcast[:PORT]' (Linux): the broadcast "
@@ -116,9 +122,8 @@ def register(sub: Any) -> None:
     p.add_argument("--capture", type=Path, metavar="FILE",
                    help="write the packets the simulator receives and sends to FILE (pcapng; "
                    "open it in Wireshark with: gcu-async wireshark --install)")  # fmt: skip
-    p.add_argument("--report", type=Path, metavar="FILE",
-                   help="write the host conformance report (text) to FILE at exit and on "
-                   "SIGQUIT")  # fmt: skip
+    add_report_option(p, f"{HOST_REPORT_HELP} at exit and on SIGQUIT (the simulator plays "
+                      "the GCU: it reports the host)")  # fmt: skip
     p.add_argument("--report-json", type=Path, metavar="FILE",
                    help="write the host conformance report and the simulator's counters "
                    "(JSON) to FILE at exit and on SIGQUIT")  # fmt: skip
@@ -178,7 +183,8 @@ def _build(args: argparse.Namespace) -> tuple[GcuSimulator, ListenSpec]:
             plan = FaultPlan(requests=plan.requests)
         elif args.faults_on == "replies":
             plan = FaultPlan(replies=plan.replies)
-        model = SimulatorModel(args.pod, seed=args.seed, max_zoom=args.max_zoom)
+        model = SimulatorModel(args.pod, seed=args.seed, max_zoom=args.max_zoom,
+                               firmware=args.firmware)  # fmt: skip
         capture = as_capture(args.capture)
     except (ValueError, CaptureUnavailable) as exc:
         raise _UsageError(str(exc)) from None
@@ -214,7 +220,7 @@ class Reports:
         return {
             "conformance": model.conformance.report().as_dict(),
             "simulator": {
-                "pod": model.profile.name,
+                "pod": model.profile.name, "firmware": model.firmware.name,
                 "answered": s.answered, "anomalous": s.anomalous, "tolerated": s.tolerated,
                 "frame_anomalies": s.frame_anomalies,
                 "anomalies_by_field": dict(s.anomalies_by_field),
@@ -231,17 +237,11 @@ class Reports:
         print(text, file=sys.stderr, flush=True)
         try:
             if self.text_path is not None:
-                _write(self.text_path, text + "\n")
+                write_report(self.text_path, text + "\n")
             if self.json_path is not None:
-                _write(self.json_path, json.dumps(self.document(), indent=2) + "\n")
+                write_report(self.json_path, json.dumps(self.document(), indent=2) + "\n")
         except OSError as exc:
             print(f"{PROG}: cannot write the report: {exc}", file=sys.stderr)
-
-
-def _write(path: Path, content: str) -> None:
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    tmp.write_text(content, encoding="utf-8")
-    os.replace(tmp, path)
 
 
 def _install_switches(
@@ -311,7 +311,10 @@ async def _serve(
             where += f" (pty: open {server.device_path})"
         if spec.reply_to is not None:
             where += f" (replies to {format_hostport(*spec.reply_to)})"
-        print(f"{PROG}: {sim.model.profile.name} listening on {where}", flush=True)
+        model = sim.model
+        firmware = "" if model.firmware.name == DEFAULT_FIRMWARE else (
+            f" (firmware {model.firmware.name})")  # fmt: skip
+        print(f"{PROG}: {model.profile.name}{firmware} listening on {where}", flush=True)
         await stop.wait()
     finally:
         await server.close()

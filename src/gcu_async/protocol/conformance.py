@@ -31,9 +31,8 @@ from gcu_async.errors import RemoteProtocolError
 from gcu_async.protocol.anomalies import Anomaly
 from gcu_async.protocol.commands import AnomalousCommand, UnknownCommand, command_code
 from gcu_async.protocol.enums import Opcode, opcode_name
-from gcu_async.protocol.fields import WIRE_RANGES
 from gcu_async.protocol.gcu_frames import UnknownSubFrame
-from gcu_async.protocol.host_frames import HOST_MAIN_SCHEMA, HostMainFrame, HostSubFrame
+from gcu_async.protocol.host_frames import AIRCRAFT_YAW, HostMainFrame, HostSubFrame
 from gcu_async.protocol.layout import CRC_SIZE, OPCODE_OFFSET
 from gcu_async.protocol.packets import HostPacket, decode_host_packet, version_anomalies
 
@@ -57,15 +56,13 @@ MAX_SPEED_M_S = 300.0
 """Faster than this is a position jump (e.g. the first GNSS fix), not motion."""
 MIN_VELOCITY_WINDOWS = 3
 EARTH_RADIUS_M = 6_371_000.0
-_YAW = HOST_MAIN_SCHEMA.by_name["aircraft_yaw_raw"]
-_SIGNED = HOST_MAIN_SCHEMA.by_name["aircraft_roll_raw"]
-"""A signed angle in [−180°, 180°): what a heading sent signed would be (the roll's range)."""
-_U16_SPAN = WIRE_RANGES[_YAW.fmt][1] + 1
-YAW_WRAP = _YAW.raw_high + 1
+_YAW = AIRCRAFT_YAW.field
+_U16_SPAN = AIRCRAFT_YAW.span
+YAW_WRAP = AIRCRAFT_YAW.turn
 """The raw aircraft yaw one past the field's range: 360° (36000)."""
-YAW_SIGNED_LOW = _U16_SPAN + _SIGNED.raw_low
+YAW_SIGNED_LOW = AIRCRAFT_YAW.signed_low
 """Raw aircraft yaw values from here to 65535 read as S16 −18000 … −1 (−180° … −0.01°)."""
-_SIGNED_TEXT = f"±{-_SIGNED.raw_low}"
+_SIGNED_TEXT = f"±{YAW_WRAP // 2}"
 _YAW_TEXT = f"U16 [0, {YAW_WRAP})"
 FIXED_PARAMETER_OPCODES = frozenset({Opcode.TAKE_PHOTO, Opcode.RECORD, Opcode.FOCUS})
 """Commands whose parameter byte V2.0.6's table gives as the constant 0x01."""
@@ -115,14 +112,15 @@ class Example:
     """One packet that shows a deviation."""
 
     time: float
-    """Seconds since the first packet."""
+    """Seconds since the first packet (NaN: the input had no times)."""
     raw_hex: str
     """The packet as received (empty when only the decoded packet was given)."""
     decoded: str
     """The values concerned, decoded."""
 
     def as_dict(self) -> dict[str, Any]:
-        return {"time_s": round(self.time, 3), "raw_hex": self.raw_hex, "decoded": self.decoded}
+        time = round(self.time, 3) if math.isfinite(self.time) else None
+        return {"time_s": time, "raw_hex": self.raw_hex, "decoded": self.decoded}
 
 
 @dataclass
@@ -186,17 +184,25 @@ class ConformanceReport:
         lines = [head]
         if not self.deviations:
             lines.append("  no deviation found" if self.packets else "  no host packet yet")
-        for d in self.deviations:
-            share = f": {d.count} of {d.total} ({100 * d.count / d.total:.1f} %)" if d.total else ""
-            lines.append(f"- {d.key}: {d.title}{share}")
-            if d.diagnosis:
-                lines.append(f"  diagnosis: {d.diagnosis}")
-            for e in d.examples:
-                lines.append(f"  e.g. t={e.time:.3f} s: {e.decoded}")
-                if e.raw_hex:
-                    lines.append(f"       {e.raw_hex}")
+        lines += deviation_lines(self.deviations)
         lines.extend(f"  note: {n}" for n in self.notes)
         return "\n".join(lines)
+
+
+def deviation_lines(deviations: tuple[Deviation, ...]) -> list[str]:
+    """The text of each deviation: its key, title and share, diagnosis, examples."""
+    lines: list[str] = []
+    for d in deviations:
+        share = f": {d.count} of {d.total} ({100 * d.count / d.total:.1f} %)" if d.total else ""
+        lines.append(f"- {d.key}: {d.title}{share}")
+        if d.diagnosis:
+            lines.append(f"  diagnosis: {d.diagnosis}")
+        for e in d.examples:
+            when = f" t={e.time:.3f} s" if math.isfinite(e.time) else ""
+            lines.append(f"  e.g.{when}: {e.decoded}")
+            if e.raw_hex:
+                lines.append(f"       {e.raw_hex}")
+    return lines
 
 
 class HostConformance:
@@ -480,7 +486,7 @@ class HostConformance:
             share = 100 * yaw.count / total
             if self._yaw_signed and not self._yaw_unwrapped:
                 yaw.diagnosis = (f"aircraft yaw ≥ {YAW_WRAP} in {share:.0f} % of packets, every "
-                                 f"one a signed S16 −{-_SIGNED.raw_low}…−1 read as U16: looks "
+                                 f"one a signed S16 −{YAW_WRAP // 2}…−1 read as U16: looks "
                                  f"like a signed {_SIGNED_TEXT} value (headings west of north, "
                                  f"−180°…0°) in the {_YAW_TEXT} field")  # fmt: skip
             elif self._yaw_unwrapped and not self._yaw_signed:
@@ -600,5 +606,6 @@ def _copy(d: Deviation) -> Deviation:
 
 __all__ = [
     "EXAMPLES", "GAP_S", "LONG_RUN_S", "MIN_RATE_HZ", "ConformanceReport", "Deviation",
-    "Example", "HostConformance", "field_diagnosis", "frame_anomalies", "yaw_reading",
+    "Example", "HostConformance", "deviation_lines", "field_diagnosis", "frame_anomalies",
+    "yaw_reading",
 ]  # fmt: skip

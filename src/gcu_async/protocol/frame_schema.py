@@ -19,6 +19,7 @@ from enum import IntFlag
 from typing import Any, TypeVar
 
 from gcu_async._checks import check_int
+from gcu_async.errors import FieldRangeError
 from gcu_async.protocol.anomalies import Anomaly, FieldRange, check_raw, reserved_bits_detail
 from gcu_async.protocol.fields import WireField, offsets
 from gcu_async.protocol.units import check_flags, quantize
@@ -38,12 +39,16 @@ class FrameSchema:
     """One frame: its ``fields`` in wire order from byte ``start``, ``size`` bytes in all
     (bytes after the last field are reserved: zeros on send, ignored on receive).
     ``flags`` names the fields that hold flags of an ``IntFlag`` (reserved bits must be zero:
-    a :class:`FieldRangeError` on send, an :class:`Anomaly` on receive)."""
+    a :class:`FieldRangeError` on send, an :class:`Anomaly` on receive). ``details`` gives
+    fields whose out-of-range values have a known reading a function ``raw -> detail``, the
+    words both sides add to the error or anomaly (e.g. a signed heading,
+    :mod:`~gcu_async.protocol.headings`)."""
 
     __slots__ = (
         "_anomalies",
         "_validate",
         "by_name",
+        "details",
         "fields",
         "flags",
         "name",
@@ -56,7 +61,8 @@ class FrameSchema:
     )  # fmt: skip
 
     def __init__(self, name: str, start: int, size: int, fields: Iterable[WireField],
-                 flags: Mapping[str, type[IntFlag]] | None = None) -> None:  # fmt: skip
+                 flags: Mapping[str, type[IntFlag]] | None = None,
+                 details: Mapping[str, Callable[[int], str]] | None = None) -> None:  # fmt: skip
         self.name = name
         self.start = start
         self.size = size
@@ -68,6 +74,10 @@ class FrameSchema:
             raise ValueError(f"{name}: duplicate field names")
         if set(self.flags) - set(self.names):
             raise ValueError(f"{name}: flags name no field: {set(self.flags) - set(self.names)}")
+        self.details: dict[str, Callable[[int], str]] = dict(details or {})
+        if set(self.details) - set(self.names) or set(self.details) & set(self.flags):
+            raise ValueError(f"{name}: details name no field, or a flags field: "
+                             f"{sorted(self.details)}")  # fmt: skip
         used = sum(f.size for f in self.fields)
         if used > size:
             raise ValueError(f"{name}: fields take {used} bytes, more than the frame's {size}")
@@ -153,8 +163,15 @@ class FrameSchema:
             flags = self.flags.get(f.name)
             if flags is not None:
                 check_flags(f.name, value, flags)
-            else:
+                continue
+            try:
                 check_int(f.name, value, f.raw_low, f.raw_high, f.raw_unit)
+            except FieldRangeError:
+                explain = self.details.get(f.name)
+                if explain is None:
+                    raise
+                raise FieldRangeError(f.name, value, f.raw_low, f.raw_high, f.raw_unit,
+                                      detail=explain(value)) from None  # fmt: skip
 
     def quantizer(self, name: str, label: str | None = None) -> Callable[[object], int]:
         """Send side: a function ``value -> raw`` for field ``name`` — what
@@ -195,7 +212,9 @@ class FrameSchema:
         for f, value in zip(self.fields, frame, strict=True):
             flags = self.flags.get(f.name)
             if flags is None:
-                found += check_raw(f.name, value, f.raw_low, f.raw_high, f.raw_unit)
+                explain = self.details.get(f.name)
+                detail = "" if explain is None else explain(value)
+                found += check_raw(f.name, value, f.raw_low, f.raw_high, f.raw_unit, detail)
                 continue
             bits = flag_bits(flags)
             if value & ~bits:

@@ -21,12 +21,17 @@ from gcu_async.protocol.enums import (
 )
 from gcu_async.protocol.fields import WireField
 from gcu_async.protocol.frame_schema import FrameSchema
+from gcu_async.protocol.headings import HeadingRule
 from gcu_async.protocol.host_frames import HOST_SUB_SCHEMA
 from gcu_async.protocol.layout import MAIN_SIZE, MAIN_START, SUB_FRAME_HEADER, SUB_SIZE, SUB_START
 from gcu_async.protocol.pods import pod_name
 from gcu_async.protocol.units import Attitude, AxisAngles, GeoPosition, check_tuple, quantize
 
 D001 = "0.01 deg"
+CAMERA_YAW = HeadingRule(WireField("yaw_raw", "H", "camera absolute yaw (a heading)", 0, 36000,
+                                   100, "deg", D001, high_open=True))  # fmt: skip
+"""Bytes 22–23, the camera's absolute yaw, and how any raw value reads as a heading in
+[0°, 360°) (:mod:`~gcu_async.protocol.headings`: the Z-1Pro sends a signed S16)."""
 
 GCU_MAIN_SCHEMA = FrameSchema("GCU main frame", MAIN_START, MAIN_SIZE, (
     WireField("mode_raw", "B", "pod working mode (see Mode)"),
@@ -38,10 +43,10 @@ GCU_MAIN_SCHEMA = FrameSchema("GCU main frame", MAIN_START, MAIN_SIZE, (
     WireField("roll_raw", "h", "camera absolute roll", -9000, 9000, 100, "deg", D001),
     WireField("pitch_raw", "h", "camera absolute pitch", -18000, 18000, 100, "deg", D001,
               high_open=True),
-    WireField("yaw_raw", "H", "camera absolute yaw", 0, 36000, 100, "deg", D001, high_open=True),
+    CAMERA_YAW.field,
     *(WireField(f"rate_{axis}_raw", "h", f"camera {axis.upper()}-axis absolute angular rate",
                 scale=10, unit="deg/s", raw_unit="0.1 deg/s") for axis in "xyz"),
-))  # fmt: skip
+), details={"yaw_raw": CAMERA_YAW.detail})  # fmt: skip
 """Bytes 5–36 of a GCU packet: the one table of the main frame's fields."""
 GCU_SUB_SCHEMA = FrameSchema("GCU sub frame", SUB_START, SUB_SIZE, (
     WireField("hardware_version_raw", "B", "hardware version, 0.1 resolution (0x1F: 3.1)",
@@ -80,7 +85,8 @@ GCU_SUB_RANGES = GCU_SUB_SCHEMA.ranges
 _M = GCU_MAIN_SCHEMA.by_name
 _S = GCU_SUB_SCHEMA.by_name
 _relative = GCU_MAIN_SCHEMA.view(AxisAngles, "relative_x_raw", "relative_y_raw", "relative_z_raw")
-_attitude = GCU_MAIN_SCHEMA.view(Attitude, "roll_raw", "pitch_raw", "yaw_raw")
+_ROLL, _PITCH = _M["roll_raw"].scale, _M["pitch_raw"].scale
+_heading = CAMERA_YAW.degrees
 _rates = GCU_MAIN_SCHEMA.view(AxisAngles, "rate_x_raw", "rate_y_raw", "rate_z_raw")
 _target = GCU_SUB_SCHEMA.view(GeoPosition, "target_latitude_raw", "target_longitude_raw",
                               "target_altitude_raw")  # fmt: skip
@@ -120,7 +126,8 @@ class GcuMainFrame(NamedTuple):
     pitch_raw: int = 0
     """Bytes 20–21, S16 0.01°: camera absolute pitch."""
     yaw_raw: int = 0
-    """Bytes 22–23, U16 0.01°: camera absolute yaw."""
+    """Bytes 22–23, U16 0.01°: camera absolute yaw, [0, 36000) (a pod may send a signed
+    S16: :attr:`attitude` reads it, :data:`CAMERA_YAW`)."""
     rate_x_raw: int = 0
     """Bytes 24–25, S16 0.1 °/s: camera X-axis absolute angular rate."""
     rate_y_raw: int = 0
@@ -194,8 +201,10 @@ class GcuMainFrame(NamedTuple):
 
     @property
     def attitude(self) -> Attitude:
-        """Camera absolute roll/pitch/yaw, degrees (needs valid aircraft INS data)."""
-        return _attitude(self)
+        """Camera absolute roll/pitch/yaw, degrees (needs valid aircraft INS data); the yaw
+        a heading in [0°, 360°) whatever the pod sends (a signed S16 too: :data:`CAMERA_YAW`,
+        docs/protocol-notes.md "What real pods do"); ``yaw_raw`` keeps the wire value."""
+        return Attitude(self.roll_raw / _ROLL, self.pitch_raw / _PITCH, _heading(self.yaw_raw))
 
     @property
     def angular_rates(self) -> AxisAngles:
@@ -210,7 +219,8 @@ class GcuMainFrame(NamedTuple):
     @property
     def anomalies(self) -> tuple[Anomaly, ...]:
         """Fields of a decoded frame outside the ranges V2.0.6 gives them (miss distances,
-        angles), kept raw and flagged (docs/client.md, "Liberal receive, strict send")."""
+        angles), kept raw and flagged (docs/client.md, "Liberal receive, strict send"); a yaw
+        of 36000 or more says how it was read (:data:`CAMERA_YAW`)."""
         return GCU_MAIN_SCHEMA.anomalies(self)
 
     def __str__(self) -> str:

@@ -14,6 +14,7 @@ from gcu_async.protocol.anomalies import Anomaly
 from gcu_async.protocol.enums import HostFlags, SubFrameRequest
 from gcu_async.protocol.fields import WireField
 from gcu_async.protocol.frame_schema import FrameSchema, flag_bits
+from gcu_async.protocol.headings import HeadingRule
 from gcu_async.protocol.layout import MAIN_SIZE, MAIN_START, SUB_SIZE, SUB_START
 from gcu_async.protocol.layout import SUB_FRAME_HEADER as SUB_FRAME_HEADER  # re-exported
 from gcu_async.protocol.units import (
@@ -43,6 +44,9 @@ HOST_MAIN_SCHEMA = FrameSchema("host main frame", MAIN_START, MAIN_SIZE, (
     WireField("subframe_request", "B", "GCU sub-frame request code (0x01 standard, 0x00 none)"),
 ), flags={"flags_raw": HostFlags})  # fmt: skip
 """Bytes 5–36 of a host packet: the one table of the main frame's fields."""
+AIRCRAFT_YAW = HeadingRule(HOST_MAIN_SCHEMA.by_name["aircraft_yaw_raw"])
+"""Bytes 16–17 read as a heading whatever the host sends (docs/protocol-notes.md §15
+"Aircraft yaw outside [0, 36000)"): what the simulator uses; decoding keeps the raw value."""
 HOST_SUB_SCHEMA = FrameSchema("host sub frame", SUB_START, SUB_SIZE, (
     WireField("longitude_raw", "i", "aircraft longitude", -1_800_000_000, 1_800_000_000, 1e7,
               "deg", "1e-7 deg"),

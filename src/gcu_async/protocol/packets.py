@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import struct
 from binascii import crc_hqx
+from collections.abc import Collection
 from typing import Any, NamedTuple, NoReturn
 
 from gcu_async._checks import check_int, type_error
@@ -29,6 +30,7 @@ from gcu_async.protocol.commands import (
 )
 from gcu_async.protocol.crc import crc16_xmodem
 from gcu_async.protocol.feedback import Feedback
+from gcu_async.protocol.fields import WIRE_RANGES
 from gcu_async.protocol.frame_schema import FrameSchema
 from gcu_async.protocol.gcu_frames import (
     GCU_MAIN_SCHEMA,
@@ -186,13 +188,18 @@ class GcuPacket(NamedTuple):
     feedback: Feedback = Feedback(0)
     version: int = DEFAULT_VERSION
 
-    def encode(self) -> bytes:
+    def encode(self, *, deviations: Collection[str] = ()) -> bytes:
         """Validate every field and return the wire bytes. The version (0–255) and the
         feedback's ``extra_status`` bytes are written as they are, so a decoded reply
-        re-encodes to its own bytes (the simulator can act as other firmware)."""
+        re-encodes to its own bytes (the simulator can act as other firmware).
+        ``deviations`` names main-frame fields to send outside their V2.0.6 range (a firmware
+        that does, e.g. a signed ``yaw_raw``): each is still an ``int`` of its wire type."""
         if not isinstance(self.main, GcuMainFrame):
             raise type_error("main", "a GcuMainFrame", self.main)
-        self.main.validate()
+        if deviations:
+            _check_deviations(self.main, deviations)
+        else:
+            self.main.validate()
         if self.sub is not None:
             if not isinstance(self.sub, (GcuSubFrame, UnknownSubFrame)):
                 raise type_error("sub", "a GcuSubFrame, an UnknownSubFrame or None", self.sub)
@@ -237,6 +244,19 @@ class GcuPacket(NamedTuple):
         if isinstance(self.sub, GcuSubFrame):
             found += self.sub.anomalies
         return found + self.feedback.anomalies
+
+
+def _check_deviations(main: GcuMainFrame, deviations: Collection[str]) -> None:
+    """``main`` valid but for the fields ``deviations`` names, which need only fit their wire
+    type."""
+    fields = GCU_MAIN_SCHEMA.by_name
+    unknown = set(deviations) - set(fields)
+    if unknown:
+        raise ValueError(f"deviations: {sorted(unknown)} name no main-frame field")
+    for name in deviations:
+        low, high = WIRE_RANGES[fields[name].fmt]
+        check_int(name, getattr(main, name), low, high, fields[name].raw_unit)
+    main._replace(**{name: fields[name].raw_low for name in deviations}).validate()
 
 
 def _anomalies_dict(anomalies: tuple[Anomaly, ...]) -> dict[str, Any]:

@@ -5,6 +5,8 @@
 - :class:`GcuSimulator` — the model behind UDP / TCP / pty / serial / in-memory endpoints,
   with seeded fault injection (:class:`FaultPlan`, :class:`FaultConfig`), ``silence()``
   and ``stall()`` (:class:`StallSwitch`).
+- :class:`Firmware` — how the replies are filled: the document (``"v2.0.6"``) or a firmware
+  of a real device (:data:`FIRMWARES`), independent of the pod model (:class:`PodProfile`).
 
 The servers (:class:`UdpServer`, :class:`TcpServer`, :class:`SerialServer`,
 :class:`MemoryServer`) are given a :class:`ServerParts`, never the simulator: nothing in
@@ -13,6 +15,7 @@ this package imports :mod:`gcu_async.sim.simulator` back (docs/architecture.md).
 
 from gcu_async.sim.clock import Clock, ManualClock, MonotonicClock
 from gcu_async.sim.faults import FaultConfig, FaultDecision, FaultInjector, FaultPlan, FaultStats
+from gcu_async.sim.firmware import DEFAULT_FIRMWARE, FIRMWARES, Firmware, firmware_for
 from gcu_async.sim.listen import ListenSpec, parse_listen_url
 from gcu_async.sim.memory import MemoryServer
 from gcu_async.sim.model import DEFAULT_POD, ExecutionRecord, ModelStats, SimulatorModel
@@ -27,9 +30,9 @@ from gcu_async.sim.tcp import TcpServer
 from gcu_async.sim.udp import UdpServer
 
 __all__ = [
-    "DEFAULT_POD", "Clock", "ExecutionRecord", "FaultConfig", "FaultDecision", "FaultInjector",
-    "FaultPlan", "FaultStats", "GcuSimulator", "ListenSpec", "ManualClock", "MemoryServer",
-    "ModelStats", "MonotonicClock", "PodProfile", "SerialServer", "ServerParts", "SimServer",
-    "SimState", "SimulatorModel", "SimulatorStats", "StallSwitch", "TcpServer", "UdpServer",
-    "parse_listen_url", "profile_for",
+    "DEFAULT_FIRMWARE", "DEFAULT_POD", "FIRMWARES", "Clock", "ExecutionRecord", "FaultConfig",
+    "FaultDecision", "FaultInjector", "FaultPlan", "FaultStats", "Firmware", "GcuSimulator",
+    "ListenSpec", "ManualClock", "MemoryServer", "ModelStats", "MonotonicClock", "PodProfile",
+    "SerialServer", "ServerParts", "SimServer", "SimState", "SimulatorModel", "SimulatorStats",
+    "StallSwitch", "TcpServer", "UdpServer", "firmware_for", "parse_listen_url", "profile_for",
 ]  # fmt: skip

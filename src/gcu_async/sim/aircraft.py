@@ -4,30 +4,23 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from gcu_async.protocol.conformance import YAW_SIGNED_LOW
-from gcu_async.protocol.host_frames import HOST_MAIN_SCHEMA, HostMainFrame, HostSubFrame
+from gcu_async.protocol.host_frames import AIRCRAFT_YAW, HostMainFrame, HostSubFrame
 from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp
 
 DEFAULT_HEIGHT_M = 100.0
 """Simulator assumption: height above flat ground when the host sends no relative altitude."""
 
 
-_YAW = HOST_MAIN_SCHEMA.by_name["aircraft_yaw_raw"]
-_YAW_TURN = _YAW.raw_high + 1 - _YAW.raw_low
-"""Raw steps in a full turn: the yaw field's range, [0, 36000)."""
-
-
 def aircraft_yaw(raw: int) -> float:
     """Host bytes 16–17 (U16, 0.01°, [0, 36000)) as the simulator uses them, in [0°, 360°).
 
     Out-of-range values are flagged by the decoder and read as the host most likely meant
-    them (docs/protocol-notes.md §15 "Aircraft yaw outside [0, 36000)"): 47536 … 65535 as
-    a signed S16 (−180° … −0.01°, what a host writing a signed ±18000 value sends for
-    headings west of north), 36000 … 47535 as an angle past 360° (wrapped).
+    them (docs/protocol-notes.md §15 "Aircraft yaw outside [0, 36000)"; the rule of
+    :mod:`~gcu_async.protocol.headings`): 47536 … 65535 as a signed S16 (−180° … −0.01°,
+    what a host writing a signed ±18000 value sends for headings west of north), 36000 …
+    47535 as an angle past 360° (wrapped).
     """
-    if raw >= YAW_SIGNED_LOW:
-        raw -= 0x10000
-    return (raw % _YAW_TURN) / _YAW.scale
+    return AIRCRAFT_YAW.degrees(raw)
 
 
 @dataclass

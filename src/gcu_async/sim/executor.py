@@ -62,6 +62,7 @@ from gcu_async.protocol.host_frames import HostMainFrame
 from gcu_async.protocol.pods import supports
 from gcu_async.protocol.units import GeoPosition
 from gcu_async.sim.camera import THERMAL, cameras_in
+from gcu_async.sim.firmware import DEFAULT_FIRMWARE, FIRMWARES, Firmware
 from gcu_async.sim.profiles import PodProfile
 from gcu_async.sim.state import SimState
 
@@ -105,10 +106,13 @@ def handler_for(command: type[Command]) -> Handler | None:
 class Executor:
     """Runs commands against a :class:`SimState` for one pod profile."""
 
-    def __init__(self, state: SimState, profile: PodProfile, calibration_seconds: float) -> None:
+    def __init__(self, state: SimState, profile: PodProfile, calibration_seconds: float,
+                 firmware: Firmware = FIRMWARES[DEFAULT_FIRMWARE]) -> None:  # fmt: skip
         self.state = state
         self.profile = profile
         self.calibration_seconds = calibration_seconds
+        self.firmware = firmware
+        """The firmware's behaviours (the model keeps it current)."""
 
     def execute(self, command: Command, main: HostMainFrame, now: float) -> int:
         """Run ``command`` (carried by a host packet with main frame ``main``) at clock time
@@ -153,7 +157,7 @@ def _calibration(ex: Executor, command: Command, main: HostMainFrame, now: float
 
 @behaviour(Centre)
 def _centre(ex: Executor, command: Command, main: HostMainFrame, now: float) -> int:
-    return SUCCESS if ex.state.gimbal.centre() else FAILED
+    return SUCCESS if ex.state.gimbal.centre() or ex.firmware.centre_ignored_ok else FAILED
 
 
 def _enter_mode(ex: Executor, command: Command, main: HostMainFrame, now: float) -> int:

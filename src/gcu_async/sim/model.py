@@ -35,6 +35,7 @@ from gcu_async.sim.aircraft import ReceivedAircraft, aircraft_yaw
 from gcu_async.sim.camera import CameraState
 from gcu_async.sim.clock import Clock, MonotonicClock
 from gcu_async.sim.executor import Executor
+from gcu_async.sim.firmware import DEFAULT_FIRMWARE, Firmware, firmware_for
 from gcu_async.sim.motion import DEFAULT_MAX_RATE, Gimbal
 from gcu_async.sim.profiles import PodProfile, profile_for
 from gcu_async.sim.rangefinder import Rangefinder
@@ -107,7 +108,9 @@ class SimulatorModel:
     the same executions one by one, in order, as :class:`ExecutionRecord` (time, command,
     status), so a test can tell two commands of one opcode apart by their parameters; it
     stays empty otherwise (it grows by one record per execution: clear it in long runs).
-    ``state`` is the live :class:`SimState`.
+    ``state`` is the live :class:`SimState`. ``firmware`` (a name of
+    :data:`~gcu_async.sim.firmware.FIRMWARES` or a :class:`~gcu_async.sim.firmware.Firmware`)
+    says how the replies are filled: ``"v2.0.6"``, the document, by default.
     """
 
     def __init__(
@@ -123,6 +126,7 @@ class SimulatorModel:
         initial_mode: Mode = Mode.POINTING_FOLLOW,
         protocol_version: int = DEFAULT_VERSION,
         record_executions: bool = False,
+        firmware: Firmware | str = DEFAULT_FIRMWARE,
     ) -> None:
         if not calibration_seconds >= 0:
             raise ValueError(f"calibration_seconds: {calibration_seconds!r} must be >= 0")
@@ -143,7 +147,8 @@ class SimulatorModel:
             camera=CameraState.for_profile(self.profile),
             rangefinder=Rangefinder(),
         )
-        self.executor = Executor(self.state, self.profile, calibration_seconds)
+        self.executor = Executor(self.state, self.profile, calibration_seconds,
+                                 firmware_for(firmware))  # fmt: skip
         self.executions: Counter[int] = Counter()
         self.record_executions = check_bool("record_executions", record_executions)
         self.execution_log: list[ExecutionRecord] = []
@@ -156,6 +161,17 @@ class SimulatorModel:
         self.conformance = HostConformance()
         """Every host packet handled, checked against V2.0.6 (:meth:`HostConformance.report`)."""
         self._raw = b""
+
+    @property
+    def firmware(self) -> Firmware:
+        """How the replies are filled and commands answered (:mod:`~gcu_async.sim.firmware`);
+        settable while the model runs (a name or a :class:`~gcu_async.sim.firmware.Firmware`):
+        the next reply follows it."""
+        return self.executor.firmware
+
+    @firmware.setter
+    def firmware(self, firmware: Firmware | str) -> None:
+        self.executor.firmware = firmware_for(firmware)
 
     # -- bytes in, bytes out ------------------------------------------------------------------
     def receive(self, data: bytes | bytearray | memoryview) -> list[bytes]:
@@ -207,9 +223,14 @@ class SimulatorModel:
             return None
         self._raw = packet  # for the conformance report's examples; handle() keeps its shape
         try:
-            return self.handle(decoded).encode()
+            return self.encode(self.handle(decoded))
         finally:
             self._raw = b""
+
+    def encode(self, reply: GcuPacket) -> bytes:
+        """The wire bytes of a reply :meth:`handle` made, with this firmware's deviations from
+        V2.0.6 (``GcuPacket.encode()`` alone refuses them)."""
+        return reply.encode(deviations=self.firmware.deviations)
 
     # -- the GCU ------------------------------------------------------------------------------
     def handle(self, packet: HostPacket) -> GcuPacket:
@@ -265,8 +286,8 @@ class SimulatorModel:
         self.stats.answered += 1
         standard = main.subframe_request == SubFrameRequest.STANDARD
         return GcuPacket(
-            main_frame(self.state),
-            sub_frame(self.state, self.profile) if standard else None,
+            main_frame(self.state, self.firmware),
+            sub_frame(self.state, self.profile, self.firmware) if standard else None,
             feedback,
             self.protocol_version,
         )
@@ -309,5 +330,6 @@ class SimulatorModel:
             self.executor.calibration_status(now)
 
     def __repr__(self) -> str:
-        return (f"<SimulatorModel {self.profile.name} mode={self.state.mode.name} "
+        return (f"<SimulatorModel {self.profile.name} firmware={self.firmware.name} "
+                f"mode={self.state.mode.name} "
                 f"answered={self.stats.answered}>")  # fmt: skip

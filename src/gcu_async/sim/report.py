@@ -2,13 +2,21 @@
 
 from __future__ import annotations
 
-from gcu_async.protocol.enums import PIP_MODE_MASK, Mode, PodStatus
+from gcu_async.protocol.enums import PIP_MODE_MASK, FaultFlags, Mode, PodStatus
 from gcu_async.protocol.fields import WireField
-from gcu_async.protocol.gcu_frames import GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA, GcuMainFrame, GcuSubFrame
+from gcu_async.protocol.gcu_frames import (
+    CAMERA_YAW,
+    GCU_MAIN_SCHEMA,
+    GCU_SUB_SCHEMA,
+    GcuMainFrame,
+    GcuSubFrame,
+)
+from gcu_async.sim.firmware import Firmware
 from gcu_async.sim.profiles import PodProfile
 from gcu_async.sim.state import SimState
 
 _M, _S = GCU_MAIN_SCHEMA.by_name, GCU_SUB_SCHEMA.by_name
+_YAW = _M["yaw_raw"]
 
 
 def _clamped(field: WireField, value: float) -> int:
@@ -43,11 +51,12 @@ def pod_status(state: SimState) -> int:
     return int(flags)
 
 
-def main_frame(state: SimState) -> GcuMainFrame:
-    """GCU main frame, bytes 5–36."""
+def main_frame(state: SimState, firmware: Firmware) -> GcuMainFrame:
+    """GCU main frame, bytes 5–36 (the camera yaw as ``firmware`` sends it)."""
     g = state.gimbal
     rel = state.relative_axes
     att = state.attitude
+    yaw = CAMERA_YAW.signed_raw(att.yaw) if firmware.signed_yaw else _wrapped(_YAW, att.yaw)
     roll_rate, pitch_rate, yaw_rate = g.rates
     return GcuMainFrame(
         int(g.mode),
@@ -59,15 +68,15 @@ def main_frame(state: SimState) -> GcuMainFrame:
         _wrapped(_M["relative_z_raw"], rel.z),
         _clamped(_M["roll_raw"], att.roll),
         _wrapped(_M["pitch_raw"], att.pitch),
-        _wrapped(_M["yaw_raw"], att.yaw),
+        yaw,
         _clamped(_M["rate_x_raw"], -pitch_rate),
         _clamped(_M["rate_y_raw"], roll_rate),
         _clamped(_M["rate_z_raw"], yaw_rate),
     )
 
 
-def sub_frame(state: SimState, profile: PodProfile) -> GcuSubFrame:
-    """GCU sub frame 0x01, bytes 38–68."""
+def sub_frame(state: SimState, profile: PodProfile, firmware: Firmware) -> GcuSubFrame:
+    """GCU sub frame 0x01, bytes 38–68 (versions and faults as ``firmware`` reports them)."""
     cam, rf = state.camera, state.rangefinder
     distance = 0 if not rf.on else _clamped(_S["target_distance_raw"], rf.distance)
     lat = lon = alt = 0
@@ -76,17 +85,21 @@ def sub_frame(state: SimState, profile: PodProfile) -> GcuSubFrame:
         lon = _clamped(_S["target_longitude_raw"], rf.position.longitude)
         alt = _clamped(_S["target_altitude_raw"], rf.position.altitude)
     zoom = state.zoom
+    hardware, version = firmware.versions or (profile.hardware_version, profile.firmware_version)
+    faults = state.faults
+    if firmware.gnss_fault and not state.aircraft.satellites:
+        faults |= FaultFlags.GNSS_NO_FIX
     return GcuSubFrame(
-        _clamped(_S["hardware_version_raw"], profile.hardware_version),
-        _clamped(_S["firmware_version_raw"], profile.firmware_version),
+        _clamped(_S["hardware_version_raw"], hardware),
+        _clamped(_S["firmware_version_raw"], version),
         int(profile.model),
-        state.faults & 0xFFFF,
+        faults & 0xFFFF,
         distance,
         lon,
         lat,
         alt,
         _clamped(_S["camera1_zoom_raw"], zoom.get(1, 0.0)),
-        _clamped(_S["camera2_zoom_raw"], zoom.get(2, 0.0)),
+        _clamped(_S["camera2_zoom_raw"], zoom.get(2, firmware.missing_camera_zoom)),
         cam.thermal_flags(profile.radiometric),
         cam.camera_flags() | (cam.pip_mode & PIP_MODE_MASK),
         _clamped(_S["time_zone"], cam.time_zone),

@@ -14,6 +14,7 @@ from gcu_async.protocol.links import DEFAULT_BAUDRATE, GCU_TCP_PORT, GCU_UDP_POR
 from gcu_async.sim.clock import Clock
 from gcu_async.sim.exchange import Exchange
 from gcu_async.sim.faults import FaultConfig, FaultInjector, FaultPlan
+from gcu_async.sim.firmware import DEFAULT_FIRMWARE, Firmware
 from gcu_async.sim.listen import ListenSpec, parse_listen_url
 from gcu_async.sim.memory import MemoryServer
 from gcu_async.sim.model import DEFAULT_POD, SimulatorModel
@@ -34,7 +35,8 @@ class GcuSimulator:
     simulator share its model and fault injectors. ``capture`` (a pcapng file path or a
     :class:`~gcu_async.capture.PacketCapture`; needs the ``capture`` extra) records what
     every endpoint receives and sends, as it crosses the socket or terminal (after fault
-    injection); the file is open while an endpoint runs.
+    injection); the file is open while an endpoint runs. ``pod`` and ``firmware`` are the
+    model's (:class:`SimulatorModel`): ``GcuSimulator(pod="Z-1Pro", firmware="z1pro-6.7")``.
     """
 
     def __init__(
@@ -42,14 +44,18 @@ class GcuSimulator:
         model: SimulatorModel | None = None,
         *,
         pod: PodModel | int | str = DEFAULT_POD,
+        firmware: Firmware | str = DEFAULT_FIRMWARE,
         faults: FaultPlan | FaultConfig | None = None,
         clock: Clock | None = None,
         seed: int = 0,
         capture: PacketCapture | str | os.PathLike[str] | None = None,
     ) -> None:
-        if model is not None and (clock is not None or seed != 0 or pod != DEFAULT_POD):
-            raise ValueError("GcuSimulator: give either model= or pod=/clock=/seed=, not both")
-        self.model = model if model is not None else SimulatorModel(pod, clock=clock, seed=seed)
+        if model is not None and (clock is not None or seed != 0 or pod != DEFAULT_POD
+                                  or firmware != DEFAULT_FIRMWARE):  # fmt: skip
+            raise ValueError("GcuSimulator: give either model= or pod=/firmware=/clock=/seed=, "
+                             "not both")  # fmt: skip
+        self.model = model if model is not None else SimulatorModel(
+            pod, clock=clock, seed=seed, firmware=firmware)
         self.faults = FaultPlan()
         self.request_faults = FaultInjector(self.faults.requests)
         self.reply_faults = FaultInjector(self.faults.replies)

@@ -763,12 +763,26 @@ local function gcu_main(ctx, tree)
       r(10 + 2 * k, 2), angle, 100, "Relative angle " .. axis:upper(), " deg")
     range_anomaly(ctx, "relative_" .. axis .. "_raw", angle, -18000, 17999, "0.01 deg")
   end
-  local att = {le_int(r(18, 2)), le_int(r(20, 2)), le_uint(r(22, 2))}
-  local att_range = {{-9000, 9000}, {-18000, 17999}, {0, 35999}}
-  for k, axis in ipairs({"roll", "pitch", "yaw"}) do
+  local att = {le_int(r(18, 2)), le_int(r(20, 2))}
+  local att_range = {{-9000, 9000}, {-18000, 17999}}
+  for k, axis in ipairs({"roll", "pitch"}) do
     add_scaled(t, "gcu.main.attitude_deg." .. axis, "gcu.main.attitude_raw", r(16 + 2 * k, 2),
       att[k], 100, "Camera " .. axis, " deg")
     range_anomaly(ctx, axis .. "_raw", att[k], att_range[k][1], att_range[k][2], "0.01 deg")
+  end
+  -- the camera yaw is a heading in [0, 360) whatever the pod sends: U16 [0, 36000) as
+  -- V2.0.6 writes it; 47536-65535 only a signed S16 explains (the Z-1Pro sends its yaw
+  -- signed); 36000-47535 neither: an angle past 360, wrapped
+  local yaw = le_uint(r(22, 2))
+  local heading = yaw
+  if yaw >= 47536 then heading = yaw - 65536 end
+  heading = (heading % 36000) / 100
+  local yitem = t:add(F["gcu.main.attitude_deg.yaw"], r(22, 2), heading,
+    "Camera yaw: " .. pyfloat(heading) .. " deg")
+  yitem:add(F["gcu.main.attitude_raw"], r(22, 2), yaw, "Raw: " .. int_text(yaw))
+  if yaw >= 36000 then
+    anomaly(ctx, "yaw_raw", yaw, 0, 35999, "0.01 deg",
+      yaw >= 47536 and YAW_SIGNED_DETAIL or YAW_PAST_TURN_DETAIL)
   end
   for k, axis in ipairs({"x", "y", "z"}) do
     add_scaled(t, "gcu.main.angular_rates_deg_s." .. axis, "gcu.main.angular_rates_raw",
