@@ -146,6 +146,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_session_heartbeat_sockets.py": ("subprocess", ALONE),
     "test_session_pacing.py": FAST,
     "test_session_regressions.py": FAST,
+    "test_session_restart.py": FAST,
     "test_session_sockets.py": ("realtime", ALONE),  # reordering below the 15 ms guard
     "test_sim_cli.py": "subprocess",
     "test_sim_cli_report.py": "subprocess",
