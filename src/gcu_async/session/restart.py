@@ -173,9 +173,9 @@ class RestartWatch:
         reply to compare)."""
         seen = Reported.of(main, sub)
         last = self._last
-        if last is not None and seen.zoom_raw is not None and last.zoom_raw is not None:
-            if abs(seen.zoom_raw - last.zoom_raw) > 0:
-                self._zoom_changed_at = now
+        if (last is not None and seen.zoom_raw is not None and last.zoom_raw is not None
+                and seen.zoom_raw != last.zoom_raw):  # fmt: skip
+            self._zoom_changed_at = now
         self._last_at = now
         if sub is not None or last is None or last.zoom_raw is None:
             self._last = seen
@@ -197,9 +197,9 @@ class RestartWatch:
                 and after.zoom_raw is not None
                 and abs(after.zoom_raw - before.zoom_raw) > _ZOOM_STEP):  # fmt: skip
             changes.append(StateChange("zoom", _zoom(before.zoom_raw), _zoom(after.zoom_raw)))
-        if ("recording" not in excused and before.recording is not None
-                and after.recording is not None and after.recording != before.recording):  # fmt: skip
-            changes.append(StateChange("recording", _on(before.recording), _on(after.recording)))
+        was, now = before.recording, after.recording
+        if "recording" not in excused and was is not None and now is not None and now != was:
+            changes.append(StateChange("recording", _on(was), _on(now)))
         if "ranging" not in excused and after.ranging != before.ranging:
             changes.append(StateChange("ranging", _on(before.ranging), _on(after.ranging)))
         return tuple(changes)

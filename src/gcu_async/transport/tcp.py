@@ -187,9 +187,10 @@ class TcpTransport(Transport):
         """Abort the connection with an RST, discarding asyncio's write buffer and the
         kernel's send queue; then (via ``loop.call_soon``) emit ``LOST`` with detail
         ``"reset: <reason> (<url>)"`` and, with ``reconnect=True``, reconnect as after any
-        loss (``reconnect=False``: ``GAVE_UP`` follows the ``LOST``). :meth:`send` raises :class:`LinkLost` from this call on until reconnected.
-        Bytes already in the peer's receive buffer stay readable by the peer. Does nothing
-        while the link is down. Raises TypeError if ``reason`` is not a ``str``."""
+        loss (``reconnect=False``: ``GAVE_UP`` follows the ``LOST``). :meth:`send` raises
+        :class:`LinkLost` from this call on until reconnected. Bytes already in the peer's
+        receive buffer stay readable by the peer. Does nothing while the link is down.
+        Raises TypeError if ``reason`` is not a ``str``."""
         check_reason(reason)
         proto = self._proto
         if proto is None or proto.transport is None or proto.transport.is_closing():
