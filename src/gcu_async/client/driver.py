@@ -168,8 +168,9 @@ class Driver:
 
     async def open_once(self, connect_timeout: float) -> None:
         """One attempt of an open (the client is ``OPENING``): open the transport, start
-        the heartbeat, wait for the first reply; then ``OPEN``. :class:`LinkLost` if it
-        fails, with the attempt's transport and session closed again (still ``OPENING``)."""
+        the heartbeat, wait for the first reply, which makes it ``OPEN``. :class:`LinkLost`
+        if it fails, with the attempt's transport and session closed again (still
+        ``OPENING``)."""
         run = self._run
         loop = asyncio.get_running_loop()
         self._first_reply = first = loop.create_future()
@@ -200,10 +201,10 @@ class Driver:
             raise
         finally:
             self._first_reply = None
-        if failure is not None or not self._opening(run):
-            await self.stop_attempt("open failed")
-            raise failure or LinkLost(f"{self.transport.url}: closed while opening")
-        self.state = ClientState.OPEN
+        if failure is None and run == self._run and self.state is ClientState.OPEN:
+            return  # the first reply made it OPEN (_handle)
+        await self.stop_attempt("open failed")
+        raise failure or LinkLost(f"{self.transport.url}: closed while opening")
 
     async def stop_attempt(self, reason: str) -> None:
         """End an open attempt: the session, the heartbeat and the transport (the client
@@ -437,6 +438,7 @@ class Driver:
                 first = self._first_reply
                 if first is not None and not first.done():
                     first.set_result(None)
+                    self.state = ClientState.OPEN  # commands are accepted from this reply on
                 self._logs.flush()
                 if event.restored:
                     log.info("link to %s restored", self.transport.url)

@@ -101,13 +101,11 @@ def _zoom(raw: int | None) -> str:
 
 
 class RestartWatch:
-    """The comparison above, fed by the session: every reply, every finished command, each
-    loss. :meth:`reply` returns the changes no command explains, once per loss."""
+    """The comparison above, fed by the session: each new sub frame (:meth:`zoom_seen`),
+    every finished command, each loss; after a loss, :meth:`compare` the first reply (the
+    session calls it while :attr:`pending`)."""
 
     def __init__(self) -> None:
-        self._last: Reported | None = None
-        self._last_at = -float("inf")
-        """When the last reply arrived."""
         self._zoom_changed_at = -float("inf")
         self._ended: dict[str, float] = {}
         """Aspect → when a command acting on it last ended (succeeded or unknown)."""
@@ -116,16 +114,18 @@ class RestartWatch:
         self._last_mode_command: int | None = None
         self._before: Reported | None = None
         self._excused: frozenset[str] = frozenset()
+        self.pending = False
+        """A loss happened and the first report after it has not been compared yet."""
         self.compared: Reported | None = None
-        """What was reported last before the loss the latest :meth:`reply` compared."""
+        """What was reported last before the loss the latest :meth:`compare` compared."""
 
     def reset(self) -> None:
         self.__init__()  # type: ignore[misc]
 
-    @property
-    def pending(self) -> bool:
-        """A loss happened and the first report after it has not been compared yet."""
-        return self._before is not None
+    def zoom_seen(self, previous: GcuSubFrame | None, sub: GcuSubFrame, now: float) -> None:
+        """A reply brought a sub frame other than ``previous`` (the last one)."""
+        if previous is not None and sub.camera1_zoom_raw != previous.camera1_zoom_raw:
+            self._zoom_changed_at = now
 
     def finished(self, opcode: int, command: Command, state: TicketState, now: float) -> None:
         """A command reached a final state."""
@@ -139,12 +139,15 @@ class RestartWatch:
         if opcode in MODE_CHANGING:
             self._last_mode_command = opcode
 
-    def lost(self) -> None:
-        """The link went down: remember what was reported last, and what explains a change."""
-        if self._before is not None or self._last is None:
-            return  # still waiting for the first report after an earlier loss
-        before = self._before = self._last
-        since = self._last_at - REPORT_SETTLE
+    def lost(self, main: GcuMainFrame | None, sub: GcuSubFrame | None,
+             last_reply: float | None) -> None:  # fmt: skip
+        """The link went down; ``main``, ``sub``: what was reported last, at
+        ``last_reply``. Remembers them, and what explains a change since."""
+        if self.pending or main is None or last_reply is None:
+            return  # still waiting for the first report after an earlier loss, or no report
+        before = self._before = Reported.of(main, sub)
+        self.pending = True
+        since = last_reply - REPORT_SETTLE
         excused = {aspect for aspect, t in self._ended.items() if t >= since}
         if self._zoom_moving(before, since):
             excused.add("zoom")
@@ -167,26 +170,15 @@ class RestartWatch:
             return before.zoom_raw is None or abs(before.zoom_raw - target) > _ZOOM_STEP
         return False
 
-    def reply(self, main: GcuMainFrame, sub: GcuSubFrame | None,
-              now: float) -> tuple[StateChange, ...]:  # fmt: skip
-        """A reply arrived: the changes that make it a restart (empty: none, or not the
-        reply to compare)."""
-        seen = Reported.of(main, sub)
-        last = self._last
-        if (last is not None and seen.zoom_raw is not None and last.zoom_raw is not None
-                and seen.zoom_raw != last.zoom_raw):  # fmt: skip
-            self._zoom_changed_at = now
-        self._last_at = now
-        if sub is not None or last is None or last.zoom_raw is None:
-            self._last = seen
-        else:  # a reply without a sub frame keeps the last sub-frame aspects
-            self._last = seen._replace(zoom_raw=last.zoom_raw, recording=last.recording)
+    def compare(self, main: GcuMainFrame, sub: GcuSubFrame | None) -> tuple[StateChange, ...]:
+        """A reply after the loss: the changes that make it a restart (empty: none, or not
+        the reply to compare: the first with a sub frame is, when there was one before)."""
         before = self._before
         if before is None or (before.zoom_raw is not None and sub is None):
             return ()
-        self._before = None
+        self._before, self.pending = None, False
         self.compared = before
-        return self._changes(before, seen)
+        return self._changes(before, Reported.of(main, sub))
 
     def _changes(self, before: Reported, after: Reported) -> tuple[StateChange, ...]:
         changes = []

@@ -629,6 +629,8 @@ class Session:
         self._status = main
         self._feedback = feedback
         if sub is not None:
+            if sub is not self._info:
+                self._restart.zoom_seen(self._info, sub, now)
             self._info = sub
             recording = self._recording
             flag = bool(sub.camera_flags_raw & _RECORDING)
@@ -640,9 +642,10 @@ class Session:
                 self._health.restored_count += 1
             self._state = SessionState.UP
             self._events.append(LinkUp(restored, "replies resumed" if restored else "first reply"))
-        changes = self._restart.reply(main, sub, now)
-        if changes:
-            self._restarted(changes)
+        if self._restart.pending:
+            changes = self._restart.compare(main, sub)
+            if changes:
+                self._restarted(changes)
         run = self._ledger.identify(feedback.opcode, now, earliest)
         ticket = self._in_flight
         if run is not None and ticket is not None and run.opcode == ticket.opcode:
@@ -733,7 +736,7 @@ class Session:
         self._state = SessionState.DOWN
         self._end_all(now, f"{self.name}: {reason}")
         if up:
-            self._restart.lost()
+            self._restart.lost(self._status, self._info, self._health.last_reply)
         if was is not SessionState.DOWN:
             self._events.append(LinkDown(reason))
             if reset:
