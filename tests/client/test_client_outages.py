@@ -238,6 +238,24 @@ def test_a_command_sent_on_hearing_of_the_restart_comes_after_the_restore() -> N
 
 
 # -- starting before the GCU ---------------------------------------------------------------
+def test_status_and_info_are_none_before_the_first_reply() -> None:
+    async def main() -> None:
+        rig = Rig()
+        gcu = rig.gcu
+        assert (gcu.status, gcu.info) == (None, None)  # not opened
+        rig.sim.silence(2.0)  # the first reply comes within connect_timeout (3 s)
+        opening = asyncio.ensure_future(gcu.open())
+        async with rig.server:
+            await asyncio.sleep(1.0)
+            assert gcu.state is ClientState.OPENING and (gcu.status, gcu.info) == (None, None)
+            await opening
+            assert gcu.status is not None and gcu.info is not None
+            await gcu.close()
+
+    run(main())
+
+
+
 def test_wait_false_returns_at_once_and_the_link_comes_up_when_the_transport_opens() -> None:
     async def main() -> None:
         rig = Rig(opens_at=20.0, wait=False)

@@ -16,6 +16,7 @@ from gcu_async.protocol import (
     EulerControl,
     Mode,
     Opcode,
+    PointingLock,
     Ranging,
     Record,
     ZoomIn,
@@ -164,6 +165,26 @@ def test_a_command_of_unknown_outcome_explains_its_change() -> None:
     rig.run_until(rig.now + 1.0)
     info = rig.session.info
     assert info is not None and info.camera1_zoom == pytest.approx(9.0)
+    assert of(rig, Restarted) == []
+    rig.check()
+
+
+def test_commands_of_unknown_outcome_explain_a_mode_and_a_ranging_change() -> None:
+    """A mode command and ranging off go out as the replies stop: both execute, neither is
+    confirmed. After the outage the mode and ranging differ from the last report before it;
+    the two commands whose outcome is unknown explain it: no restart."""
+    rig = rig_with_state()
+    start = rig.now
+    rig.replies.blackouts.append((start, start + 15.0))
+    mode = rig.submit(PointingLock())
+    ranging = rig.submit(Ranging(enabled=False))
+    rig.run_until(start + 15.0)
+    assert mode is not None and mode.state is TicketState.UNKNOWN
+    assert ranging is not None and ranging.state in (TicketState.UNKNOWN, TicketState.NOT_SENT)
+    rig.run_while(lambda: rig.session.state is not SessionState.UP, 5.0)
+    rig.run_until(rig.now + 1.0)
+    status = rig.session.status
+    assert status is not None and status.mode is Mode.POINTING_LOCK
     assert of(rig, Restarted) == []
     rig.check()
 
