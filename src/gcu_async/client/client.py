@@ -510,7 +510,8 @@ class GcuClient(OpenClose):
     async def telemetry(self, maxsize: int = 1) -> AsyncGenerator[TelemetrySample, None]:
         """Iterate over replies as they arrive. The queue holds ``maxsize`` samples; when
         the consumer falls behind the oldest are dropped (counted in
-        ``telemetry_dropped``). Ends when the client closes."""
+        ``telemetry_dropped``). Ends when the client closes or fails; an iterator started
+        before the first reply (``wait=False``) waits for it."""
         samples = self._telemetry.samples(check_int("maxsize", maxsize, 1, sys.maxsize),
                                           self._driver.state in ENDED)  # fmt: skip
         async with contextlib.aclosing(samples):
@@ -604,13 +605,14 @@ class GcuClient(OpenClose):
     async def wait_link(self, up: bool = True, *, timeout: float = WAIT_TIMEOUT) -> None:
         """Return once the link is up (``up=False``: down); at once if it already is.
         :class:`~gcu_async.errors.WaitTimeout` after ``timeout`` seconds,
-        :class:`~gcu_async.errors.LinkLost` if the client closes meanwhile."""
+        :class:`~gcu_async.errors.LinkLost` if the client closes or fails meanwhile."""
         await self._waiting.wait_link(up, timeout=timeout)
 
     async def link_events(self) -> AsyncGenerator[LinkEvent, None]:
-        """Iterate over link events (lost, restored, an OS error, a new peer, a retried
-        open) from now on; ends when the client closes. Up to 256 unread events are kept
-        (the oldest go first)."""
+        """Iterate over link events (:class:`~gcu_async.transport.LinkEventKind`: up, lost,
+        restored, restarted, gave up, an OS error, a new peer, a failed open attempt) from
+        now on; ends when the client closes or fails. Up to 256 unread events are kept (the
+        oldest go first)."""
         events = self._waiting.link_events()
         async with contextlib.aclosing(events):
             async for event in events:

@@ -151,7 +151,7 @@ class Driver:
         return Context.of(session.status, session.info, self.max_zoom)
 
     def closed(self) -> asyncio.Event | None:
-        """Set once the client closes; None while it is not open."""
+        """Set once the client closes or fails; None while it is closed."""
         return None if self.state is ClientState.CLOSED else self.closed_event
 
     # -- lifecycle -------------------------------------------------------------------------

@@ -5,7 +5,7 @@ A command's feedback says the GCU *took* it; the gimbal then needs time to slew 
 lens to zoom. These methods wait on telemetry for the result, always with a timeout, and
 raise :class:`~gcu_async.errors.WaitTimeout` naming what was awaited and the last value
 seen. They keep waiting through a link outage (no telemetry arrives, the timeout runs on)
-and raise :class:`~gcu_async.errors.LinkLost` when the client closes.
+and raise :class:`~gcu_async.errors.LinkLost` when the client closes or fails.
 """
 
 from __future__ import annotations
