@@ -98,6 +98,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_client_boundary.py": FAST,
     "test_client_new_user.py": "realtime",
     "test_client_open_retry.py": "realtime",
+    "test_client_outages.py": FAST,
     "test_client_robustness.py": ("realtime", ALONE),  # exactly once needs delays < the guard
     "test_client_session.py": "realtime",
     "test_client_waiting.py": "realtime",
@@ -157,6 +158,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_session_heartbeat_sockets.py": ("subprocess", ALONE),
     "test_session_pacing.py": FAST,
     "test_session_regressions.py": FAST,
+    "test_session_restart.py": FAST,
     "test_session_sockets.py": ("realtime", ALONE),  # reordering below the 15 ms guard
     "test_sim_cli.py": "subprocess",
     "test_sim_cli_report.py": "subprocess",
@@ -179,6 +181,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_sitl_replay.py": FAST,
     "test_tiers.py": FAST,
     "test_transport_memory.py": FAST,
+    "test_transport_reconnect_rule.py": FAST,
     "test_transport_serial.py": "realtime",
     "test_transport_registry.py": FAST,
     "test_transport_tcp.py": "realtime",

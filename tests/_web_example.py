@@ -20,6 +20,7 @@ import uvicorn
 from websockets.asyncio.client import ClientConnection
 
 from gcu_async import GcuClient
+from gcu_async.client import ClientState
 from gcu_async.pytest_plugin import SimHandle
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -27,7 +28,7 @@ if str(ROOT) not in sys.path:  # the examples live beside src/, not inside the p
     sys.path.insert(0, str(ROOT))
 
 from examples.web.app import create_app  # noqa: E402
-from examples.web.connection import GcuConnection  # noqa: E402
+from examples.web.snapshot import Attempts  # noqa: E402
 
 CHROMIUM = "/usr/bin/chromium"
 """Debian's Chromium, driven by Playwright (never ``playwright install``)."""
@@ -56,9 +57,17 @@ class Web:
         return gcu
 
     @property
-    def connection(self) -> GcuConnection:
-        connection: GcuConnection = self.app.state.connection
-        return connection
+    def attempts(self) -> Attempts:
+        """The app's count of its client's failed open attempts."""
+        attempts: Attempts = self.app.state.attempts
+        return attempts
+
+    async def wait_open(self, timeout: float = 5.0) -> None:
+        """Return once the app's client is open (the GCU answered)."""
+        await eventually(self._open, timeout, "the app's client open")
+
+    async def _open(self) -> bool:
+        return self.gcu.state is ClientState.OPEN
 
     @property
     def ws_url(self) -> str:
@@ -119,9 +128,7 @@ async def running_web(
     async with serve(app) as base_url, httpx.AsyncClient(base_url=base_url, timeout=5.0) as http:
         web = Web(sim, base_url, http, app)
         if wait_connected:
-            assert await web.connection.wait_connected(CONNECT_TIMEOUT), (
-                f"the app's client did not open: {web.connection.snapshot()}"
-            )
+            await web.wait_open(CONNECT_TIMEOUT)
         yield web
 
 

@@ -173,9 +173,8 @@ class Autopilot:
         if s.acceleration is not None:
             parts.append("acc N/E/U {:.2f}/{:.2f}/{:.2f}".format(*s.acceleration))
         parts.append(f"sats {s.satellites} week {s.gnss_week} ms {s.gnss_ms}")
-        link = self.gcu.link
-        if link.up:
-            st = self.gcu.status
+        link, st = self.gcu.link, self.gcu.status
+        if link.up and st is not None:
             parts.append(
                 f"GCU {st.mode.name} cam pitch {st.attitude.pitch:.1f} "
                 f"yaw {st.attitude.yaw:.1f} ({link.reply_rate:.0f} Hz)"

@@ -94,9 +94,7 @@ async def run_survey(
             report.notes.append(f"zoom not available on this pod ({exc}): photos at 1x")
         else:
             report.zoom = zoom
-            if not await _settle(
-                gcu, lambda: abs(gcu.info.camera1_zoom - zoom) < ZOOM_TOLERANCE, settle_timeout
-            ):
+            if not await _settle(gcu, lambda: _zoomed(gcu, zoom), settle_timeout):
                 report.notes.append(f"zoom did not reach {zoom:g}x in time")
         for n in range(photos):
             if n:
@@ -162,7 +160,11 @@ async def wait_for_link(gcu: GcuClient, timeout: float) -> bool:
 
 
 def _looking_down(gcu: GcuClient) -> bool:
-    return gcu.status.attitude.pitch < SETTLED_PITCH
+    return gcu.status is not None and gcu.status.attitude.pitch < SETTLED_PITCH
+
+
+def _zoomed(gcu: GcuClient, zoom: float) -> bool:
+    return gcu.info is not None and abs(gcu.info.camera1_zoom - zoom) < ZOOM_TOLERANCE
 
 
 async def _settle(gcu: GcuClient, reached: Callable[[], bool], timeout: float) -> bool:
@@ -178,7 +180,7 @@ async def _settle(gcu: GcuClient, reached: Callable[[], bool], timeout: float) -
 async def _main(args: argparse.Namespace) -> int:
     async with connect(args.gcu) as gcu:
         report = await run_survey(gcu, photos=args.photos, interval=args.interval, zoom=args.zoom)
-        mode = gcu.status.mode
+        mode = gcu.status.mode if gcu.status is not None else Mode.UNKNOWN
     print(report)
     print(f"pod mode at the end: {mode.name}")
     return 0 if report.completed and mode is Mode.TOP_DOWN else 1

@@ -1,16 +1,16 @@
 """A Starlette web backend for one gimbal: JSON commands, WebSocket telemetry, one page.
 
 ``create_app(gcu_url, **client_options)`` builds the ASGI app. It creates ONE
-:class:`~gcu_async.GcuClient` (``gcu_async.connect``; a bad URL or option raises at once)
-that every request shares. The app starts whether or not the GCU answers: its lifespan runs
-a :class:`~examples.web.connection.GcuConnection`, which opens the client in the background,
-retrying with backoff until the GCU answers (a GCU powered after the app), reopens it if
-its transport gives up, and closes it on shutdown. Routes:
+:class:`~gcu_async.GcuClient` (``gcu_async.connect(url, wait=False)``; a bad URL or option
+raises at once) that every request shares. The app starts whether or not the GCU answers:
+its lifespan opens the client, which returns at once and brings the link up in the
+background (a GCU powered after the app), keeps it up through outages of any length, and
+closes it on shutdown. Routes:
 
 - ``GET /`` — the page (``static/index.html``), ``/static/*`` its script and style.
 - ``GET /api/status`` — mode, attitude, relative angles, rates, zoom, flags, link health and
-  ``connection`` (:meth:`GcuConnection.snapshot`); 503 ``NotConnected`` (with
-  ``connection``) while the client is not open yet.
+  ``connection`` (:meth:`~examples.web.snapshot.Attempts.json`); 503 ``NotConnected``
+  (with ``connection``) while the client is not open (no reply yet, or it failed).
 - ``GET /api/commands`` — the commands below with their parameters.
 - ``POST /api/commands/{name}`` — run a command; JSON object body of parameters
   (``Content-Type: application/json``, at most ``max_body`` bytes). Errors:
@@ -18,7 +18,7 @@ its transport gives up, and closes it on shutdown. Routes:
   too deep, or with duplicate keys), 422 bad parameter (``ValueError`` /
   ``FieldRangeError``), 409 GCU answered failure (``CommandFailed``) or pod lacks the command
   (``UnsupportedCommandError``), 504 no feedback in time (``CommandTimeout``), 503 link down
-  (``LinkLost``) or client not open yet (``NotConnected``).
+  (``LinkLost``) or client not open (``NotConnected``).
 - ``WS /ws/telemetry`` — JSON telemetry at most ``telemetry_hz`` times a second (newest
   sample wins: a slow browser never backs up the client), and a ``{"type": "link"}``
   message every 0.5 s while no replies arrive (link down, or still waiting for the GCU).
@@ -53,18 +53,18 @@ from gcu_async import (
     CommandFailed,
     CommandTimeout,
     FieldRangeError,
-    GcuError,
+    GcuClient,
     LinkLost,
     UnsupportedCommandError,
     connect,
 )
+from gcu_async.client import ClientState
 from gcu_async.protocol import opcode_name
 
 from .body import DEFAULT_MAX_BODY, BodyError, read_json
 from .commands import COMMANDS, parse_params
-from .connection import ConnectionState, GcuConnection, check_retry
 from .guard import LOOPBACK_HOSTS, WS_PROTOCOL, Guard, Policy
-from .snapshot import client_state, link_json, state_json
+from .snapshot import Attempts, client_state, link_json, state_json
 
 log = logging.getLogger("gcu_async.examples.web")
 
@@ -81,8 +81,6 @@ def create_app(
     gcu_url: str,
     *,
     telemetry_hz: float = DEFAULT_TELEMETRY_HZ,
-    retry_initial: float = 0.5,
-    retry_max: float = 5.0,
     token: str | None = None,
     allowed_hosts: Iterable[str] | None = None,
     max_body: int = DEFAULT_MAX_BODY,
@@ -91,12 +89,12 @@ def create_app(
     """The ASGI app for the GCU at ``gcu_url``.
 
     ``client_options`` go to :func:`gcu_async.connect` (``local_port``, ``command_timeout``,
-    ``connect_timeout``, ``silence_timeout``, ``check_support`` …); a bad URL or option
-    raises here. ``telemetry_hz`` bounds the WebSocket rate, (0, 50]. The app starts at once;
-    the client is opened in the background (each attempt waits ``connect_timeout`` for a
-    reply; between attempts ``retry_initial`` seconds, doubling up to ``retry_max``) and
-    closed when the app stops. ``app.state.gcu`` is the client, ``app.state.connection`` the
-    :class:`~examples.web.connection.GcuConnection` while the app runs.
+    ``connect_timeout``, ``silence_timeout``, ``check_support``, ``restore`` …); a bad URL or
+    option raises here. ``telemetry_hz`` bounds the WebSocket rate, (0, 50]. The app starts
+    at once; the client opens in the background (``wait=False``: each attempt waits
+    ``connect_timeout`` for a reply, the library's backoff between them) and closes when the
+    app stops. ``app.state.gcu`` is the client, ``app.state.attempts`` its failed attempts
+    (:class:`~examples.web.snapshot.Attempts`).
 
     ``token`` (16–256 URL-safe characters, ``None``: none) is the bearer token ``/api/`` and
     ``/ws/`` need; ``allowed_hosts`` the host names ``Host`` may carry (default loopback
@@ -107,14 +105,12 @@ def create_app(
     if isinstance(max_body, bool) or not isinstance(max_body, int) or not 2 <= max_body <= 2**20:
         raise ValueError(f"max_body: {max_body!r} is outside the allowed range [2, 1048576] bytes")
     policy = Policy.make(allowed_hosts, token)
-    retry_initial, retry_max = check_retry(retry_initial, retry_max)
-    gcu = connect(gcu_url, **client_options)
+    gcu = connect(gcu_url, wait=False, **client_options)
+    attempts = Attempts(gcu)
 
     @contextlib.asynccontextmanager
     async def lifespan(app: Starlette) -> AsyncIterator[None]:
-        connection = GcuConnection(gcu, retry_initial=retry_initial, retry_max=retry_max)
-        app.state.connection = connection
-        async with connection:
+        async with gcu:  # returns at once: the link comes up in the background
             log.info("serving the GCU at %s (connecting in the background)", gcu_url)
             try:
                 yield
@@ -122,7 +118,7 @@ def create_app(
                 log.info("closing the client of %s", gcu_url)
 
     async def telemetry(websocket: WebSocket) -> None:
-        await stream_telemetry(websocket, _connection(websocket), 1.0 / telemetry_hz)
+        await stream_telemetry(websocket, attempts, 1.0 / telemetry_hz)
 
     routes = [
         Route("/", index, methods=["GET"]),
@@ -138,6 +134,7 @@ def create_app(
     app.state.policy = policy
     app.state.max_body = max_body
     app.state.gcu = gcu
+    app.state.attempts = attempts
     return app
 
 
@@ -169,9 +166,9 @@ def allowed_hosts_from(extra: Iterable[str] | str) -> frozenset[str]:
     return LOOPBACK_HOSTS | {name.strip() for name in names if name.strip()}
 
 
-def _connection(conn: Request | WebSocket) -> GcuConnection:
-    connection: GcuConnection = conn.app.state.connection
-    return connection
+def _attempts(conn: Request | WebSocket) -> Attempts:
+    attempts: Attempts = conn.app.state.attempts
+    return attempts
 
 
 def _error(code: int, exc: BaseException | str, kind: str | None = None,
@@ -183,10 +180,10 @@ def _error(code: int, exc: BaseException | str, kind: str | None = None,
     return JSONResponse({"error": str(exc), "kind": kind, **extra}, status_code=code)
 
 
-def _not_connected(connection: GcuConnection, **extra: Any) -> JSONResponse:
-    """503 while the client is not open: what the connection is waiting for."""
-    return _error(503, connection.describe(), "NotConnected",
-                  connection=connection.snapshot(), **extra)  # fmt: skip
+def _not_connected(attempts: Attempts, **extra: Any) -> JSONResponse:
+    """503 while the client is not open: what it waits for, or why it failed."""
+    return _error(503, attempts.describe(), "NotConnected", connection=attempts.json(),
+                  **extra)  # fmt: skip
 
 
 def _number(x: float) -> float | None:
@@ -201,15 +198,12 @@ async def index(request: Request) -> Response:
 
 async def status(request: Request) -> Response:
     """The latest state; 200 even while the link is down (``link.up`` is then false), 503
-    ``NotConnected`` while the client is not open (still waiting for the GCU)."""
-    connection = _connection(request)
-    if not connection.connected:
-        return _not_connected(connection)
-    try:
-        state = client_state(connection.gcu)
-    except GcuError:  # no reply yet: cannot happen once the client is open
-        return _not_connected(connection)
-    return JSONResponse({**state, "connection": connection.snapshot()})
+    ``NotConnected`` while the client is not open (still waiting for the GCU, or failed)."""
+    attempts = _attempts(request)
+    state = client_state(attempts.gcu)
+    if attempts.gcu.state is not ClientState.OPEN or state is None:
+        return _not_connected(attempts)
+    return JSONResponse({**state, "connection": attempts.json()})
 
 
 async def list_commands(request: Request) -> Response:
@@ -229,12 +223,12 @@ async def run_command(request: Request) -> Response:
         if exc.status == 413:  # the rest of the body is unread: end the connection, not drain it
             response.headers["connection"] = "close"
         return response
-    connection = _connection(request)
+    attempts = _attempts(request)
     try:
         values = parse_params(spec, body)
-        if not connection.connected:
-            return _not_connected(connection, outcome="not sent")
-        feedback = await spec.run(connection.gcu, values)
+        if attempts.gcu.state is not ClientState.OPEN:
+            return _not_connected(attempts, outcome="not sent")
+        feedback = await spec.run(attempts.gcu, values)
     except CommandFailed as exc:
         return _error(
             409,
@@ -261,13 +255,13 @@ async def run_command(request: Request) -> Response:
 
 
 # -- WebSocket ----------------------------------------------------------------------------
-async def stream_telemetry(websocket: WebSocket, connection: GcuConnection, period: float) -> None:
+async def stream_telemetry(websocket: WebSocket, attempts: Attempts, period: float) -> None:
     """Send telemetry until the browser leaves or the app stops (then code 1001). A client
     offering the :data:`~examples.web.guard.WS_PROTOCOL` subprotocol (the page does, beside
     its token) gets it."""
     offered = websocket.scope.get("subprotocols", [])
     await websocket.accept(subprotocol=WS_PROTOCOL if WS_PROTOCOL in offered else None)
-    sender = asyncio.create_task(_send_telemetry(websocket, connection, period))
+    sender = asyncio.create_task(_send_telemetry(websocket, attempts, period))
     receiver = asyncio.create_task(_until_disconnect(websocket))
     try:
         done, _ = await asyncio.wait({sender, receiver}, return_when=asyncio.FIRST_COMPLETED)
@@ -291,32 +285,32 @@ async def _until_disconnect(websocket: WebSocket) -> None:
         pass
 
 
-def _link_message(connection: GcuConnection) -> str:
-    return json.dumps({"type": "link", "link": link_json(connection.gcu.link),
-                       "connection": connection.snapshot()})  # fmt: skip
+def _link_message(attempts: Attempts) -> str:
+    return json.dumps({"type": "link", "link": link_json(attempts.gcu.link),
+                       "connection": attempts.json()})  # fmt: skip
 
 
-async def _send_telemetry(websocket: WebSocket, connection: GcuConnection, period: float) -> None:
-    """While the client is not open, a link message every 0.5 s; while it is, its telemetry.
-    Returns when the connection stops. ``seq`` counts telemetry messages on this socket."""
+async def _send_telemetry(websocket: WebSocket, attempts: Attempts, period: float) -> None:
+    """The client's telemetry, and a link message every 0.5 s while none arrives (before
+    the GCU first answers, during an outage, after the client failed). Returns when the
+    client closes (the app stops). ``seq`` counts telemetry messages on this socket."""
+    gcu = attempts.gcu
     seq = 0
     while True:
-        if not await connection.wait_connected(LINK_REPORT_SECONDS):
-            if connection.state is ConnectionState.STOPPED:
-                return
-            await websocket.send_text(_link_message(connection))
-            continue
-        seq = await _send_client_telemetry(websocket, connection, period, seq)
-        if connection.state is ConnectionState.STOPPED:
+        if gcu.state in (ClientState.OPENING, ClientState.OPEN):
+            seq = await _send_client_telemetry(websocket, attempts, period, seq)
+        elif gcu.state is ClientState.FAILED:  # it stays so until the app stops
+            await websocket.send_text(_link_message(attempts))
+            await asyncio.sleep(LINK_REPORT_SECONDS)
+        else:  # closing or closed: the app stops
             return
-        # the client closed under a running connection (the transport gave up): wait again
 
 
 async def _send_client_telemetry(
-    websocket: WebSocket, connection: GcuConnection, period: float, seq: int
+    websocket: WebSocket, attempts: Attempts, period: float, seq: int
 ) -> int:
-    """Telemetry of the open client until it closes; returns the last ``seq`` sent."""
-    gcu = connection.gcu
+    """Telemetry of the client until it closes or fails; returns the last ``seq`` sent."""
+    gcu: GcuClient = attempts.gcu
     loop = asyncio.get_running_loop()
     # maxsize=1: the newest sample wins, a slow browser never queues up behind the client
     stream = gcu.telemetry(maxsize=1)
@@ -331,7 +325,7 @@ async def _send_client_telemetry(
                 pending = asyncio.ensure_future(anext(stream))
             done, _ = await asyncio.wait({pending}, timeout=LINK_REPORT_SECONDS)
             if not done:  # no reply for a while: report the link, keep waiting
-                await websocket.send_text(_link_message(connection))
+                await websocket.send_text(_link_message(attempts))
                 continue
             try:
                 sample = pending.result()
@@ -342,7 +336,7 @@ async def _send_client_telemetry(
             seq += 1
             message = state_json(sample.status, sample.info, gcu.link, sample.feedback,
                                  aircraft=gcu.aircraft)  # fmt: skip
-            message.update(type="telemetry", seq=seq, connection=connection.snapshot())
+            message.update(type="telemetry", seq=seq, connection=attempts.json())
             await websocket.send_text(json.dumps(message))
             next_slot = loop.time() + period
     finally:

@@ -6,7 +6,8 @@ from __future__ import annotations
 from dataclasses import asdict
 from typing import Any
 
-from gcu_async import GcuClient, LinkHealth
+from gcu_async import GcuClient, LinkEvent, LinkEventKind, LinkHealth
+from gcu_async.client import ClientState
 from gcu_async.protocol import AircraftState, Feedback, GcuMainFrame, GcuSubFrame, pod_name
 
 
@@ -78,7 +79,48 @@ def state_json(
     return data
 
 
-def client_state(gcu: GcuClient) -> dict[str, Any]:
-    """:func:`state_json` of a client's latest status and info."""
+def client_state(gcu: GcuClient) -> dict[str, Any] | None:
+    """:func:`state_json` of a client's latest status and info (``None`` before the first
+    reply)."""
+    if gcu.status is None:
+        return None
     info = gcu.info if gcu.pod_model is not None else None
     return state_json(gcu.status, info, gcu.link, aircraft=gcu.aircraft)
+
+
+class Attempts:
+    """What the page says while the app waits for its GCU: the client's failed open
+    attempts since it last came up (its ``RETRYING`` link events) and the last one's
+    detail."""
+
+    def __init__(self, gcu: GcuClient) -> None:
+        self.gcu = gcu
+        self.count = 0
+        self.last: str | None = None
+        gcu.on_link_change(self._event)
+
+    def _event(self, event: LinkEvent) -> None:
+        if event.kind is LinkEventKind.RETRYING:
+            self.count += 1
+            self.last = event.detail
+        elif event.kind is LinkEventKind.UP:
+            self.count, self.last = 0, None
+
+    def json(self) -> dict[str, Any]:
+        """``state`` (the client's: ``opening``, ``open``, ``failed``, ``closed``), ``url``,
+        failed ``attempts`` and ``last_error`` (the last attempt's, or why it failed)."""
+        gcu = self.gcu
+        failed = gcu.state is ClientState.FAILED
+        return {"state": gcu.state.value, "url": gcu.transport.url, "attempts": self.count,
+                "last_error": gcu.failure if failed else self.last}  # fmt: skip
+
+    def describe(self) -> str:
+        """One line for an error message: what the app waits for, or why it stopped."""
+        gcu = self.gcu
+        if gcu.state is ClientState.FAILED:
+            return f"the client of the GCU at {gcu.transport.url} failed: {gcu.failure}"
+        text = f"waiting for the GCU at {gcu.transport.url}"
+        if self.count:
+            text += f" ({self.count} failed attempt{'s' if self.count != 1 else ''}"
+            text += f"; {self.last})" if self.last else ")"
+        return text

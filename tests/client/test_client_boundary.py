@@ -631,8 +631,10 @@ def _client_options(owner: str, build: Callable[[dict[str, Any]], GcuClient],
         opt(name, "real", valid=(5e-324, 1.0, 1e300),
             read=lambda rig, c, n=name: getattr(c, n) if n == "connect_timeout"
             else getattr(c.session, n), **positive)  # fmt: skip
-    opt("open_timeout", "real", optional=True, valid=(None, 5e-324, 1.0, 1e300),
-        read=lambda rig, c: c.open_timeout, **positive)
+    opt("open_timeout", "real", optional=True, valid=(None, 5e-324, 1.0, 1e300, INF),
+        read=lambda rig, c: c.open_timeout, **positive)  # inf: until closed
+    opt("wait", "bool", valid=(True, False), read=lambda rig, c: c.wait)
+    opt("restore", "bool", valid=(True, False), read=lambda rig, c: c.restore)
     opt("reorder_guard", "real", low=0.0, optional=True, valid=(None, 0.0, 0.015, 1e300),
         read=lambda rig, c: c.reorder_guard,
         expected=lambda v: default_guard if v is None else v)  # fmt: skip
@@ -785,7 +787,7 @@ def misuse(p: P) -> list[Case]:
     cases = [Case(p, v, type_error) for v in wrong]
     if p.kind in ("int", "enum", "real"):
         range_error = ValueError if p.transport else FieldRangeError
-        cases += [Case(p, v, range_error) for v in _outside(p)]
+        cases += [Case(p, v, range_error) for v in _outside(p) if v not in p.valid]
     cases += [Case(p, v, ValueError) for v in p.bad]
     return cases
 

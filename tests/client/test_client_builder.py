@@ -256,6 +256,7 @@ SURFACE = {
         "call (self, transport: 'Transport', *, rate_hz: 'float' = 50.0, "
         "command_timeout: 'float' = 2.0, queue_timeout: 'float' = 30.0, "
         "connect_timeout: 'float' = 3.0, open_timeout: 'float | None' = None, "
+        "wait: 'bool' = True, restore: 'bool' = False, "
         "silence_timeout: 'float' = 1.0, check_support: 'bool' = False, "
         "reorder_guard: 'float | None' = None, aircraft_timeout: 'float' = 1.0, "
         "version: 'int' = 2, clock: 'Callable[[], float]' = <built-in function monotonic>, "
@@ -304,6 +305,7 @@ SURFACE = {
     "gaze_at": (
         "await (self, latitude: 'float', longitude: 'float', altitude: 'float') -> 'Feedback'"
     ),
+    "failure": "property",
     "info": "property",
     "ins_valid": "property",
     "link": "property",
@@ -375,6 +377,7 @@ SURFACE = {
     "start_recording": (
         "await (self, *, cameras: 'int' = <CameraMask.CAMERA_1: 1>) -> 'Feedback | None'"
     ),
+    "restore": "property",
     "state": "property",
     "status": "property",
     "stop_recording": (

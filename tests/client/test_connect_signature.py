@@ -31,7 +31,8 @@ def test_connect_has_the_clients_keyword_arguments() -> None:
 def test_every_client_keyword_goes_to_the_client() -> None:
     values: dict[str, Any] = {
         "rate_hz": 40.0, "command_timeout": 1.5, "queue_timeout": 9.0, "connect_timeout": 0.5,
-        "open_timeout": 4.0, "silence_timeout": 0.75, "check_support": True,
+        "open_timeout": 4.0, "wait": False, "restore": True, "silence_timeout": 0.75,
+        "check_support": True,
         "reorder_guard": 0.02, "aircraft_timeout": 2.0, "version": 1, "max_zoom": 30.0,
     }  # fmt: skip
     gcu = connect("udp://127.0.0.1:4000", local_port=0, **values)

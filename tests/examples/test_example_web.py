@@ -9,7 +9,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import math
-import re
 import sys
 import time
 from collections.abc import AsyncIterator
@@ -49,7 +48,6 @@ if str(ROOT) not in sys.path:  # the examples live beside src/, not inside the p
 
 from examples.web.app import create_app  # noqa: E402
 from examples.web.commands import COMMANDS  # noqa: E402
-from examples.web.connection import ConnectionState  # noqa: E402
 
 
 @pytest.fixture
@@ -84,8 +82,7 @@ async def test_status_reports_the_simulated_gimbal(web: Web) -> None:
     assert link["packets_received"] > 0
     assert link["crc_errors"] == 0
     connection = status["connection"]
-    assert (connection["state"], connection["url"]) == ("connected", web.sim.url)
-    assert connection["connects"] == 1
+    assert (connection["state"], connection["url"]) == ("open", web.sim.url)
     assert (connection["attempts"], connection["last_error"]) == (0, None)
     assert status["aircraft_heading"] is None  # the app sends no aircraft state of its own
     # raw wire integers beside the units
@@ -496,21 +493,20 @@ async def _no_subscribers(gcu: GcuClient) -> bool:
 
 
 # -- lifecycle ----------------------------------------------------------------------------
-FAST_RETRY: dict[str, Any] = {"connect_timeout": 0.3, "retry_initial": 0.1, "retry_max": 0.2}
-"""Client and retry options that make each failed start-up attempt short."""
+FAST_RETRY: dict[str, Any] = {"connect_timeout": 0.3}
+"""Client options that make each failed start-up attempt short."""
 
 
 async def test_app_starts_before_the_gcu_and_connects_when_it_answers(gcu_sim: SimHandle) -> None:
     gcu_sim.silence(60.0)  # the GCU is off: nothing answers
     async with running_web(gcu_sim.url, gcu_sim, wait_connected=False, **FAST_RETRY) as web:
-        connection = web.connection
         await eventually(lambda: _attempts_at_least(web, 2), what="two failed attempts")
         # the app is up and says what it waits for
         response = await web.http.get("/api/status")
         assert response.status_code == 503
         body = response.json()
         assert body["kind"] == "NotConnected"
-        assert body["connection"]["state"] == "waiting"
+        assert body["connection"]["state"] == "opening"
         assert body["connection"]["url"] == gcu_sim.url
         assert body["connection"]["attempts"] >= 2
         assert "no reply from the GCU within 0.3 s" in body["connection"]["last_error"]
@@ -523,26 +519,26 @@ async def test_app_starts_before_the_gcu_and_connects_when_it_answers(gcu_sim: S
         async with ws_connect(web.ws_url) as ws:
             message = await next_message(ws)
             assert message["type"] == "link"
-            assert message["connection"]["state"] == "waiting"
+            assert message["connection"]["state"] == "opening"
             assert message["link"]["up"] is False
             gcu_sim.silence(0)  # powered on: the same socket starts carrying telemetry
-            deadline = time.monotonic() + 5.0
+            deadline = time.monotonic() + 10.0
             while (message := await next_message(ws))["type"] != "telemetry":
-                assert message["connection"]["state"] == "waiting"
+                assert message["connection"]["state"] == "opening"
                 assert time.monotonic() < deadline, "no telemetry after the GCU came up"
-            assert message["connection"]["state"] == "connected"
+            assert message["connection"]["state"] == "open"
             assert message["link"]["up"] is True
             assert message["pod"]["model"] == "D-90Pro(TA)"
-        assert connection.connected and connection.connects == 1
+        assert web.gcu.state is ClientState.OPEN
         status = await web.status()
-        assert status["connection"]["state"] == "connected"
-        assert status["connection"]["last_error"] is None
+        assert status["connection"]["state"] == "open"
+        assert (status["connection"]["attempts"], status["connection"]["last_error"]) == (0, None)
         assert (await web.command("take_photo")).status_code == 200
         assert gcu_sim.simulator.model.executions[Opcode.TAKE_PHOTO] == 1
 
 
 async def _attempts_at_least(web: Web, n: int) -> bool:
-    return web.connection.attempts >= n
+    return web.attempts.count >= n
 
 
 async def test_app_waits_for_a_gcu_powered_later() -> None:
@@ -552,11 +548,11 @@ async def test_app_waits_for_a_gcu_powered_later() -> None:
     url = f"udp://127.0.0.1:{port}"
     async with running_web(url, None, wait_connected=False, **FAST_RETRY) as web:
         await eventually(lambda: _attempts_at_least(web, 2), what="two failed attempts")
-        assert not web.connection.connected
+        assert web.gcu.state is ClientState.OPENING
         assert (await web.http.get("/api/status")).status_code == 503
         sim = GcuSimulator()
         async with sim.serve_udp("127.0.0.1", port):
-            assert await web.connection.wait_connected(5.0), web.connection.snapshot()
+            await web.wait_open(10.0)
             status = await web.status()
             assert status["pod"]["model"] == "D-90Pro(TA)"
             assert status["link"]["up"] is True
@@ -565,28 +561,33 @@ async def test_app_waits_for_a_gcu_powered_later() -> None:
 
 
 @pytest.mark.parametrize("gcu_sim_transport", ["tcp"])
-async def test_client_is_reopened_when_its_transport_gives_up(gcu_sim: SimHandle) -> None:
-    # without reconnect, a TCP transport stays down after a loss: the app reopens the client
+async def test_a_client_whose_transport_gave_up_is_reported_failed(gcu_sim: SimHandle) -> None:
+    # without reconnect, a TCP transport gives up at its first loss: the client fails, and
+    # the page and the API say why until the app is restarted
     url = gcu_sim.url + "?reconnect=false"
     async with running_web(url, gcu_sim, **FAST_RETRY) as web:
-        connection = web.connection
-        assert (connection.connects, connection.reopens) == (1, 0)
-        assert gcu_sim.kill_connection()
-
-        async def reopened() -> bool:
-            return connection.reopens == 1 and connection.connected
-
-        await eventually(reopened, timeout=5.0, what="the client reopened")
-        assert connection.connects == 2
-        assert web.gcu.transport.connected
-        assert (await web.command("take_photo")).status_code == 200
-        assert gcu_sim.simulator.model.executions[Opcode.TAKE_PHOTO] == 1
+        async with ws_connect(web.ws_url) as ws:
+            assert (await next_message(ws))["type"] == "telemetry"
+            assert gcu_sim.kill_connection()
+            deadline = time.monotonic() + 5.0
+            while (message := await next_message(ws))["type"] != "link" or (
+                    message["connection"]["state"] != "failed"):  # fmt: skip
+                assert time.monotonic() < deadline, "the socket never said the client failed"
+            assert "reconnect is off" in message["connection"]["last_error"]
+            assert message["link"]["up"] is False
+        response = await web.http.get("/api/status")
+        assert response.status_code == 503
+        body = response.json()
+        assert body["connection"]["state"] == "failed"
+        assert body["error"].startswith(f"the client of the GCU at {gcu_sim.url} failed: ")
+        response = await web.command("take_photo")
+        assert (response.status_code, response.json()["outcome"]) == (503, "not sent")
+        assert gcu_sim.simulator.model.executions[Opcode.TAKE_PHOTO] == 0
 
 
 async def test_app_stops_cleanly_while_waiting(gcu_sim: SimHandle) -> None:
     gcu_sim.silence(60.0)
     async with running_web(gcu_sim.url, gcu_sim, wait_connected=False, **FAST_RETRY) as web:
-        connection = web.connection
         ws = await ws_connect(web.ws_url)
         assert (await next_message(ws))["type"] == "link"
         await eventually(lambda: _attempts_at_least(web, 1), what="a failed attempt")
@@ -597,7 +598,6 @@ async def test_app_stops_cleanly_while_waiting(gcu_sim: SimHandle) -> None:
         assert info.value.rcvd.code in (1001, 1012), info.value.rcvd
     finally:
         await ws.close()
-    assert connection.state is ConnectionState.STOPPED
     assert web.gcu.state is ClientState.CLOSED
     assert not web.gcu.transport.connected
 
@@ -634,22 +634,6 @@ def test_create_app_rejects_a_bad_rate() -> None:
     for hz in (0.0, -1.0, 51.0):
         with pytest.raises(ValueError, match="telemetry_hz"):
             create_app("udp://127.0.0.1:2337", telemetry_hz=hz)
-
-
-@pytest.mark.parametrize(
-    ("options", "message"),
-    [
-        ({"retry_initial": 0.0}, "retry_initial: 0.0 is outside the allowed range (0, inf) s"),
-        ({"retry_initial": -1}, "retry_initial: -1 is outside the allowed range"),
-        ({"retry_max": math.nan}, "retry_max: expected a finite number of seconds > 0, got nan"),
-        ({"retry_initial": "1"}, "retry_initial: expected a finite number"),
-        ({"retry_initial": 2.0, "retry_max": 1.0},
-         "retry_max: 1.0 is outside the allowed range [retry_initial = 2.0, inf) s"),
-    ],
-)  # fmt: skip
-def test_create_app_rejects_bad_retry_delays(options: dict[str, Any], message: str) -> None:
-    with pytest.raises(ValueError, match=re.escape(message)):
-        create_app("udp://127.0.0.1:2337", **options)
 
 
 def test_create_app_rejects_a_bad_url_at_once() -> None:

@@ -285,7 +285,7 @@ async def test_outage_marks_values_stale_and_disables_commands(
 async def test_page_waits_for_a_gcu_powered_later(browser: Any, tmp_path: Path) -> None:
     port = free_udp_port()
     url = f"udp://127.0.0.1:{port}"
-    options: dict[str, Any] = {"connect_timeout": 0.3, "retry_initial": 0.1, "retry_max": 0.3}
+    options: dict[str, Any] = {"connect_timeout": 0.3}
     async with running_web(url, None, wait_connected=False, **options) as web:
         page = await open_page(browser, web, PHONE)
         await page.until("document.body.dataset.link === 'waiting'")

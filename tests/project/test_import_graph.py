@@ -20,14 +20,15 @@ SRC = ROOT / "src"
 PACKAGE = "gcu_async"
 DOC = ROOT / "docs" / "architecture.md"
 
-FOUNDATION = frozenset({"errors", "_checks", "_lifecycle"})
-"""The bottom layer every unit may import: the exceptions, the argument checks and the
-open/close lifecycle. ``errors`` imports nothing of the package; ``_checks`` only ``errors``;
-``_lifecycle`` nothing."""
+FOUNDATION = frozenset({"errors", "_checks", "_lifecycle", "_lograte"})
+"""The bottom layer every unit may import: the exceptions, the argument checks, the
+open/close lifecycle and rate-limited logging. ``errors`` imports nothing of the package;
+``_checks`` only ``errors``; ``_lifecycle`` and ``_lograte`` nothing."""
 
 ALLOWED: Mapping[str, frozenset[str]] = {
     "errors": frozenset(),
     "_lifecycle": frozenset(),
+    "_lograte": frozenset(),
     "_checks": frozenset({"errors"}),
     "protocol": FOUNDATION,
     "session": FOUNDATION | {"protocol"},

@@ -442,7 +442,7 @@ async def test_reopening_gives_up_after_its_bounds_and_close_stops_it(tmp_path: 
         await t.open()
         pty.close(pty.controller)
         await rec.wait_events(2)
-        assert rec.kinds() == [LinkEventKind.LOST, LinkEventKind.LOST]
+        assert rec.kinds() == [LinkEventKind.LOST, LinkEventKind.GAVE_UP]
         assert rec.events[1].detail.startswith("giving up after 3 reconnect attempts")
         assert not t.reconnecting
         await t.close()

@@ -212,7 +212,7 @@ async def test_gives_up_after_max_attempts(servers: list[Server]) -> None:
     await server.wait_connected()
     await server.stop()
     await rec.wait_events(2)
-    assert rec.kinds() == [LinkEventKind.LOST, LinkEventKind.LOST]
+    assert rec.kinds() == [LinkEventKind.LOST, LinkEventKind.GAVE_UP]
     final = rec.events[1].detail
     assert final.startswith("giving up after 3 reconnect attempts")
     assert "cannot connect" in final
@@ -237,6 +237,7 @@ async def test_gives_up_after_max_total(servers: list[Server]) -> None:
     await server.wait_connected()
     await server.stop()
     await rec.wait_events(2)
+    assert rec.kinds() == [LinkEventKind.LOST, LinkEventKind.GAVE_UP]
     assert rec.events[1].detail.startswith("giving up")
     elapsed = rec.event_times[1] - rec.event_times[0]
     # no attempt starts once the next sleep would end past the deadline (cap 0.02 s)
@@ -266,7 +267,8 @@ async def test_close_during_reconnect_leaves_no_task(servers: list[Server]) -> N
     await t.close()
 
 
-async def test_without_reconnect_stays_down_until_reopened(servers: list[Server]) -> None:
+async def test_without_reconnect_gives_up_at_once_and_stays_down_until_reopened(
+        servers: list[Server]) -> None:  # fmt: skip
     server = await start(servers)
     port = server.port
     t = TcpTransport(LOOP, port, reconnect=False)
@@ -274,8 +276,9 @@ async def test_without_reconnect_stays_down_until_reopened(servers: list[Server]
     await t.open()
     await server.wait_connected()
     await server.stop()
-    await rec.wait_events(1)
-    assert rec.kinds() == [LinkEventKind.LOST]
+    await rec.wait_events(2)
+    assert rec.kinds() == [LinkEventKind.LOST, LinkEventKind.GAVE_UP]
+    assert rec.events[1].detail == f"giving up at once: reconnect is off ({t.url})"
     assert not t.reconnecting
     assert other_tasks() == set()
     with pytest.raises(LinkLost):
@@ -310,12 +313,17 @@ def test_backoff_ceilings_and_full_jitter() -> None:
         ({"cap": 0.01}, r"backoff_cap: 0\.01 is smaller than backoff_base 0\.05"),
         ({"max_attempts": 0}, r"max_attempts: 0 is out of range"),
         ({"max_total": -1.0}, r"max_total: -1\.0 is out of range"),
-        ({"max_attempts": None}, r"at least one must be set"),
     ],
 )
 def test_backoff_validation(kwargs: dict[str, Any], message: str) -> None:
     with pytest.raises(ValueError, match=message):
         Backoff(**kwargs)
+
+
+def test_backoff_is_unbounded_unless_asked() -> None:
+    assert (Backoff().max_attempts, Backoff().max_total, Backoff().bounded) == (None, None, False)
+    assert Backoff(max_attempts=None, max_total=None) == Backoff()
+    assert Backoff(max_attempts=3).bounded and Backoff(max_total=60.0).bounded
 
 
 def test_constructor_validation() -> None:

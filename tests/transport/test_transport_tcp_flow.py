@@ -245,15 +245,16 @@ async def test_reset_inside_a_data_handler(peer: SilentPeer) -> None:
     await t.close()
 
 
-async def test_reset_without_reconnect_stays_down(peer: SilentPeer) -> None:
+async def test_reset_without_reconnect_gives_up_and_stays_down(peer: SilentPeer) -> None:
     t = TcpTransport(LOOP, peer.port, reconnect=False)
     rec = Recorder(t)
     await t.open()
     conn = await peer.accept()
     t.reset("done")
-    await rec.wait_events(1)
+    assert rec.kinds() == []  # the events follow via call_soon, never from inside reset()
+    await rec.wait_events(2)
     await asyncio.sleep(0.05)
-    assert rec.kinds() == [LinkEventKind.LOST]
+    assert rec.kinds() == [LinkEventKind.LOST, LinkEventKind.GAVE_UP]
     assert not t.reconnecting
     assert other_tasks() == set()
     assert isinstance(read_available(conn)[1], ConnectionResetError)

@@ -99,6 +99,21 @@ def test_tcp_options_from_query_and_keywords() -> None:
     assert t.backoff == Backoff(max_attempts=5)
     assert t.connect_timeout == 2.0
     assert t.reconnect is True
+    t = open_transport("tcp://127.0.0.1?max_attempts=none&max_total=none")
+    assert isinstance(t, TcpTransport)
+    assert t.backoff == Backoff() and not t.backoff.bounded  # reconnects until closed
+
+
+@pytest.mark.parametrize("url", ["udp://127.0.0.1:2337", "serial:///dev/ttyUSB0"])
+def test_every_transport_takes_the_reconnect_options(url: str) -> None:
+    """Serial and UDP restore a lost link as TCP does, with the same options."""
+    rng = random.Random(1)
+    t = open_transport(f"{url}?reconnect=0&backoff_cap=4&max_attempts=3&max_total=none",
+                       rng=rng)  # fmt: skip
+    assert isinstance(t, (UdpTransport, SerialTransport))
+    assert t.backoff == Backoff(cap=4.0, max_attempts=3)
+    assert t._reopen.enabled is False
+    assert open_transport(url).backoff == Backoff()
 
 
 @pytest.mark.parametrize(
@@ -142,7 +157,6 @@ def test_tcp_options_from_query_and_keywords() -> None:
         ("tcp://127.0.0.1?connect_timeout=-1", {}, "connect_timeout: -1.0 is out of range"),
         ("tcp://127.0.0.1?backoff_factor=0.5", {}, "backoff_factor: 0.5 is out of range"),
         ("tcp://127.0.0.1?max_attempts=0", {}, "max_attempts: 0 is out of range"),
-        ("tcp://127.0.0.1?max_attempts=none", {}, "max_attempts, max_total: at least one"),
         ("tcp://127.0.0.1", {"rng": 4}, "rng: 4 is not a random.Random"),
         ("serial://dev/ttyUSB0", {}, "device: host part 'dev' is not allowed"),
         ("serial:", {}, "device: missing"),

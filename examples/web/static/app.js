@@ -55,8 +55,9 @@ function drawInstruments() {
 }
 
 // -- link state: up (live values, commands enabled) or not (stale values, commands off) --
-// view: "connecting" (page loading), "waiting" (the app's client is not open: no GCU yet),
-// "down" (the client is open but no replies arrive), "up", "offline" (no telemetry socket).
+// view: "connecting" (page loading), "waiting" (the app's client is not open: no GCU yet,
+// or the client failed), "down" (the client is open but no replies arrive), "up",
+// "offline" (no telemetry socket).
 let view = "connecting";
 let lastTelemetry = null; // performance.now() of the last telemetry message
 
@@ -75,6 +76,7 @@ function linkText(next, link, connection, note) {
   if (next === "up") return `link up · ${link.reply_rate.toFixed(0)} replies/s`;
   if (next === "down") return `link DOWN — no reply ${ago(link ? link.last_reply_age : null)}`;
   if (next === "waiting") {
+    if (connection.state === "failed") return "client failed";
     const tries = connection.attempts ? ` · attempt ${connection.attempts + 1}` : "";
     return `waiting for the GCU${tries}`;
   }
@@ -84,8 +86,11 @@ function linkText(next, link, connection, note) {
 function noticeText(next, connection) {
   if (next === "waiting") {
     let text = `Waiting for the GCU at ${connection.url}: it has not answered yet`;
-    if (connection.last_error) text += ` (${connection.last_error})`;
-    if (connection.retry_in !== null) text += `; next try in ${connection.retry_in.toFixed(1)} s`;
+    if (connection.state === "failed") {
+      text = `The client of the GCU at ${connection.url} stopped: ${connection.last_error}`;
+    } else if (connection.last_error) {
+      text += ` (${connection.last_error})`;
+    }
     return `${text}. Commands are disabled; ${lastUpdate()}.`;
   }
   if (next === "down") {
@@ -128,7 +133,7 @@ function setView(next, link = null, connection = null, note = "") {
 
 // A server message's link state: the client must be open and its link up.
 function applyLink(link, connection) {
-  if (connection && connection.state !== "connected") setView("waiting", link, connection);
+  if (connection && connection.state !== "open") setView("waiting", link, connection);
   else if (link && link.up) setView("up", link, connection);
   else setView("down", link, connection);
 }

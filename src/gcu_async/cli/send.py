@@ -267,12 +267,16 @@ async def _run_command(client: GcuClient, inv: Invocation) -> tuple[Any, dict[st
             if inv.spec.angle_target and _arrived(gcu, inv.spec.build(inv.values)[1]):
                 break
             await asyncio.sleep(0.05)
-        return feedback, {"attitude_deg": gcu.status.attitude._asdict(),
-                          "mode": gcu.status.mode.name}  # fmt: skip
+        status = gcu.status  # the command's feedback came with a reply: never None here
+        assert status is not None
+        return feedback, {"attitude_deg": status.attitude._asdict(),
+                          "mode": status.mode.name}  # fmt: skip
 
 
 def _arrived(gcu: GcuClient, targets: dict[str, Any]) -> bool:
     """The camera is within 0.5° of the pitch and yaw given (those left out: any)."""
+    if gcu.status is None:
+        return False
     att = gcu.status.attitude
     pitch, yaw = targets.get("pitch"), targets.get("yaw")
     return (pitch is None or abs(att.pitch - float(pitch)) < 0.5) and (

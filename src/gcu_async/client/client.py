@@ -36,6 +36,7 @@ from gcu_async._checks import (
     type_error,
 )
 from gcu_async._lifecycle import OpenClose
+from gcu_async._lograte import LogLimiter
 from gcu_async.capture.writer import PacketCapture
 from gcu_async.client.driver import ENDED, ClientState, Driver
 from gcu_async.client.telemetry import Callbacks, Telemetry
@@ -46,7 +47,7 @@ from gcu_async.client.waiting import (
     Predicate,
     Waiting,
 )
-from gcu_async.errors import ClientStateError, GcuError, LinkLost
+from gcu_async.errors import ClientStateError, LinkLost
 from gcu_async.protocol import commands as c
 from gcu_async.protocol.aircraft import AircraftState, aircraft_update
 from gcu_async.protocol.builder import Submission, angles, build, rates
@@ -91,8 +92,10 @@ LinkCallback = Callable[[LinkEvent], None]
 TelemetryCallback = Callable[[TelemetrySample], None]
 
 
-OPEN_BACKOFF = Backoff(base=0.25, factor=2.0, cap=5.0, max_attempts=None, max_total=1e9)
-"""Delays between the attempts of :meth:`GcuClient.open` with ``open_timeout``."""
+OPEN_BACKOFF = Backoff(base=0.25, factor=2.0, cap=5.0)
+"""Delays between the attempts of :meth:`GcuClient.open` (``open_timeout``, ``wait=False``)."""
+OPEN_ATTEMPT_LOG_WINDOW = 60.0
+"""Seconds between two log lines of failed open attempts (a GCU away for hours)."""
 
 
 class GcuClient(OpenClose):
@@ -100,10 +103,12 @@ class GcuClient(OpenClose):
 
     ``async with GcuClient(transport) as gcu:`` opens the transport, starts the heartbeat,
     waits up to ``connect_timeout`` for the first reply and, on exit, ends pending commands,
-    stops the heartbeat and closes the transport. A closed client can be opened again;
-    opening one that is open (or opening) raises :class:`ClientStateError` (a
-    ``RuntimeError``) naming its state. ``gcu = await connect(url)`` opens it too (then close
-    it yourself: ``await gcu.close()``).
+    stops the heartbeat and closes the transport. With ``wait=False`` it returns at once and
+    brings the link up in the background. Once open, the client keeps the link up through
+    outages of any length by itself (docs/client.md, "Lifecycle"). A closed (or failed)
+    client can be opened again; opening one that is open (or opening) raises
+    :class:`ClientStateError` (a ``RuntimeError``) naming its state. ``gcu = await
+    connect(url)`` opens it too (then close it yourself: ``await gcu.close()``).
 
     Args:
         transport: any :class:`~gcu_async.transport.Transport` (not yet opened).
@@ -113,10 +118,20 @@ class GcuClient(OpenClose):
             packet to its feedback (:class:`CommandTimeout`, outcome ``UNKNOWN``).
         queue_timeout: default seconds a command may wait before its first packet
             (:class:`CommandTimeout`, outcome ``NOT_SENT``).
-        connect_timeout: seconds to wait for the first reply when opening.
-        open_timeout: keep retrying :meth:`open` (backoff 0.25–5 s, full jitter) until this
-            many seconds have passed, e.g. to start before the GCU is powered; each failed
-            attempt is a ``RETRYING`` link event. ``None`` (default): one attempt.
+        connect_timeout: seconds an open attempt waits for the first reply.
+        open_timeout: keep retrying the open attempts (backoff 0.25–5 s, full jitter) until
+            this many seconds have passed (``math.inf``: until closed), e.g. to start
+            before the GCU is powered; each failed attempt is a ``RETRYING`` link event.
+            ``None`` (default): one attempt with ``wait=True``, no limit with
+            ``wait=False``.
+        wait: ``True`` (default): :meth:`open` returns once the GCU answered, or raises.
+            ``False``: :meth:`open` returns at once (``state`` ``OPENING``) and the attempts
+            run in the background until the GCU answers (``UP`` link event, ``state``
+            ``OPEN``), the client is closed, or ``open_timeout`` runs out (``GAVE_UP``,
+            ``state`` ``FAILED``). Commands fail at once (``NOT_SENT``) until then.
+        restore: after the GCU restarted (a ``RESTARTED`` link event), re-apply the mode it
+            had confirmed last, with its control values, and camera 1's zoom
+            (docs/client.md, "GCU restarts"). Default ``False``: only report it.
         silence_timeout: seconds without a reply after which the link counts as lost (more
             than the heartbeat period).
         check_support: refuse commands the pod model does not support (Appendix 8) once the
@@ -146,6 +161,8 @@ class GcuClient(OpenClose):
         queue_timeout: float = 30.0,
         connect_timeout: float = 3.0,
         open_timeout: float | None = None,
+        wait: bool = True,
+        restore: bool = False,
         silence_timeout: float = 1.0,
         check_support: bool = False,
         reorder_guard: float | None = None,
@@ -176,10 +193,12 @@ class GcuClient(OpenClose):
         self.transport = transport
         self.session = session
         self.connect_timeout = check_positive("connect_timeout", connect_timeout)
-        self.open_timeout = (None if open_timeout is None
+        self.open_timeout = (open_timeout if open_timeout is None or open_timeout == math.inf
                              else check_positive("open_timeout", open_timeout))  # fmt: skip
-        self._open_abort: asyncio.Event | None = None
-        self._between_attempts = False
+        self.wait = check_bool("wait", wait)
+        """Whether :meth:`open` waits for the GCU's first reply (the ``wait`` option)."""
+        restore = check_bool("restore", restore)
+        self._opener: asyncio.Task[None] | None = None
         self._rng = random.Random()
         check_support = check_bool("check_support", check_support)
         max_zoom = (None if max_zoom is None
@@ -189,11 +208,14 @@ class GcuClient(OpenClose):
             warnings.warn(f"rate_hz={rate:g}: the protocol advises 30-50 Hz host packets",
                           stacklevel=_caller_stacklevel())  # fmt: skip
         self._clock = clock
+        self._logs = LogLimiter(log, burst=1, window=OPEN_ATTEMPT_LOG_WINDOW, clock=clock,
+                                name=transport.url)  # fmt: skip
         session.telemetry = False
         self._telemetry = Telemetry(self._consumed)
         self._links: Callbacks[LinkEvent] = Callbacks("link")
         self._driver = Driver(session, transport, clock, self._telemetry, self._links,
-                              check_support=check_support, max_zoom=max_zoom)  # fmt: skip
+                              check_support=check_support, max_zoom=max_zoom,
+                              restore=restore)  # fmt: skip
         self._waiting = Waiting(self._driver, self._telemetry, self._links)
 
     def _consumed(self, consumed: bool) -> None:
@@ -208,6 +230,21 @@ class GcuClient(OpenClose):
     @check_support.setter
     def check_support(self, value: bool) -> None:
         self._driver.check_support = check_bool("check_support", value)
+
+    @property
+    def restore(self) -> bool:
+        """Restore the mode and zoom after a GCU restart (the ``restore`` option)."""
+        return self._driver.restore
+
+    @restore.setter
+    def restore(self, value: bool) -> None:
+        self._driver.restore = check_bool("restore", value)
+
+    @property
+    def failure(self) -> str | None:
+        """Why the client is :attr:`~ClientState.FAILED` (the ``GAVE_UP`` event's detail);
+        ``None`` in every other state."""
+        return self._driver.failure
 
     @property
     def telemetry_dropped(self) -> int:
@@ -259,67 +296,93 @@ class GcuClient(OpenClose):
         """Open the transport, start the heartbeat, wait for the first reply.
 
         Raises :class:`LinkLost` if the transport cannot open or no reply comes within
-        ``connect_timeout`` (everything is closed again), ``RuntimeError`` if the client is
-        not closed. With ``open_timeout``, failed attempts are retried with backoff until
-        that many seconds have passed (docs/client.md, "Lifecycle"); :meth:`close` stops
-        the retries (``LinkLost``)."""
+        ``connect_timeout`` (everything is closed again), ``RuntimeError`` unless the client
+        is closed or failed. With ``open_timeout``, failed attempts are retried with
+        backoff until that many seconds have passed; :meth:`close` stops them
+        (``LinkLost``). With ``wait=False`` it returns at once and the attempts run in the
+        background (docs/client.md, "Lifecycle")."""
         driver = self._driver
-        if driver.state is not ClientState.CLOSED:
+        if driver.state not in (ClientState.CLOSED, ClientState.FAILED):
             raise ClientStateError(
                 f"GcuClient is {driver.state.value}: a client is reusable but not reentrant "
                 "(close it before opening it again; `async with` does both)",
                 state=driver.state.value,
             )
-        if self.open_timeout is None:
-            await driver.open_once(self.connect_timeout)
+        driver.begin()
+        if not self.wait:
+            log.info("opening %s (in the background)", self.transport.url)
+            self._opener = asyncio.get_running_loop().create_task(
+                self._open_in_background(), name=f"gcu_async open {self.transport.url}")
             return
-        loop = asyncio.get_running_loop()
-        deadline = loop.time() + self.open_timeout
-        self._open_abort = abort = asyncio.Event()
-        attempts = 0
+        log.info("opening %s", self.transport.url)
         try:
-            while True:
-                try:
-                    await driver.open_once(self.connect_timeout)
-                    return
-                except LinkLost as exc:
-                    attempts += 1
-                    delay = OPEN_BACKOFF.delay(attempts - 1, self._rng)
-                    if abort.is_set():
-                        raise LinkLost(f"{self.transport.url}: closed while opening") from exc
-                    delay = min(delay, deadline - loop.time())  # the last try at the end
-                    if delay <= 0:
-                        raise LinkLost(
-                            f"{self.transport.url}: no GCU within open_timeout "
-                            f"{self.open_timeout:g} s ({attempts} attempts; last: {exc})"
-                        ) from exc
-                    log.info("%s: attempt %d failed (%s); next in %.2f s",
-                             self.transport.url, attempts, exc, delay)  # fmt: skip
-                    self._links.emit(LinkEvent(
-                        LinkEventKind.RETRYING,
-                        f"attempt {attempts} failed: {exc}; next in {delay:.2f} s"))  # fmt: skip
-                    driver.state = ClientState.OPENING  # not reentrant while it waits
-                    self._between_attempts = True
-                    try:
-                        with contextlib.suppress(asyncio.TimeoutError):
-                            await asyncio.wait_for(abort.wait(), delay)
-                    finally:
-                        self._between_attempts = False
-                        driver.state = ClientState.CLOSED
-                    if abort.is_set():
-                        raise LinkLost(f"{self.transport.url}: closed while opening") from exc
-        finally:
-            self._open_abort = None
+            await self._attempts()
+        except BaseException:
+            await driver.shutdown("open failed")
+            raise
+
+    async def _attempts(self) -> None:
+        """Open attempts until one succeeds (``OPEN``); :class:`LinkLost` when the client
+        closes meanwhile, when ``open_timeout`` runs out, or, without it and with ``wait``,
+        when the one attempt fails."""
+        driver = self._driver
+        limit = self.open_timeout
+        if limit is None and not self.wait:
+            limit = math.inf
+        loop = asyncio.get_running_loop()
+        deadline = None if limit is None else loop.time() + limit
+        closed = driver.closed_event
+        assert closed is not None
+        attempts = 0
+        while True:
+            try:
+                await driver.open_once(self.connect_timeout)
+                return
+            except LinkLost as exc:
+                attempts += 1
+                if driver.state is not ClientState.OPENING or closed.is_set():
+                    raise LinkLost(f"{self.transport.url}: closed while opening") from exc
+                if deadline is None:
+                    raise
+                delay = min(OPEN_BACKOFF.delay(attempts - 1, self._rng), deadline - loop.time())
+                if delay <= 0:  # the last try was at the end
+                    raise LinkLost(
+                        f"{self.transport.url}: no GCU within open_timeout {limit:g} s "
+                        f"({attempts} attempts; last: {exc})"
+                    ) from exc
+                self._logs.log(logging.INFO, "failed open attempt",
+                               "%s: attempt %d failed (%s); next in %.2f s",
+                               self.transport.url, attempts, exc, delay)  # fmt: skip
+                self._links.emit(LinkEvent(
+                    LinkEventKind.RETRYING,
+                    f"attempt {attempts} failed: {exc}; next in {delay:.2f} s"))  # fmt: skip
+                with contextlib.suppress(asyncio.TimeoutError):
+                    await asyncio.wait_for(closed.wait(), delay)
+                if closed.is_set():
+                    raise LinkLost(f"{self.transport.url}: closed while opening") from exc
+
+    async def _open_in_background(self) -> None:
+        """``wait=False``: the attempts, until one succeeds or ``open_timeout`` runs out
+        (``GAVE_UP``, ``FAILED``); :meth:`close` cancels them."""
+        driver = self._driver
+        try:
+            await self._attempts()
+        except LinkLost as exc:
+            if driver.state is ClientState.OPENING:  # open_timeout ran out
+                self._links.emit(LinkEvent(LinkEventKind.GAVE_UP, str(exc)))
+                await driver.fail(str(exc))
+        except Exception as exc:  # a bug, not a missing GCU: say so, do not spin
+            log.exception("%s: opening in the background failed", self.transport.url)
+            await driver.fail(f"opening failed: {exc!r}")
 
     async def close(self) -> None:
-        """End pending commands (:class:`CommandLinkLost`), stop the heartbeat, end the
-        telemetry iterators and close the transport. Idempotent."""
-        if self._open_abort is not None:  # open() is retrying: stop it
-            self._open_abort.set()
-        if self._driver.state in ENDED:
-            return
-        if self._between_attempts:
-            return  # open() waits between attempts: nothing is open
+        """End pending commands (:class:`CommandLinkLost`), stop the heartbeat and the
+        background attempts, end the telemetry iterators and the waits, close the
+        transport. Idempotent; a failed client becomes closed."""
+        opener, self._opener = self._opener, None
+        if opener is not None and not opener.done():
+            opener.cancel()
+            await asyncio.wait({opener})
         await self._driver.shutdown("client closed")
 
     @property
@@ -416,17 +479,17 @@ class GcuClient(OpenClose):
 
     # -- telemetry -------------------------------------------------------------------------
     @property
-    def status(self) -> GcuMainFrame:
-        """The latest main frame (mode, pod status, angles, rates)."""
-        return self._driver.status()
+    def status(self) -> GcuMainFrame | None:
+        """The latest main frame (mode, pod status, angles, rates); ``None`` before the
+        first reply. While the link is down it is the last one received (``link.up``
+        says whether it is current)."""
+        return self.session.status
 
     @property
-    def info(self) -> GcuSubFrame:
-        """The latest sub frame (pod model, versions, zoom, ranging, flags)."""
-        info = self.session.info
-        if info is None:
-            raise GcuError("no reply with a sub frame from the GCU yet")
-        return info
+    def info(self) -> GcuSubFrame | None:
+        """The latest sub frame (pod model, versions, zoom, ranging, flags); ``None`` before
+        the first reply that carried one."""
+        return self.session.info
 
     @property
     def pod_model(self) -> PodModel | None:
@@ -447,7 +510,8 @@ class GcuClient(OpenClose):
     async def telemetry(self, maxsize: int = 1) -> AsyncGenerator[TelemetrySample, None]:
         """Iterate over replies as they arrive. The queue holds ``maxsize`` samples; when
         the consumer falls behind the oldest are dropped (counted in
-        ``telemetry_dropped``). Ends when the client closes."""
+        ``telemetry_dropped``). Ends when the client closes or fails; an iterator started
+        before the first reply (``wait=False``) waits for it."""
         samples = self._telemetry.samples(check_int("maxsize", maxsize, 1, sys.maxsize),
                                           self._driver.state in ENDED)  # fmt: skip
         async with contextlib.aclosing(samples):
@@ -459,9 +523,11 @@ class GcuClient(OpenClose):
         return self._telemetry.callbacks.add(callback)
 
     def on_link_change(self, callback: LinkCallback) -> Callable[[], None]:
-        """Call ``callback(LinkEvent)`` when the link is lost or restored, when the OS
-        reports an error on it (:attr:`~gcu_async.transport.LinkEventKind.ERROR`: once per
-        episode), when a new peer answers, and when :meth:`open` retries."""
+        """Call ``callback(LinkEvent)`` when the link comes up, is lost or restored, when the
+        GCU restarted, when the transport gave up, when the OS reports an error on it
+        (:attr:`~gcu_async.transport.LinkEventKind.ERROR`: once per episode), when a new
+        peer answers, and when an open attempt failed
+        (:class:`~gcu_async.transport.LinkEventKind` lists them)."""
         return self._links.add(callback)
 
     # -- commands --------------------------------------------------------------------------
@@ -539,13 +605,14 @@ class GcuClient(OpenClose):
     async def wait_link(self, up: bool = True, *, timeout: float = WAIT_TIMEOUT) -> None:
         """Return once the link is up (``up=False``: down); at once if it already is.
         :class:`~gcu_async.errors.WaitTimeout` after ``timeout`` seconds,
-        :class:`~gcu_async.errors.LinkLost` if the client closes meanwhile."""
+        :class:`~gcu_async.errors.LinkLost` if the client closes or fails meanwhile."""
         await self._waiting.wait_link(up, timeout=timeout)
 
     async def link_events(self) -> AsyncGenerator[LinkEvent, None]:
-        """Iterate over link events (lost, restored, an OS error, a new peer, a retried
-        open) from now on; ends when the client closes. Up to 256 unread events are kept
-        (the oldest go first)."""
+        """Iterate over link events (:class:`~gcu_async.transport.LinkEventKind`: up, lost,
+        restored, restarted, gave up, an OS error, a new peer, a failed open attempt) from
+        now on; ends when the client closes or fails. Up to 256 unread events are kept (the
+        oldest go first)."""
         events = self._waiting.link_events()
         async with contextlib.aclosing(events):
             async for event in events:

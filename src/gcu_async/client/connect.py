@@ -28,11 +28,13 @@ def connect(url: str, **options: Any) -> GcuClient:
     2332), ``serial:///dev/ttyUSB0?baudrate=115200``. The options named like
     :class:`GcuClient`'s keyword arguments (``rate_hz``, ``command_timeout``, … : its
     signature is this function's) configure the client; the rest go to the transport (e.g.
-    ``local_port``, ``discovery``, ``baudrate``). ``connect_timeout`` as a keyword is the
-    client's (the wait for the first reply); a TCP transport's own connect timeout goes in
-    the URL (``tcp://HOST?connect_timeout=5``). A bad URL or option raises
-    ``TypeError``/``ValueError`` before anything is opened (a ``url`` that is not a ``str``
-    is a ``TypeError``).
+    ``local_port``, ``discovery``, ``baudrate``, ``max_attempts``). ``connect_timeout`` as a
+    keyword is the client's (the wait for the first reply); a TCP transport's own connect
+    timeout goes in the URL (``tcp://HOST?connect_timeout=5``). ``wait=False`` opens in the
+    background: ``async with connect(url, wait=False) as gcu:`` returns at once, and the
+    link comes up when the GCU answers (docs/client.md, "Starting before the GCU"). A bad
+    URL or option raises ``TypeError``/``ValueError`` before anything is opened (a ``url``
+    that is not a ``str`` is a ``TypeError``).
     """
     from gcu_async.transport.url import open_transport
 

@@ -14,9 +14,12 @@ import asyncio
 import enum
 import logging
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Coroutine, Sequence
+from typing import Any
 
 from gcu_async._checks import check_instance
+from gcu_async._lograte import LogLimiter
+from gcu_async.client.restore import restore, restored
 from gcu_async.client.telemetry import Callbacks, Telemetry
 from gcu_async.client.wirelog import WIRE_LOG, log_packet
 from gcu_async.errors import (
@@ -40,6 +43,7 @@ from gcu_async.session import (
     LinkDown,
     LinkUp,
     ResetLink,
+    Restarted,
     Session,
     TelemetrySample,
     Ticket,
@@ -53,16 +57,28 @@ log = logging.getLogger("gcu_async.client")
 
 
 class ClientState(enum.Enum):
-    """The client's lifecycle (reusable, not reentrant)."""
+    """The client's lifecycle (reusable, not reentrant; docs/client.md, "Lifecycle")."""
 
     CLOSED = "closed"
+    """Not opened yet, or closed: :meth:`~GcuClient.open` may open it."""
     OPENING = "opening"
+    """:meth:`~GcuClient.open` runs (or, with ``wait=False``, its attempts run in the
+    background): no reply from the GCU yet; commands fail at once (``NOT_SENT``)."""
     OPEN = "open"
+    """The GCU answered; the link may go down and come back any number of times."""
     CLOSING = "closing"
+    FAILED = "failed"
+    """The client stopped by itself: its transport gave up restoring the link (opt-in
+    bounds, or ``reconnect=False``) or, opened with ``wait=False``, ``open_timeout`` ran
+    out (a ``GAVE_UP`` link event said so). Nothing runs; :meth:`~GcuClient.open` starts
+    over, :meth:`~GcuClient.close` makes it ``CLOSED``."""
 
 
-ENDED = frozenset({ClientState.CLOSED, ClientState.CLOSING})
+ENDED = frozenset({ClientState.CLOSED, ClientState.CLOSING, ClientState.FAILED})
 """States in which no telemetry comes."""
+SEND_FAILED_WINDOW = 10.0
+"""Seconds between two log lines of a send that keeps failing (the link is down: every
+heartbeat's send fails, 50 a second)."""
 
 
 class Driver:
@@ -70,7 +86,7 @@ class Driver:
 
     def __init__(self, session: Session, transport: Transport, clock: Callable[[], float],
                  telemetry: Telemetry, links: Callbacks[LinkEvent], *, check_support: bool,
-                 max_zoom: float | None) -> None:  # fmt: skip
+                 max_zoom: float | None, restore: bool = False) -> None:  # fmt: skip
         self.session = session
         self.transport = transport
         self._clock = clock
@@ -78,17 +94,30 @@ class Driver:
         self.links = links
         self.check_support = check_support
         self.max_zoom = max_zoom
+        self.restore = restore
+        """Restore the mode and zoom after a GCU restart (:mod:`~gcu_async.client.restore`)."""
         self.state = ClientState.CLOSED
+        self.failure: str | None = None
+        """Why the client is ``FAILED`` (None in every other state)."""
         self._timer: asyncio.TimerHandle | None = None
         self._timer_at = math.inf
         self._futures: dict[Ticket, asyncio.Future[Feedback | None]] = {}
         self._needs_ins: dict[Ticket, bool] = {}
         """Pending commands that need INS data: True once a packet went out while one was
         pending with INS invalid."""
-        self._first_reply: asyncio.Future[None] | None = None
+        self._first_reply: asyncio.Future[LinkLost | None] | None = None
+        """Resolved by the first reply of an open attempt (None), or by what ends the
+        attempt first (a :class:`LinkLost`: the client closed, the transport gave up)."""
+        self._run = 0
+        """Counts :meth:`begin`: an attempt of an earlier open() knows it is stale."""
+        self._tasks: set[asyncio.Task[None]] = set()
+        """Work the driver started (a restore, a shutdown after GAVE_UP); cancelled when the
+        client closes."""
+        self._logs = LogLimiter(log, burst=1, window=SEND_FAILED_WINDOW, clock=clock,
+                                name=transport.url)  # fmt: skip
         self._loop: asyncio.AbstractEventLoop | None = None
         self.closed_event: asyncio.Event | None = None
-        """Set once the client closes (None before it was first opened)."""
+        """Set once the client closes or fails (None before it was first opened)."""
         self._datagram = transport.datagram
         self._bound: ArrivalBound | None = None
         """Replies delivered from now on arrived after ``_bound.value`` (links that reorder);
@@ -110,63 +139,133 @@ class Driver:
             raise GcuError("no reply from the GCU yet")
         return status
 
+    def not_open(self) -> str:
+        """Why nothing can be done right now: the client is not open, or it failed."""
+        if self.state is ClientState.FAILED:
+            return f"the client failed ({self.failure}); open it again"
+        return "the client is not open"
+
     def context(self) -> Context:
         """What the command builder needs of the GCU's latest reports."""
         session = self.session
         return Context.of(session.status, session.info, self.max_zoom)
 
     def closed(self) -> asyncio.Event | None:
-        """Set once the client closes; None while it is not open."""
+        """Set once the client closes or fails; None while it is closed."""
         return None if self.state is ClientState.CLOSED else self.closed_event
 
     # -- lifecycle -------------------------------------------------------------------------
-    async def open_once(self, connect_timeout: float) -> None:
-        """Open the transport, start the heartbeat, wait for the first reply (one attempt)."""
+    def begin(self) -> None:
+        """An open() starts: ``OPENING``, a new closed event (it spans every attempt)."""
         self.state = ClientState.OPENING
-        self._loop = loop = asyncio.get_running_loop()
+        self.failure = None
+        self._loop = asyncio.get_running_loop()
         self.closed_event = asyncio.Event()
-        self._first_reply = loop.create_future()
+        self._run += 1
+
+    def _opening(self, run: int) -> bool:
+        return run == self._run and self.state is ClientState.OPENING
+
+    async def open_once(self, connect_timeout: float) -> None:
+        """One attempt of an open (the client is ``OPENING``): open the transport, start
+        the heartbeat, wait for the first reply, which makes it ``OPEN``. :class:`LinkLost`
+        if it fails, with the attempt's transport and session closed again (still
+        ``OPENING``)."""
+        run = self._run
+        loop = asyncio.get_running_loop()
+        self._first_reply = first = loop.create_future()
         self.transport.set_handlers(self._on_data, self._on_link_event)
-        log.info("opening %s", self.transport.url)
+        log.debug("%s: opening the transport", self.transport.url)
         try:
             await self.transport.open()
         except BaseException:
-            self.state = ClientState.CLOSED
+            self._first_reply = None
             raise
+        if not self._opening(run):  # closed while the transport opened
+            self._first_reply = None
+            await self.transport.close()
+            raise LinkLost(f"{self.transport.url}: closed while opening")
         self.session.open(self._clock())
         self._bound = arrival_bound(self.transport, self._clock, loop)
         self._loop_clock = loop_keeps(self._clock, loop)
         self._pump()
         try:
-            await asyncio.wait_for(asyncio.shield(self._first_reply), connect_timeout)
+            failure = await asyncio.wait_for(asyncio.shield(first), connect_timeout)
         except asyncio.TimeoutError:
-            await self.shutdown("no reply")
+            await self.stop_attempt("no reply")
             raise LinkLost(
                 f"{self.transport.url}: no reply from the GCU within {connect_timeout:g} s"
             ) from None
         except BaseException:
-            await self.shutdown("open interrupted")
+            await self.stop_attempt("open interrupted")
             raise
-        self.state = ClientState.OPEN
-        log.info("link to %s up", self.transport.url)
-
-    async def shutdown(self, reason: str) -> None:
-        """End pending commands, stop the heartbeat, end the telemetry iterators, close the
-        transport."""
-        self.state = ClientState.CLOSING
-        try:
-            self.session.close(self._clock(), reason)
-            self._dispatch()
-            if self._timer is not None:
-                self._timer.cancel()
-                self._timer, self._timer_at = None, math.inf
-            self.telemetry.close()
-            await self.transport.close()
         finally:
-            self.state = ClientState.CLOSED
-            log.info("closed %s (%s)", self.transport.url, reason)
+            self._first_reply = None
+        if failure is None and run == self._run and self.state is ClientState.OPEN:
+            return  # the first reply made it OPEN (_handle)
+        await self.stop_attempt("open failed")
+        raise failure or LinkLost(f"{self.transport.url}: closed while opening")
+
+    async def stop_attempt(self, reason: str) -> None:
+        """End an open attempt: the session, the heartbeat and the transport (the client
+        stays as it is)."""
+        self.session.close(self._clock(), reason)
+        self._dispatch()
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer, self._timer_at = None, math.inf
+        await self.transport.close()
+
+    async def shutdown(self, reason: str, end: ClientState = ClientState.CLOSED) -> None:
+        """End pending commands, stop the heartbeat, end the telemetry iterators and the
+        waits, close the transport; then ``end`` (``CLOSED``, or ``FAILED`` with
+        ``reason`` as :attr:`failure`). Idempotent."""
+        if self.state is ClientState.CLOSING:  # another shutdown runs: let it finish
+            assert self.closed_event is not None
+            await self.closed_event.wait()
+        if self.state in (ClientState.CLOSED, ClientState.FAILED):
+            if end is ClientState.CLOSED:
+                self.state, self.failure = ClientState.CLOSED, None
+            return
+        first = self._first_reply
+        if first is not None and not first.done():  # an open attempt waits: end it now
+            first.set_result(LinkLost(f"{self.transport.url}: {reason} while opening"))
+        self.state = ClientState.CLOSING
+        current = asyncio.current_task()
+        for task in list(self._tasks):
+            if task is not current:
+                task.cancel()
+        try:
+            await self.stop_attempt(reason)
+            self.telemetry.close()
+        finally:
+            self.state = end
+            self.failure = reason if end is ClientState.FAILED else None
+            self._logs.flush()
+            if end is ClientState.FAILED:
+                log.error("%s: the client failed: %s", self.transport.url, reason)
+            else:
+                log.info("closed %s (%s)", self.transport.url, reason)
             if self.closed_event is not None:
                 self.closed_event.set()
+
+    async def fail(self, reason: str) -> None:
+        """Stop for good (``FAILED``) after a ``GAVE_UP``: the transport will not restore the
+        link, or the open attempts ran out of ``open_timeout``."""
+        await self.shutdown(reason, ClientState.FAILED)
+
+    def spawn(self, work: Coroutine[Any, Any, None], name: str) -> asyncio.Task[None]:
+        """Run ``work`` in a task the driver cancels when the client closes."""
+        task = asyncio.get_running_loop().create_task(work, name=f"{name} {self.transport.url}")
+        self._tasks.add(task)
+        task.add_done_callback(self._task_done)
+        return task
+
+    def _task_done(self, task: asyncio.Task[None]) -> None:
+        self._tasks.discard(task)
+        if not task.cancelled() and task.exception() is not None:
+            log.error("%s: %s failed", self.transport.url, task.get_name(),
+                      exc_info=task.exception())  # fmt: skip
 
     # -- commands --------------------------------------------------------------------------
     async def run(self, submission: Submission, *, queue_timeout: float | None = None) -> Feedback:
@@ -179,13 +278,36 @@ class Driver:
                      queue_timeout: float | None = None) -> Feedback | None:  # fmt: skip
         """Submit a command and await its outcome (``None``: a state-checked record command
         the camera's state made unnecessary)."""
+        ticket, future = self.enqueue(submission, queue_timeout=queue_timeout)
+        try:
+            return await future
+        except asyncio.CancelledError:
+            self._futures.pop(ticket, None)
+            self._needs_ins.pop(ticket, None)
+            if not ticket.done:
+                self.session.cancel(ticket, self._clock())
+                self._dispatch()
+                self._schedule()
+            raise
+
+    def enqueue(self, submission: Submission, *, queue_timeout: float | None = None
+                ) -> tuple[Ticket, asyncio.Future[Feedback | None]]:  # fmt: skip
+        """Submit a command now (synchronously): its ticket and the future of its outcome.
+        Raises what :meth:`Session.submit` raises, and :class:`CommandLinkLost` unless the
+        client is open."""
         command = submission.command
         check_instance("command", command, Command, "a Command")
         if self.state is not ClientState.OPEN:
             opcode = command_code(command)
-            hint = ("not opened: use `async with connect(url) as gcu:` (or `await "
-                    "gcu.open()`) first" if self.closed_event is None
-                    else f"client is {self.state.value}")  # fmt: skip
+            if self.closed_event is None:
+                hint = ("not opened: use `async with connect(url) as gcu:` (or `await "
+                        "gcu.open()`) first")  # fmt: skip
+            elif self.state is ClientState.OPENING:
+                hint = "client is opening (no reply from the GCU yet)"
+            elif self.state is ClientState.FAILED:
+                hint = f"client failed ({self.failure}; open it again)"
+            else:
+                hint = f"client is {self.state.value}"
             raise CommandLinkLost(f"{opcode_name(opcode)}: {hint}; not sent",
                                   outcome=Outcome.NOT_SENT, opcode=opcode,
                                   command=command)  # fmt: skip
@@ -200,16 +322,7 @@ class Driver:
         if ticket.opcode in NEEDS_INS:
             self._needs_ins[ticket] = False
         self._pump()  # goes out now if the rate allows: the heartbeat's phase moves
-        try:
-            return await future
-        except asyncio.CancelledError:
-            self._futures.pop(ticket, None)
-            self._needs_ins.pop(ticket, None)
-            if not ticket.done:
-                self.session.cancel(ticket, self._clock())
-                self._dispatch()
-                self._schedule()
-            raise
+        return ticket, future
 
     def _check_support(self, command: Command) -> None:
         model = self.pod_model
@@ -248,8 +361,8 @@ class Driver:
                 try:
                     self.transport.send(data)
                 except (LinkLost, OSError) as exc:
-                    session.send_failed()
-                    log.debug("send failed: %s", exc)
+                    session.send_failed()  # every heartbeat while the link is down
+                    self._logs.log(logging.DEBUG, "send failed", "send failed: %s", exc)
             events = session.events()
             if events:
                 self._handle(events)
@@ -288,16 +401,26 @@ class Driver:
             self._schedule()
 
     def _on_link_event(self, event: LinkEvent) -> None:
-        if event.kind is LinkEventKind.LOST:
+        kind = event.kind
+        if kind is LinkEventKind.LOST:
             self.session.connection_lost(self._clock(), event.detail or "transport lost")
             self._dispatch()
             self._schedule()
-        elif event.kind is LinkEventKind.PEER:
+        elif kind is LinkEventKind.PEER:
+            log.info("%s", event.detail)
             self.links.emit(event)
-        elif event.kind is LinkEventKind.ERROR:
+        elif kind is LinkEventKind.ERROR:
             log.warning("%s (the link stays open; link health decides whether it is up)",
                         event.detail)  # fmt: skip
             self.links.emit(event)
+        elif kind is LinkEventKind.GAVE_UP:
+            first = self._first_reply
+            if self.state is ClientState.OPEN:
+                self.links.emit(event)
+                self.spawn(self.fail(event.detail), "gcu_async fail")
+            elif first is not None and not first.done():  # it ends this open attempt
+                first.set_result(LinkLost(event.detail))
+        # RESTORED: the link counts as up with the next reply (the session's LinkUp)
 
     # -- events ----------------------------------------------------------------------------
     def _dispatch(self) -> None:
@@ -315,16 +438,34 @@ class Driver:
                 first = self._first_reply
                 if first is not None and not first.done():
                     first.set_result(None)
+                    self.state = ClientState.OPEN  # commands are accepted from this reply on
+                self._logs.flush()
                 if event.restored:
-                    log.warning("link to %s restored", self.transport.url)
+                    log.info("link to %s restored", self.transport.url)
                     self.links.emit(LinkEvent(LinkEventKind.RESTORED, event.reason))
+                else:
+                    log.info("link to %s up", self.transport.url)
+                    self.links.emit(LinkEvent(LinkEventKind.UP, event.reason))
             elif isinstance(event, LinkDown):
                 log.warning("link to %s lost: %s", self.transport.url, event.reason)
                 self.links.emit(LinkEvent(LinkEventKind.LOST, event.reason))
+            elif isinstance(event, Restarted):
+                self._restarted(event)
             elif isinstance(event, ResetLink):
                 reset = getattr(self.transport, "reset", None)
                 if reset is not None:
                     reset(event.reason)
+
+    def _restarted(self, event: Restarted) -> None:
+        """The GCU restarted: restore what it lost first (so that commands the
+        application sends on hearing of it come after), then say so."""
+        restoring = self.restore and (event.mode is not None or event.zoom is not None)
+        detail = f"the GCU restarted: {event.reason}"
+        if restoring:
+            self.spawn(restore(self, event), "gcu_async restore")
+            detail += "; restoring " + " and ".join(restored(event))
+        log.warning("%s: %s", self.transport.url, detail)
+        self.links.emit(LinkEvent(LinkEventKind.RESTARTED, detail))
 
     def _resolve(self, ticket: Ticket) -> None:
         future = self._futures.pop(ticket, None)

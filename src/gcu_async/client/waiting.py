@@ -5,7 +5,7 @@ A command's feedback says the GCU *took* it; the gimbal then needs time to slew 
 lens to zoom. These methods wait on telemetry for the result, always with a timeout, and
 raise :class:`~gcu_async.errors.WaitTimeout` naming what was awaited and the last value
 seen. They keep waiting through a link outage (no telemetry arrives, the timeout runs on)
-and raise :class:`~gcu_async.errors.LinkLost` when the client closes.
+and raise :class:`~gcu_async.errors.LinkLost` when the client closes or fails.
 """
 
 from __future__ import annotations
@@ -78,6 +78,13 @@ class Waiting:
     def _link_up(self) -> bool:
         return self._driver.session.state is SessionState.UP
 
+    def _ended(self, what: str) -> str:
+        """Why a wait for ``what`` ended without it: the client closed, or failed."""
+        failure = self._driver.failure
+        if failure is not None:
+            return f"the client failed ({failure}) while waiting for {what}"
+        return f"the client closed while waiting for {what}"
+
     # -- telemetry -------------------------------------------------------------------------
     async def wait_for(self, predicate: Predicate, *, timeout: float = WAIT_TIMEOUT,
                        what: str = "the condition") -> TelemetrySample:  # fmt: skip
@@ -87,8 +94,9 @@ class Waiting:
         timeout = check_positive("timeout", timeout)
         if not isinstance(what, str):
             raise type_error("what", "a str", what)
-        if self._closed() is None:
-            raise LinkLost("the client is not open")
+        closed = self._closed()
+        if closed is None or closed.is_set():
+            raise LinkLost(self._driver.not_open())
         latest = self._latest()  # a reply from before an outage is no evidence of now
         if latest is not None and self._link_up() and predicate(latest):
             return latest
@@ -101,7 +109,7 @@ class Waiting:
                     last[0] = sample
                     if predicate(sample):
                         return sample
-            raise LinkLost(f"the client closed while waiting for {what}")
+            raise LinkLost(self._ended(what))
 
         try:
             return await asyncio.wait_for(first(), timeout)
@@ -178,7 +186,7 @@ class Waiting:
         timeout = check_positive("timeout", timeout)
         closed = self._closed()
         if closed is None or closed.is_set():
-            raise LinkLost("the client is not open")
+            raise LinkLost(self._driver.not_open())
         what = "the link up" if want else "the link down"
         changed = asyncio.Event()
         unsubscribe = self._links.add(lambda event: changed.set())
@@ -187,7 +195,7 @@ class Waiting:
         try:
             while True:
                 if closed.is_set():
-                    raise LinkLost(f"the client closed while waiting for {what}")
+                    raise LinkLost(self._ended(what))
                 if self._link_up() is want:
                     return
                 left = deadline - loop.time()
@@ -202,7 +210,7 @@ class Waiting:
         """See :meth:`GcuClient.link_events <gcu_async.client.GcuClient.link_events>`."""
         closed = self._closed()
         if closed is None or closed.is_set():
-            raise LinkLost("the client is not open")
+            raise LinkLost(self._driver.not_open())
         events: deque[LinkEvent] = deque(maxlen=LINK_EVENTS_MAX)
         ready = asyncio.Event()
 

@@ -7,14 +7,17 @@ from gcu_async.session.events import (
     LinkDown,
     LinkUp,
     ResetLink,
+    Restarted,
     TelemetrySample,
     TicketDone,
 )
 from gcu_async.session.health import LinkHealth
+from gcu_async.session.restart import StateChange
 from gcu_async.session.session import Session, SessionState, SessionStats
 from gcu_async.session.tickets import Ticket, TicketState
 
 __all__ = [
-    "ControlKind", "Event", "LinkDown", "LinkHealth", "LinkUp", "ResetLink", "Session",
-    "SessionState", "SessionStats", "TelemetrySample", "Ticket", "TicketDone", "TicketState",
+    "ControlKind", "Event", "LinkDown", "LinkHealth", "LinkUp", "ResetLink", "Restarted",
+    "Session", "SessionState", "SessionStats", "StateChange", "TelemetrySample", "Ticket",
+    "TicketDone", "TicketState",
 ]  # fmt: skip

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import enum
 
-from gcu_async.protocol.commands import COMMAND_TYPES, Track
+from gcu_async.protocol.commands import COMMAND_TYPES, Command, Track
 from gcu_async.protocol.enums import Mode, Opcode
 from gcu_async.protocol.host_frames import ControlValues
 from gcu_async.session.tickets import Ticket, TicketState
@@ -58,6 +58,8 @@ class ControlState:
         """Opcode of the mode command the GCU confirmed last (None: no mode known)."""
         self.values: ControlValues | None = None
         """Values for ``confirmed`` (None: sent invalid)."""
+        self.command: Command | None = None
+        """The command that entered ``confirmed`` (None with it)."""
         self._pending: dict[Ticket, ControlValues | None] = {}
         """Mode-changing tickets not yet final, in submission order, with the values to use
         once each is confirmed."""
@@ -65,6 +67,7 @@ class ControlState:
     def reset(self) -> None:
         self.confirmed = None
         self.values = None
+        self.command = None
         self._pending.clear()
 
     @property
@@ -85,17 +88,20 @@ class ControlState:
         if state is TicketState.NOT_SENT:
             return  # nothing happened on the GCU
         if state is not TicketState.SUCCEEDED:
-            self.confirmed, self.values = None, None  # the mode is not known any more
+            self._forget()  # the mode is not known any more
         elif opcode == Opcode.CENTRE:
             self.values = None  # same mode; old values would steer away from the centre
         elif opcode == Opcode.CLICK_TO_PAN:
-            self.confirmed, self.values = None, None  # pointing-lock once the pan is done
+            self._forget()  # pointing-lock once the pan is done
         elif opcode == Opcode.TRACK and not (
             isinstance(ticket.command, Track) and ticket.command.enter
         ):
-            self.confirmed, self.values = None, None  # tracking exited: mode not reported
+            self._forget()  # tracking exited: mode not reported
         else:
-            self.confirmed, self.values = opcode, values
+            self.confirmed, self.values, self.command = opcode, values, ticket.command
+
+    def _forget(self) -> None:
+        self.confirmed, self.values, self.command = None, None, None
 
     def target(self) -> tuple[int | None, Ticket | None]:
         """The mode new values are for: the last mode-changing command pending, else the

@@ -4,8 +4,11 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+from gcu_async.protocol.commands import Command
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
+from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.session.restart import StateChange
 from gcu_async.session.tickets import Ticket
 
 
@@ -51,4 +54,26 @@ class ResetLink(NamedTuple):
     reason: str
 
 
-Event = TelemetrySample | TicketDone | LinkUp | LinkDown | ResetLink
+class Restarted(NamedTuple):
+    """The GCU came back from a link loss with its state reset: the first reply after the
+    loss reports ``changes`` that no command explains (:mod:`~gcu_async.session.restart`).
+    Follows the :class:`LinkUp` of that reply. The rest is what the host had before the
+    loss, for a driver that restores it."""
+
+    changes: tuple[StateChange, ...]
+    mode: Command | None
+    """The mode command the GCU had confirmed last, when the mode changed and the GCU was
+    in that mode before the loss (None otherwise)."""
+    control: ControlValues | None
+    """The control values given for that mode (None: sent invalid)."""
+    zoom: float | None
+    """Camera 1's zoom ratio reported before the loss, when the zoom changed (None
+    otherwise)."""
+
+    @property
+    def reason(self) -> str:
+        """The changes, as one line: ``"mode GAZE -> POINTING_FOLLOW, zoom 5x -> 1x"``."""
+        return ", ".join(str(change) for change in self.changes)
+
+
+Event = TelemetrySample | TicketDone | LinkUp | LinkDown | ResetLink | Restarted

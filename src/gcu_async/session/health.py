@@ -32,13 +32,16 @@ class LinkHealth:
     """Replies that could answer more than one run of packets (used as proof of nothing)."""
     lost_count: int
     restored_count: int
+    restarted_count: int = 0
+    """Times the GCU came back from a loss with its state reset (docs/client.md, "GCU
+    restarts")."""
 
 
 class HealthTracker:
     """Counts and timestamps behind :class:`LinkHealth` (no I/O, no clock of its own)."""
 
     __slots__ = ("_recent", "last_reply", "lost_count", "other_versions", "packets_received",
-                 "packets_sent", "restored_count", "send_errors")  # fmt: skip
+                 "packets_sent", "restarted_count", "restored_count", "send_errors")  # fmt: skip
 
     def __init__(self) -> None:
         self.last_reply: float | None = None
@@ -49,6 +52,7 @@ class HealthTracker:
         self.other_versions = 0
         self.lost_count = 0
         self.restored_count = 0
+        self.restarted_count = 0
 
     def on_reply(self, now: float) -> None:
         self.packets_received += 1

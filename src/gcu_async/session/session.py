@@ -73,12 +73,13 @@ from gcu_async.protocol.packets import (
     HostPacket,
     decode_gcu_packet,
 )
-from gcu_async.session.control import KIND, ControlKind, ControlState
+from gcu_async.session.control import KIND, REPORTED, ControlKind, ControlState
 from gcu_async.session.events import (
     Event,
     LinkDown,
     LinkUp,
     ResetLink,
+    Restarted,
     TelemetrySample,
     TicketDone,
 )
@@ -86,6 +87,7 @@ from gcu_async.session.feed import TIMEOUT_MAX, AircraftFeed
 from gcu_async.session.health import HealthTracker, LinkHealth
 from gcu_async.session.pacing import Pacer
 from gcu_async.session.recording import RecordingBelief
+from gcu_async.session.restart import ZOOM_SCALE, RestartWatch, StateChange
 from gcu_async.session.runs import RunLedger
 from gcu_async.session.tickets import Ticket, TicketState
 
@@ -205,6 +207,7 @@ class Session:
         self._recording = RecordingBelief(check_positive("record_settle", record_settle))
         self._deframer = Deframer.for_gcu_packets()
         self._health = HealthTracker()
+        self._restart = RestartWatch()
         self.stats = SessionStats()
         self.telemetry = True
         """Emit a :class:`TelemetrySample` event for every reply (a driver with no
@@ -245,6 +248,7 @@ class Session:
         self._ledger = RunLedger(self.reorder_guard, self.reply_window)
         self._control.reset()
         self._recording.reset()
+        self._restart.reset()
         self._deframer.reset()
         self._status = self._info = None
         self._state = SessionState.OPENING
@@ -600,6 +604,7 @@ class Session:
             ambiguous_feedback=r.ambiguous,
             lost_count=h.lost_count,
             restored_count=h.restored_count,
+            restarted_count=h.restarted_count,
         )
 
     def send_failed(self) -> None:
@@ -624,6 +629,8 @@ class Session:
         self._status = main
         self._feedback = feedback
         if sub is not None:
+            if sub is not self._info:
+                self._restart.zoom_seen(self._info, sub, now)
             self._info = sub
             recording = self._recording
             flag = bool(sub.camera_flags_raw & _RECORDING)
@@ -635,6 +642,10 @@ class Session:
                 self._health.restored_count += 1
             self._state = SessionState.UP
             self._events.append(LinkUp(restored, "replies resumed" if restored else "first reply"))
+        if self._restart.pending:
+            changes = self._restart.compare(main, sub)
+            if changes:
+                self._restarted(changes)
         run = self._ledger.identify(feedback.opcode, now, earliest)
         ticket = self._in_flight
         if run is not None and ticket is not None and run.opcode == ticket.opcode:
@@ -700,12 +711,32 @@ class Session:
             queue.popleft()
             self._finish(head, TicketState.SKIPPED, now)
 
+    def _restarted(self, changes: tuple[StateChange, ...]) -> None:
+        """The GCU restarted: the event, with what a driver needs to restore the host's
+        mode (the mode command it confirmed last, if the GCU was in that mode before the
+        loss and the mode changed) and camera 1's zoom (if it changed)."""
+        self._health.restarted_count += 1
+        before, control = self._restart.compared, self._control
+        assert before is not None
+        aspects = {change.aspect for change in changes}
+        mode = None
+        if ("mode" in aspects and control.command is not None and control.confirmed in KIND
+                and REPORTED[control.confirmed] == before.mode_raw):  # fmt: skip
+            mode = control.command
+        zoom = None
+        if "zoom" in aspects and before.zoom_raw is not None:
+            zoom = before.zoom_raw / ZOOM_SCALE
+        self._events.append(Restarted(changes, mode, control.values if mode else None, zoom))
+
     def _link_down(self, now: float, reason: str, *, reset: bool) -> None:
-        if self._state is SessionState.UP:
+        up = self._state is SessionState.UP
+        if up:
             self._health.lost_count += 1
         was = self._state
         self._state = SessionState.DOWN
         self._end_all(now, f"{self.name}: {reason}")
+        if up:
+            self._restart.lost(self._status, self._info, self._health.last_reply)
         if was is not SessionState.DOWN:
             self._events.append(LinkDown(reason))
             if reset:
@@ -736,6 +767,7 @@ class Session:
         if ticket is self._in_flight:
             self._in_flight = None
         self._control.finished(ticket)
+        self._restart.finished(ticket.opcode, ticket.command, state, now)
         if ticket.opcode == Opcode.RECORD:
             if state is TicketState.SUCCEEDED:
                 self._recording.toggled(ticket.expect_recording, now)

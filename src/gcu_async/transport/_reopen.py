@@ -11,24 +11,28 @@ from collections.abc import Awaitable, Callable
 
 from gcu_async._checks import check_bool, type_error
 from gcu_async.transport._common import call_guarded
-from gcu_async.transport.backoff import Backoff, cancel_and_wait, giving_up, retry
+from gcu_async.transport.backoff import (
+    Backoff,
+    cancel_and_wait,
+    giving_up,
+    not_reconnecting,
+    retry,
+)
 from gcu_async.transport.base import LinkEvent, LinkEventKind
-
-DEFAULT_REOPEN = Backoff(max_attempts=None, max_total=60.0)
-"""Every 0–2 s (full jitter) for up to a minute."""
 
 
 class Reopener:
     """Runs ``attempt(timeout)`` in a task on :attr:`backoff`'s schedule after a loss, emits
-    ``RESTORED`` ("``what`` after N attempt(s)") or the final "giving up" ``LOST``, and counts
-    both; :meth:`stop` cancels it. ``reconnect=False`` never starts it."""
+    ``RESTORED`` ("``what`` after N attempt(s)") or, when opt-in bounds run out, ``GAVE_UP``,
+    and counts both; :meth:`stop` cancels it. ``reconnect=False`` never starts it: it emits
+    ``GAVE_UP`` at once."""
 
     def __init__(self, reconnect: bool, backoff: Backoff | None,
                  rng: random.Random | None) -> None:  # fmt: skip
         self.enabled = check_bool("reconnect", reconnect)
         if backoff is not None and not isinstance(backoff, Backoff):
             raise type_error("backoff", "a Backoff or None", backoff)
-        self.backoff = backoff if backoff is not None else DEFAULT_REOPEN
+        self.backoff = backoff if backoff is not None else Backoff()
         self._rng = rng if rng is not None else random.Random()
         self._task: asyncio.Task[None] | None = None
         self.closing = False
@@ -41,8 +45,10 @@ class Reopener:
 
     def start(self, url: str, attempt: Callable[[float], Awaitable[None]], timeout: float,
               what: str, emit: Callable[[LinkEvent], None]) -> None:  # fmt: skip
-        """After a loss: start reopening, unless disabled or closing."""
-        if self.enabled and not self.closing:
+        """After a loss: start reopening, unless closing; disabled, give up at once."""
+        if not self.enabled and not self.closing:
+            call_guarded(emit, not_reconnecting(url), "event")
+        elif not self.closing:
             self._task = asyncio.get_running_loop().create_task(
                 self._run(url, attempt, timeout, what, emit), name=f"gcu_async reopen {url}"
             )
@@ -86,7 +92,7 @@ class Reopening:
 
     @property
     def backoff(self) -> Backoff:
-        """The reopening schedule after a loss: by default every 0–2 s for up to a minute."""
+        """The reopening schedule after a loss: by default every 0–2 s until closed."""
         return self._reopen.backoff
 
     @property

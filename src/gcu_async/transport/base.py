@@ -28,9 +28,16 @@ class LinkEventKind(enum.Enum):
     """What happened to the link."""
 
     LOST = "lost"
-    """The link went down (peer closed, I/O error). Stream transports may try to restore it."""
+    """The link went down (peer closed, I/O error, no reply for ``silence_timeout``). The
+    transport tries to restore it (``reconnect=True``, the default) until it is closed, or
+    until its opt-in :class:`~gcu_async.transport.Backoff` bounds run out (``GAVE_UP``)."""
     RESTORED = "restored"
-    """A lost link is back (e.g. TCP reconnected)."""
+    """A lost link is back (e.g. TCP reconnected; for a client: replies arrive again)."""
+    GAVE_UP = "gave_up"
+    """The transport stopped trying to restore a lost link: its ``max_attempts`` or
+    ``max_total`` ran out, or it was made with ``reconnect=False``; the detail says why. A
+    client then ends in :attr:`~gcu_async.client.ClientState.FAILED` (or, opened with
+    ``wait=False``, its ``open_timeout`` ran out)."""
     PEER = "peer"
     """Bytes came from a new peer address (UDP any-source discovery)."""
     ERROR = "error"
@@ -40,7 +47,14 @@ class LinkEventKind(enum.Enum):
     Whether the link is up is decided by the replies, not by this."""
     RETRYING = "retrying"
     """An attempt of the client's :meth:`~gcu_async.client.GcuClient.open` failed and
-    another follows (``open_timeout``); the detail says why and when."""
+    another follows (``open_timeout``, ``wait=False``); the detail says why and when."""
+    UP = "up"
+    """The client's first reply after it was opened: the link is up (with ``wait=False``,
+    how an application learns that the GCU answered)."""
+    RESTARTED = "restarted"
+    """The GCU came back from an outage with its state reset (mode, zoom, recording or
+    ranging changed in a way no command explains: docs/client.md, "GCU restarts"); the
+    detail lists the changes. Emitted by the client, after ``RESTORED``."""
 
 
 @dataclass(frozen=True)

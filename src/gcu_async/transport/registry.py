@@ -103,24 +103,40 @@ class TransportKind:
         return self.scheme if self.address == "none" else f"{self.scheme}://"
 
 
-def _udp(parts: UrlParts, options: dict[str, object]) -> Transport:
-    return UdpTransport(parts.host, parts.port, **options)  # type: ignore[arg-type]
-
-
 _BACKOFF_FIELDS = (
     ("backoff_base", "base"), ("backoff_factor", "factor"), ("backoff_cap", "cap"),
     ("max_attempts", "max_attempts"), ("max_total", "max_total"),
 )  # fmt: skip
+_RECONNECT_OPTIONS: dict[str, Converter] = {
+    "reconnect": as_bool, "backoff_base": as_float, "backoff_factor": as_float,
+    "backoff_cap": as_float, "max_attempts": optional(as_int), "max_total": optional(as_float),
+    "rng": as_rng,
+}  # fmt: skip
+"""How every transport that restores a lost link takes its schedule (docs/transports.md,
+"Reconnecting"): the :class:`Backoff` fields by name, ``reconnect`` and ``rng``."""
+
+
+def _with_backoff(options: dict[str, object]) -> dict[str, object]:
+    """``options`` with the :class:`Backoff` fields folded into ``backoff`` (when any is
+    given; otherwise the transport's default schedule)."""
+    fields = {field: options.pop(name) for name, field in _BACKOFF_FIELDS if name in options}
+    if fields:
+        options["backoff"] = Backoff(**fields)  # type: ignore[arg-type]
+    return options
+
+
+def _udp(parts: UrlParts, options: dict[str, object]) -> Transport:
+    return UdpTransport(parts.host, parts.port, **_with_backoff(options))  # type: ignore[arg-type]
 
 
 def _tcp(parts: UrlParts, options: dict[str, object]) -> Transport:
-    backoff_opts = {field: options.pop(name) for name, field in _BACKOFF_FIELDS if name in options}
-    backoff = Backoff(**backoff_opts)  # type: ignore[arg-type]
-    return TcpTransport(parts.host, parts.port, backoff=backoff, **options)  # type: ignore[arg-type]
+    return TcpTransport(parts.host, parts.port, **_with_backoff(options))  # type: ignore[arg-type]
 
 
 def _serial(parts: UrlParts, options: dict[str, object]) -> Transport:
-    return SerialTransport(parts.device, options.get("baudrate", DEFAULT_BAUDRATE))  # type: ignore[arg-type]
+    options = _with_backoff(options)
+    baudrate = options.pop("baudrate", DEFAULT_BAUDRATE)
+    return SerialTransport(parts.device, baudrate, **options)  # type: ignore[arg-type]
 
 
 _SERIAL_OPTIONS: dict[str, Converter] = {"baudrate": as_baudrate}
@@ -134,24 +150,23 @@ KINDS: dict[str, TransportKind] = {
             options={
                 "local_port": as_int, "local_host": as_host, "broadcast": as_bool,
                 "discovery": as_bool, "follow_peer": as_bool, "reuse_port": optional(as_bool),
+                **_RECONNECT_OPTIONS,
             },
+            keyword_only=frozenset({"rng"}),
             fixture_listen="udp://127.0.0.1:0", fixture_client={"local_port": 0},
         ),
         TransportKind(
             "tcp", "host", TcpTransport, _tcp, "gcu_async.sim.tcp:listen",
             default_port=GCU_TCP_PORT,
-            options={
-                "connect_timeout": as_float, "reconnect": as_bool, "backoff_base": as_float,
-                "backoff_factor": as_float, "backoff_cap": as_float,
-                "max_attempts": optional(as_int), "max_total": optional(as_float),
-                "rng": as_rng,
-            },
+            options={"connect_timeout": as_float, **_RECONNECT_OPTIONS},
             keyword_only=frozenset({"rng"}),
             fixture_listen="tcp://127.0.0.1:0",
         ),
         TransportKind(
             "serial", "device", SerialTransport, _serial, "gcu_async.sim.serialport:listen",
-            options=_SERIAL_OPTIONS, listen_options=_SERIAL_OPTIONS, fixture_listen="pty",
+            options={**_SERIAL_OPTIONS, **_RECONNECT_OPTIONS},
+            keyword_only=frozenset({"rng"}),
+            listen_options=_SERIAL_OPTIONS, fixture_listen="pty",
         ),
         TransportKind("pty", "none", SerialTransport, None, "gcu_async.sim.serialport:listen_pty"),
     )

@@ -2,8 +2,11 @@
 
 docs/protocol-notes.md §12 "Transports": the GCU detects the rate itself among 115200, 250000,
 500000 and 1000000 baud; no other rate is accepted. If the device disappears (USB adapter unplugged,
-pty peer closed) a :attr:`~LinkEventKind.LOST` event is emitted and the transport stays down; call
-:meth:`SerialTransport.open` again to retry.
+pty peer closed) a :attr:`~LinkEventKind.LOST` event is emitted and, with ``reconnect=True``
+(default), the same path is reopened on the :class:`~gcu_async.transport.Backoff` schedule
+(by default every 0–2 s until it opens or the transport is closed), then
+:attr:`~LinkEventKind.RESTORED`; opt-in bounds that run out, or ``reconnect=False``, end in
+:attr:`~LinkEventKind.GAVE_UP` (call :meth:`SerialTransport.open` to start over).
 
 Reading
     pyserial-asyncio reads at most 1024 bytes per readiness event. This transport reads on

@@ -4,11 +4,13 @@
 When an established connection drops, a :attr:`~LinkEventKind.LOST` event is emitted at
 once; with ``reconnect=True`` (default) a background task then reconnects with exponential
 backoff and full jitter (:class:`Backoff`): before attempt *n* (0-based) it sleeps
-``uniform(0, min(cap, base * factor**n))``. On success it emits
-:attr:`~LinkEventKind.RESTORED`; when the attempts (``max_attempts``) or the time since the
-loss (``max_total``) run out it stops, stays down and emits a final ``LOST`` whose detail
-starts with ``"giving up"``. :meth:`TcpTransport.open` may be called again after that.
-While down, :meth:`TcpTransport.send` raises :class:`LinkLost`.
+``uniform(0, min(cap, base * factor**n))``, by default until it succeeds or the transport
+is closed. On success it emits :attr:`~LinkEventKind.RESTORED`; when the opt-in bounds run
+out (``max_attempts`` attempts, or ``max_total`` seconds since the loss) it stops, stays
+down and emits :attr:`~LinkEventKind.GAVE_UP` (detail ``"giving up after N reconnect
+attempts: …"``); with ``reconnect=False`` ``GAVE_UP`` follows the ``LOST`` at once.
+:meth:`TcpTransport.open` may be called again after that. While down,
+:meth:`TcpTransport.send` raises :class:`LinkLost`.
 
 Backpressure
     :meth:`TcpTransport.send` never queues behind bytes the kernel has not taken: when
@@ -45,7 +47,13 @@ from gcu_async.transport._common import (
     format_hostport,
     link_lost,
 )
-from gcu_async.transport.backoff import Backoff, cancel_and_wait, giving_up, retry
+from gcu_async.transport.backoff import (
+    Backoff,
+    cancel_and_wait,
+    giving_up,
+    not_reconnecting,
+    retry,
+)
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 
 _CLOSE_GRACE = 1.0
@@ -179,9 +187,10 @@ class TcpTransport(Transport):
         """Abort the connection with an RST, discarding asyncio's write buffer and the
         kernel's send queue; then (via ``loop.call_soon``) emit ``LOST`` with detail
         ``"reset: <reason> (<url>)"`` and, with ``reconnect=True``, reconnect as after any
-        loss. :meth:`send` raises :class:`LinkLost` from this call on until reconnected.
-        Bytes already in the peer's receive buffer stay readable by the peer. Does nothing
-        while the link is down. Raises TypeError if ``reason`` is not a ``str``."""
+        loss (``reconnect=False``: ``GAVE_UP`` follows the ``LOST``). :meth:`send` raises
+        :class:`LinkLost` from this call on until reconnected. Bytes already in the peer's
+        receive buffer stay readable by the peer. Does nothing while the link is down.
+        Raises TypeError if ``reason`` is not a ``str``."""
         check_reason(reason)
         proto = self._proto
         if proto is None or proto.transport is None or proto.transport.is_closing():
@@ -293,12 +302,16 @@ class TcpTransport(Transport):
         reason = f"connection lost: {exc}" if exc is not None else "peer closed the connection"
         event = LinkEvent(LinkEventKind.LOST, f"{self.url}: {reason}")
         call_guarded(self._on_event, event, "event")
+        if not self._reconnect:
+            call_guarded(self._on_event, not_reconnecting(self.url), "event")
         self._start_reconnect()
 
     def _reset_event(self, reason: str) -> None:
         if not self._closing:  # a deliberate close() since: no event, as for any close
             event = LinkEvent(LinkEventKind.LOST, f"reset: {reason} ({self.url})")
             call_guarded(self._on_event, event, "event")
+            if not self._reconnect:
+                call_guarded(self._on_event, not_reconnecting(self.url), "event")
 
     def _start_reconnect(self) -> None:
         if self._reconnect and not self._closing and self._proto is None:

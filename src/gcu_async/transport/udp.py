@@ -56,9 +56,11 @@ Reopening
     Errors never close the socket. If it is closed all the same (by the event loop, after an
     error it cannot handle), a :attr:`~LinkEventKind.LOST` event follows and, with
     ``reconnect=True`` (default), a background task binds a new socket on the same local
-    address with :attr:`UdpTransport.backoff` (by default every 0–2 s for up to a minute),
-    then emits :attr:`~LinkEventKind.RESTORED`; when the schedule runs out it emits a final
-    ``LOST`` starting with ``"giving up"``, as TCP and serial do.
+    address with :attr:`UdpTransport.backoff` (by default every 0–2 s until it succeeds or
+    the transport is closed), then emits :attr:`~LinkEventKind.RESTORED`; when opt-in bounds
+    run out (or with ``reconnect=False``) it emits :attr:`~LinkEventKind.GAVE_UP`, as TCP and
+    serial do. A GCU that goes silent is not a loss here: the session's link health says
+    the link is down, and up again with the next reply, however long the silence.
 """
 
 from __future__ import annotations

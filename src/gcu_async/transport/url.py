@@ -12,12 +12,13 @@ such as ``"false"`` is refused there, it is no bool). **Giving the same option b
 ways is an error** (ValueError), as is an unknown option, a repeated query key, a user
 name, a path, or a fragment. Options per scheme:
 
+- every scheme, how a lost link is restored: ``reconnect``, ``backoff_base`` (s),
+  ``backoff_factor``, ``backoff_cap`` (s), ``max_attempts`` (or none, the default),
+  ``max_total`` (s, or none, the default); keyword only: ``rng`` (a :class:`random.Random`)
 - udp: ``local_port`` (default 2338, 0 = ephemeral), ``local_host``, ``broadcast``,
   ``discovery``, ``follow_peer``, ``reuse_port`` (see
   :class:`~gcu_async.transport.udp.UdpTransport`)
-- tcp: ``connect_timeout`` (s), ``reconnect``, ``backoff_base`` (s), ``backoff_factor``,
-  ``backoff_cap`` (s), ``max_attempts`` (or none), ``max_total`` (s, or none); keyword only:
-  ``rng`` (a :class:`random.Random`)
+- tcp: ``connect_timeout`` (s)
 - serial: ``baudrate`` (115200, 250000, 500000 or 1000000)
 
 Every error is a one-line ValueError that starts with the URL and names the field.

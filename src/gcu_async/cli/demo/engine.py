@@ -18,6 +18,7 @@ from gcu_async.client.telemetry import TelemetrySample
 from gcu_async.errors import CommandFailed, CommandTimeout, LinkLost
 from gcu_async.protocol.enums import Mode, Opcode, PodModel
 from gcu_async.protocol.feedback import Feedback
+from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
 from gcu_async.protocol.pods import POD_NAMES, pod_name, supports
 from gcu_async.protocol.units import wrap_degrees_180
 
@@ -88,6 +89,20 @@ class StepEngine(abc.ABC):
 
     def heading(self) -> float:
         return self.path.heading_at(time.monotonic() - self.started)
+
+    def status(self) -> GcuMainFrame:
+        """The latest main frame (:class:`StepFailed` before the first reply)."""
+        status = self.gcu.status
+        if status is None:
+            raise StepFailed("no reply from the GCU yet")
+        return status
+
+    def info(self) -> GcuSubFrame:
+        """The latest sub frame (:class:`StepFailed` before the first one)."""
+        info = self.gcu.info
+        if info is None:
+            raise StepFailed("no sub frame from the GCU yet")
+        return info
 
     def supported(self, opcode: Opcode) -> bool:
         """Appendix 8 for the reported pod model (unknown models: assume yes)."""

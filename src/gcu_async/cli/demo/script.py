@@ -45,9 +45,9 @@ class Demo(StepEngine):
         await self.cmd("enter_euler_control(pitch=-45)", lambda: self.gcu.enter_euler_control(
             pitch=-45.0, yaw=yaw))  # fmt: skip
         await self.expect_pose(Mode.EULER_CONTROL, pitch=-45.0, yaw=yaw)
-        z0, h0 = relative_attitude(self.gcu.status).yaw, self.heading()
+        z0, h0 = relative_attitude(self.status()).yaw, self.heading()
         await self.hold(3.0, "holding the Euler angles while the aircraft turns")
-        s = self.gcu.status
+        s = self.status()
         self.say(
             f"aircraft turned {wrap_degrees_180(self.heading() - h0):+.1f} deg, camera yaw "
             f"{s.attitude.yaw:.1f}, yaw relative to the aircraft {z0:+.1f} -> "
@@ -61,7 +61,7 @@ class Demo(StepEngine):
         rate = round(min(15.0 * self.speed, 90.0, 0.9 * RATE_LIMIT / zoom), 1)
         await self.cmd(f"enter_pointing_lock(yaw_rate={rate:g})",
                        lambda: self.gcu.enter_pointing_lock(yaw_rate=rate))  # fmt: skip
-        yaw0 = self.gcu.status.attitude.yaw
+        yaw0 = self.status().attitude.yaw
         await self.expect(
             "a 30 deg pan",
             lambda s: (
@@ -87,7 +87,7 @@ class Demo(StepEngine):
 
     async def _zoom_to(self, ratio: float) -> None:
         gcu = self.gcu
-        start = gcu.info.camera1_zoom
+        start = self.info().camera1_zoom
         continuous = not self.supported(Opcode.ZOOM_TO)
         if continuous:
             call = gcu.zoom_in if ratio > start else gcu.zoom_out

@@ -54,11 +54,10 @@ async def _session(opts: DemoOptions, console: Console, report: Report) -> None:
         gcu.update_aircraft(**path.state_at(0.0))
         with contextlib.suppress(asyncio.TimeoutError):
             await asyncio.wait_for(_first_info(gcu), CONNECT_TIMEOUT)
-        model = gcu.pod_model
-        if model is None:
+        model, info = gcu.pod_model, gcu.info
+        if model is None or info is None:
             pod = "pod unknown (no sub frame yet)"
         else:
-            info = gcu.info
             pod = (f"pod {pod_name(model)}, hardware {info.hardware_version:g}, "
                    f"firmware {info.firmware_version:g}")  # fmt: skip
         console.line(f"connected in {(time.monotonic() - t0) * 1000:.0f} ms: {pod}")
