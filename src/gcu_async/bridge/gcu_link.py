@@ -7,24 +7,14 @@ the next host packet, and a command goes to a GCU that answered a moment ago. Wh
 ready, commands wait (within their 2 s), and a setpoint is not taken: a GCU that stopped
 answering would get it, valid, whenever replies return.
 
-This module is also the one place the bridge names the client's states and link events
-that report a transport that gave up and a restart; they are looked up by name, so the
-bridge works with clients that have them and with clients that do not.
+The bridge reopens a client whose transport gave up (state ``FAILED``, event ``GAVE_UP``)
+and forgets what it set on the GCU after a restart (event ``RESTARTED``).
 """
 
 from __future__ import annotations
 
-from typing import Any
-
 from gcu_async.client.client import ClientState, GcuClient
 from gcu_async.transport.base import LinkEvent, LinkEventKind
-
-FAILED: Any = getattr(ClientState, "FAILED", None)
-"""The client's state once its transport gave up reconnecting (``None``: no such state)."""
-GAVE_UP: Any = getattr(LinkEventKind, "GAVE_UP", None)
-"""The link event of a transport that gave up reconnecting (``None``: no such event)."""
-RESTARTED: Any = getattr(LinkEventKind, "RESTARTED", None)
-"""The link event of a GCU or link that restarted (``None``: no such event)."""
 
 
 def ready(client: GcuClient) -> bool:
@@ -43,12 +33,12 @@ def opened(client: GcuClient) -> bool:
 
 def failed(client: GcuClient) -> bool:
     """Has the client's transport given up reconnecting (the bridge then reopens it)?"""
-    return FAILED is not None and client.state is FAILED
+    return client.state is ClientState.FAILED
 
 
 def gave_up(event: LinkEvent) -> bool:
-    return GAVE_UP is not None and event.kind is GAVE_UP
+    return event.kind is LinkEventKind.GAVE_UP
 
 
 def restarted(event: LinkEvent) -> bool:
-    return RESTARTED is not None and event.kind is RESTARTED
+    return event.kind is LinkEventKind.RESTARTED
