@@ -66,3 +66,24 @@ async def test_angle_control_and_centre(gcu_client: GcuClient, gcu_sim_firmware:
             await gcu_client.centre()
     await asyncio.sleep(0.3)
     assert angle_error(gcu_client.status.attitude.yaw, WEST) <= 0.5
+
+
+async def test_the_client_collects_the_gcu_conformance_report(
+    gcu_sim: SimHandle, gcu_sim_firmware: str
+) -> None:
+    """``conformance=True``: every reply and host packet goes into the report; the Z-1Pro's
+    signed yaw is named, the document's firmware gives none, and commands are timed."""
+    async with gcu_sim.client(conformance=True) as gcu:
+        await gcu.reach_attitude(yaw=WEST, timeout=15.0)
+        await gcu.take_photo()
+        report = gcu.conformance()
+    assert ("main.yaw_raw.signed" in report.keys) is FIRMWARES[gcu_sim_firmware].signed_yaw
+    if not FIRMWARES[gcu_sim_firmware].signed_yaw:
+        assert report.keys == ()
+    assert report.replies > 20 and report.host_packets - report.replies in (0, 1, 2)  # in flight
+    assert report.latency["count"] == 2  # the host's opcodes were given: both commands timed
+
+
+async def test_without_the_option_there_is_no_report(gcu_client: GcuClient) -> None:
+    with pytest.raises(ValueError, match="conformance=True"):
+        gcu_client.conformance()

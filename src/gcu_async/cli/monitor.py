@@ -116,22 +116,26 @@ def down_line(gcu: GcuClient) -> str:
 async def _monitor(url: str, interval: float, count: int, timeout: float, as_json: bool,
                    capture: PacketCapture | None = None,
                    report: Path | None = None) -> int:  # fmt: skip
-    if report is None:
-        return await _watch(url, interval, count, timeout, as_json, capture, None)
-    conformance = GcuConformance()
+    opened: list[GcuClient] = []
     try:
-        return await _watch(url, interval, count, timeout, as_json, capture, conformance)
-    finally:  # an interrupt too: the report of what came
-        try:
-            write_report(report, conformance.report().text() + "\n")
-        except OSError as exc:
-            print(f"gcu-async monitor: cannot write the report: {exc}", file=sys.stderr)
+        return await _watch(url, interval, count, timeout, as_json, capture, report is not None,
+                            opened)  # fmt: skip
+    finally:  # an interrupt too: the report of what came (empty if the GCU never answered)
+        if report is not None:
+            gcu = opened[0] if opened else None
+            found = gcu.conformance() if gcu is not None else GcuConformance().report()
+            try:
+                write_report(report, found.text() + "\n")
+            except OSError as exc:
+                print(f"gcu-async monitor: cannot write the report: {exc}", file=sys.stderr)
 
 
 async def _watch(url: str, interval: float, count: int, timeout: float, as_json: bool,
-                 capture: PacketCapture | None,
-                 conformance: GcuConformance | None) -> int:  # fmt: skip
-    async with connect(url, connect_timeout=timeout, capture=capture) as gcu:
+                 capture: PacketCapture | None, conformance: bool,
+                 opened: list[GcuClient]) -> int:  # fmt: skip
+    async with connect(url, connect_timeout=timeout, capture=capture,
+                       conformance=conformance) as gcu:  # fmt: skip
+        opened.append(gcu)
         latest: list[TelemetrySample] = []
         fresh = asyncio.Event()
 
@@ -140,10 +144,6 @@ async def _watch(url: str, interval: float, count: int, timeout: float, as_json:
             fresh.set()
 
         unsubscribe = gcu.on_telemetry(on_sample)
-        if conformance is not None:
-            add = conformance.add_reply
-            stop_report = gcu.on_telemetry(
-                lambda s: add(s.status, s.info, s.feedback, s.received_at))
         loop = asyncio.get_running_loop()
         lines = 0
         try:
@@ -162,8 +162,6 @@ async def _watch(url: str, interval: float, count: int, timeout: float, as_json:
                 lines += 1
         finally:
             unsubscribe()
-            if conformance is not None:
-                stop_report()
     return EXIT_OK
 
 

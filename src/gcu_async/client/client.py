@@ -47,6 +47,7 @@ from gcu_async.client.waiting import (
     Predicate,
     Waiting,
 )
+from gcu_async.conformance import GcuConformance, GcuReport
 from gcu_async.errors import ClientStateError, LinkLost
 from gcu_async.protocol import commands as c
 from gcu_async.protocol.aircraft import AircraftState, aircraft_update
@@ -150,6 +151,8 @@ class GcuClient(OpenClose):
         max_zoom: camera 1's largest zoom ratio (the pod's datasheet: the protocol reports
             no limit). Given, :meth:`zoom_to` and :meth:`reach_zoom` refuse a larger ratio
             before sending; ``None`` (default): only the field's range, 1–3276.8.
+        conformance: collect the GCU conformance report (:meth:`conformance`): every reply
+            and host packet is analysed (a few µs each, bounded memory). Default ``False``.
     """
 
     def __init__(
@@ -171,6 +174,7 @@ class GcuClient(OpenClose):
         clock: Callable[[], float] = time.monotonic,
         capture: PacketCapture | str | os.PathLike[str] | None = None,
         max_zoom: float | None = None,
+        conformance: bool = False,
     ) -> None:
         if not isinstance(transport, Transport):
             raise type_error("transport", "a Transport", transport)
@@ -210,17 +214,19 @@ class GcuClient(OpenClose):
         self._clock = clock
         self._logs = LogLimiter(log, burst=1, window=OPEN_ATTEMPT_LOG_WINDOW, clock=clock,
                                 name=transport.url)  # fmt: skip
-        session.telemetry = False
         self._telemetry = Telemetry(self._consumed)
         self._links: Callbacks[LinkEvent] = Callbacks("link")
+        report = GcuConformance() if check_bool("conformance", conformance) else None
         self._driver = Driver(session, transport, clock, self._telemetry, self._links,
                               check_support=check_support, max_zoom=max_zoom,
-                              restore=restore)  # fmt: skip
+                              restore=restore, conformance=report)  # fmt: skip
+        session.telemetry = report is not None  # the report is fed from telemetry samples
         self._waiting = Waiting(self._driver, self._telemetry, self._links)
 
     def _consumed(self, consumed: bool) -> None:
-        """Telemetry samples are built only while someone consumes them."""
-        self.session.telemetry = consumed
+        """Telemetry samples are built only while someone consumes them (a subscriber, or
+        the conformance report)."""
+        self.session.telemetry = consumed or self._driver.conformance is not None
 
     @property
     def check_support(self) -> bool:
@@ -506,6 +512,16 @@ class GcuClient(OpenClose):
     def link(self) -> LinkHealth:
         """A snapshot of the link's health."""
         return self.session.link_health(self._clock())
+
+    def conformance(self) -> GcuReport:
+        """The GCU conformance report so far: everything the GCU's replies did outside
+        V2.0.6, with counts and examples (docs/conformance.md). Needs the client built with
+        ``conformance=True`` (``ValueError`` otherwise); it covers every reply since."""
+        report = self._driver.conformance
+        if report is None:
+            raise ValueError("conformance: the client was built with conformance=False; "
+                             "pass conformance=True to collect the GCU conformance report")
+        return report.report()
 
     async def telemetry(self, maxsize: int = 1) -> AsyncGenerator[TelemetrySample, None]:
         """Iterate over replies as they arrive. The queue holds ``maxsize`` samples; when

@@ -22,6 +22,7 @@ from gcu_async._lograte import LogLimiter
 from gcu_async.client.restore import restore, restored
 from gcu_async.client.telemetry import Callbacks, Telemetry
 from gcu_async.client.wirelog import WIRE_LOG, log_packet
+from gcu_async.conformance import GcuConformance
 from gcu_async.errors import (
     CommandFailed,
     CommandLinkLost,
@@ -86,7 +87,8 @@ class Driver:
 
     def __init__(self, session: Session, transport: Transport, clock: Callable[[], float],
                  telemetry: Telemetry, links: Callbacks[LinkEvent], *, check_support: bool,
-                 max_zoom: float | None, restore: bool = False) -> None:  # fmt: skip
+                 max_zoom: float | None, restore: bool = False,
+                 conformance: GcuConformance | None = None) -> None:  # fmt: skip
         self.session = session
         self.transport = transport
         self._clock = clock
@@ -96,6 +98,8 @@ class Driver:
         self.max_zoom = max_zoom
         self.restore = restore
         """Restore the mode and zoom after a GCU restart (:mod:`~gcu_async.client.restore`)."""
+        self.conformance = conformance
+        """Fed every packet sent and every reply (the ``conformance`` option), else None."""
         self.state = ClientState.CLOSED
         self.failure: str | None = None
         """Why the client is ``FAILED`` (None in every other state)."""
@@ -360,6 +364,8 @@ class Driver:
                     log_packet(self.transport.url, True, data)
                 try:
                     self.transport.send(data)
+                    if self.conformance is not None:
+                        self.conformance.add_host(data, now)
                 except (LinkLost, OSError) as exc:
                     session.send_failed()  # every heartbeat while the link is down
                     self._logs.log(logging.DEBUG, "send failed", "send failed: %s", exc)
@@ -431,6 +437,9 @@ class Driver:
     def _handle(self, events: Sequence[Event]) -> None:
         for event in events:
             if isinstance(event, TelemetrySample):
+                if self.conformance is not None:
+                    self.conformance.add_reply(event.status, event.info, event.feedback,
+                                               event.received_at)  # fmt: skip
                 self.telemetry.publish(event)
             elif isinstance(event, TicketDone):
                 self._resolve(event.ticket)
