@@ -154,6 +154,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_schema_literals_once.py": FAST,
     "test_session_contract.py": (FAST, HEAVY),  # 100,000 commands in 8 shards
     "test_session_decode_memo.py": FAST,
+    "test_session_deviation_log.py": FAST,
     "test_session_gate.py": FAST,
     "test_session_heartbeat_sockets.py": ("subprocess", ALONE),
     "test_session_pacing.py": FAST,

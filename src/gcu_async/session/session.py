@@ -47,6 +47,7 @@ from gcu_async.errors import (
     RemoteProtocolError,
 )
 from gcu_async.protocol.aircraft import AircraftState
+from gcu_async.protocol.anomalies import Anomaly
 from gcu_async.protocol.commands import AnomalousCommand, Command, NullCommand, command_code
 from gcu_async.protocol.deframer import Deframer
 from gcu_async.protocol.enums import (
@@ -99,6 +100,8 @@ _RECORDING = int(CameraFlags.RECORDING)
 RATE_MIN_HZ = 2.0
 """Slowest heartbeat accepted (the protocol advises 30–50 Hz and must never stop)."""
 RATE_MAX_HZ = 200.0
+FLAGGED_MAX = 64
+"""Kinds of anomaly logged once each per session (a GCU sending junk cannot flood the log)."""
 MIN_WAKE = 1e-4
 """Seconds; the smallest step :meth:`Session.next_wakeup` asks for while no packet may go
 (a floor against float round-off, never a busy loop)."""
@@ -233,6 +236,8 @@ class Session:
         function of the bytes: a repeated datagram reuses it)."""
         self._silent_at = math.inf
         """When the link counts as lost if no reply comes first (set by every reply)."""
+        self._flagged: set[tuple[str, str]] = set()
+        """The kinds of anomaly (field, detail) already logged (:meth:`_flag`)."""
 
     # -- lifecycle -------------------------------------------------------------------------
     @property
@@ -621,9 +626,24 @@ class Session:
                         "with the V2.0.6 layout; further ones are only counted "
                         "(link_health().other_versions)", self.name, version)  # fmt: skip
 
+    def _flag(self, anomalies: tuple[Anomaly, ...]) -> None:
+        """Log each kind of value outside V2.0.6 (field and reading) the first time a reply
+        carries it: a firmware deviation is said once, not per packet; every reply keeps its
+        own in its ``anomalies``."""
+        for anomaly in anomalies:
+            key = (anomaly.field, anomaly.detail)
+            if key in self._flagged or len(self._flagged) >= FLAGGED_MAX:
+                continue
+            self._flagged.add(key)
+            log.warning("%s: the GCU sends a value outside V2.0.6, %s; said once, each reply "
+                        "keeps it in its anomalies (docs/protocol-notes.md, \"What real pods "
+                        "do\")", self.name, anomaly)  # fmt: skip
+
     def _on_reply(self, main: GcuMainFrame, sub: GcuSubFrame | None, feedback: Feedback,
                   now: float, earliest: float | None) -> None:  # fmt: skip
         self._health.on_reply(now)
+        if main is not self._status and (main.anomalies or feedback.anomalies):
+            self._flag(main.anomalies + feedback.anomalies)  # a new frame: an idle GCU repeats
         # the first instant the silence since this reply exceeds silence_timeout
         self._silent_at = math.nextafter(now + self.silence_timeout, math.inf)
         self._status = main
