@@ -21,7 +21,7 @@ from typing import Any
 from gcu_async.bridge import CameraConfig, MavlinkBridge
 from gcu_async.bridge._mavlink import mavlink, mavutil
 from gcu_async.client.connect import connect
-from gcu_async.sim import GcuSimulator, SimulatorModel
+from gcu_async.sim import DEFAULT_FIRMWARE, GcuSimulator, SimulatorModel
 
 SYSTEM = 1
 GIMBAL = mavlink.MAV_COMP_ID_GIMBAL
@@ -204,6 +204,10 @@ class Rig:
             await asyncio.sleep(0.05)
 
 
+FIRMWARE = DEFAULT_FIRMWARE
+"""The firmware the rig's simulator plays (tests/bridge/conftest.py sets it per test)."""
+
+
 @contextlib.asynccontextmanager
 async def bridge_rig(pod: str = "D-90Pro(TA)", *, max_zoom: float | None = 30.0,
                      video_url: str | None = "rtsp://127.0.0.1:8554/main",
@@ -211,7 +215,7 @@ async def bridge_rig(pod: str = "D-90Pro(TA)", *, max_zoom: float | None = 30.0,
                      **bridge_options: Any) -> AsyncIterator[Rig]:  # fmt: skip
     """The whole chain running; the ground station has seen both heartbeats.
     ``extra_links``: more connection strings for the bridge (after the two peers')."""
-    sim = GcuSimulator(SimulatorModel(pod, record_executions=True))
+    sim = GcuSimulator(SimulatorModel(pod, firmware=FIRMWARE, record_executions=True))
     packet_times: list[float] = []
     handle = sim.model.handle
 

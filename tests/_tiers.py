@@ -72,6 +72,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_bridge_links.py": ("realtime", ALONE),
     "test_bridge_links_endpoint.py": FAST,
     "test_bridge_mapping.py": FAST,
+    "test_bridge_outage_matrix.py": "subprocess",
     "test_bridge_mavsdk.py": "realtime",
     "test_bridge_qgc.py": "realtime",
     "test_bridge_rig.py": "realtime",

@@ -35,7 +35,13 @@ async def test_discovery_answers_broadcast_requests_for_gimbal_information() -> 
         assert ack.result == ACCEPTED
         dev = await gcs.wait("GIMBAL_DEVICE_INFORMATION", new=False)
         assert dev.vendor_name == "XF Robot" and dev.model_name == "D-90Pro(TA)"
-        assert dev.firmware_version == 5 and dev.hardware_version == 3 | 1 << 8  # 5.0, 3.1
+        # the versions the GCU reports (document firmware: 5.0, 3.1; the Z-1Pro's: 6.7, 0.1)
+        # as MAVLink packs them: major in the low byte, minor in the next
+        reported = rig.bridge.client.info
+        assert reported is not None
+        for field, version in ((dev.firmware_version, reported.firmware_version_raw),
+                               (dev.hardware_version, reported.hardware_version_raw)):
+            assert field == version // 10 | version % 10 << 8, (field, version)
         assert dev.gimbal_device_id == 1
 
 

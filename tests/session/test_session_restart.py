@@ -217,6 +217,26 @@ def test_the_same_change_without_an_explanation_is_a_restart() -> None:
     rig.check()
 
 
+@pytest.mark.parametrize("settled", [True, False])
+def test_a_zoom_to_a_fraction_is_judged_by_its_reports(settled: bool) -> None:
+    """A fraction's ratio is unknown to the host: once the reported zoom stopped changing
+    for REPORT_SETTLE the zoom counts as still, and a restart to 1x is seen; while it still
+    changes, the change is explained."""
+    rig = rig_with_state()
+    ticket = rig.submit(ZoomTo(fraction=0.5))
+    rig.run_while(rig.pending, 5.0)
+    assert ticket is not None and ticket.state is TicketState.SUCCEEDED
+    rig.run_until(rig.now + (8.0 if settled else 0.3))
+    outage(rig, 30.0, restarted=True)
+    events = of(rig, Restarted)
+    if settled:
+        (event,) = events
+        assert any(c.aspect == "zoom" and c.after == "1x" for c in event.changes), event
+    else:
+        assert all(c.aspect != "zoom" for e in events for c in e.changes), events
+    rig.check()
+
+
 def test_a_restart_that_changes_nothing_is_not_seen() -> None:
     """A GCU in its power-on state restarts: no aspect differs, nothing to restore."""
     rig = Rig(Session(reorder_guard=0.015))

@@ -16,7 +16,8 @@ host did, or a change already under way, explains it:
   packets still on their way);
 - the zoom was moving: a continuous zoom (zoom in / out) was not stopped, a ``zoom_to``
   ratio had not been reached, or the reported zoom changed within :data:`REPORT_SETTLE`
-  seconds before the last reply;
+  seconds before the last reply (all a ``zoom_to_fraction`` target can be judged by: the
+  host does not know the maximum it is a fraction of);
 - the pod was tracking, or ran click-to-pan or tracking last: it leaves those modes by
   itself.
 
@@ -164,8 +165,8 @@ class RestartWatch:
         if int(command.OPCODE) in _CONTINUOUS:
             return True
         if isinstance(command, ZoomTo):
-            if command.ratio is None:
-                return True  # a fraction of a maximum the host does not know
+            if command.ratio is None:  # a fraction of a maximum the host does not know:
+                return False  # the reports, unchanged for REPORT_SETTLE, say it stopped
             target = round(command.ratio * ZOOM_SCALE)
             return before.zoom_raw is None or abs(before.zoom_raw - target) > _ZOOM_STEP
         return False

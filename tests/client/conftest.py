@@ -1,0 +1,11 @@
+"""This folder's simulators play every firmware where tests/_firmwares.py says so."""
+
+from __future__ import annotations
+
+import pytest
+
+from _firmwares import parametrize
+
+
+def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
+    parametrize(metafunc, "gcu_sim_firmware")
