@@ -95,6 +95,7 @@ check: lint
 bench: $(DEV_STAMP)
 	$(BIN)/python benchmarks/bench_codec.py
 	$(BIN)/python benchmarks/bench_client.py
+	$(BIN)/python benchmarks/bench_capacity.py
 
 clean:
 	rm -rf $(VENV) $(VENV)-3.* site .pytest_cache .mypy_cache .ruff_cache .hypothesis
