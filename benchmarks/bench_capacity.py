@@ -2,7 +2,7 @@
 
 Run from the repository root::
 
-    .venv/bin/python benchmarks/bench_capacity.py            # default: about 12-15 minutes
+    .venv/bin/python benchmarks/bench_capacity.py            # default: 10-15 minutes
     .venv/bin/python benchmarks/bench_capacity.py --quick    # under a minute
     .venv/bin/python benchmarks/bench_capacity.py --profile client:gcu:100   # where time goes
 
@@ -918,7 +918,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             or args.window <= 0 or args.start < 1 or args.max < args.start
             or args.resolution <= 0):  # fmt: skip
         ap.error("parts: client, sim; positive counts and durations; --max >= --start")
-    print("gcu_async capacity benchmark" + (" (--quick)" if quick else ""))
+    print(
+        "gcu_async capacity benchmark"
+        + (f" (--quick: a smoke test, at most {args.max} sessions; no figures)" if quick else "")
+    )
     for line in machine_lines():
         print(f"  {line}")
     packet = heartbeat()
