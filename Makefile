@@ -112,6 +112,7 @@ bench: $(DEV_STAMP)
 	$(BIN)/python benchmarks/bench_codec.py
 	$(BIN)/python benchmarks/bench_client.py
 	$(BIN)/python benchmarks/bench_conformance.py
+	$(BIN)/python benchmarks/bench_capacity.py
 
 clean:
 	rm -rf $(VENV) $(VENV)-3.* site .pytest_cache .mypy_cache .ruff_cache .hypothesis

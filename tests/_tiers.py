@@ -57,6 +57,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_protocol_frame_schema.py": FAST,
     "test_protocol_decode_differential.py": FAST,
     "test_aircraft_feed_sockets.py": "subprocess",
+    "test_bench_capacity.py": "subprocess",
     "test_bridge_admission.py": FAST,
     "test_bridge_adversarial.py": ("subprocess", ALONE),
     "test_bridge_autopilot.py": "realtime",
