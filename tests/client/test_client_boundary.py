@@ -635,6 +635,7 @@ def _client_options(owner: str, build: Callable[[dict[str, Any]], GcuClient],
         read=lambda rig, c: c.open_timeout, **positive)  # inf: until closed
     opt("wait", "bool", valid=(True, False), read=lambda rig, c: c.wait)
     opt("restore", "bool", valid=(True, False), read=lambda rig, c: c.restore)
+    opt("conformance", "bool", valid=(True, False), read=lambda rig, c: c.conformance)
     opt("reorder_guard", "real", low=0.0, optional=True, valid=(None, 0.0, 0.015, 1e300),
         read=lambda rig, c: c.reorder_guard,
         expected=lambda v: default_guard if v is None else v)  # fmt: skip
@@ -1098,7 +1099,8 @@ def test_arbitrary_values_accepted_iff_valid(data: st.DataObject) -> None:
 # --- properties and argument-free entry points --------------------------------------------------
 PROPERTIES = sorted(n for n, v in inspect.getmembers(GcuClient) if isinstance(v, property)
                     and not n.startswith("_"))  # fmt: skip
-NO_ARGUMENTS = ("open", "close", "centre", "release_control", "link_events")
+NO_ARGUMENTS = ("open", "close", "centre", "release_control", "link_events",
+                "conformance_report")
 
 
 async def test_properties_do_not_raise_on_an_open_client(rig: Rig) -> None:

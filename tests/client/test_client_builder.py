@@ -261,7 +261,7 @@ SURFACE = {
         "reorder_guard: 'float | None' = None, aircraft_timeout: 'float' = 1.0, "
         "version: 'int' = 2, clock: 'Callable[[], float]' = <built-in function monotonic>, "
         "capture: 'PacketCapture | str | os.PathLike[str] | None' = None, "
-        "max_zoom: 'float | None' = None) -> 'None'"
+        "max_zoom: 'float | None' = None, conformance: 'bool' = False) -> 'None'"
     ),
     "aircraft": "property",
     "aircraft_timeout": "property",
@@ -273,6 +273,8 @@ SURFACE = {
     ),
     "close": "await (self) -> 'None'",
     "command_timeout": "property",
+    "conformance": "property",
+    "conformance_report": "call (self) -> 'GcuReport'",
     "control": "property",
     "control_valid": "property",
     "enter_angle_control": (

@@ -76,7 +76,7 @@ async def test_the_client_collects_the_gcu_conformance_report(
     async with gcu_sim.client(conformance=True) as gcu:
         await gcu.reach_attitude(yaw=WEST, timeout=15.0)
         await gcu.take_photo()
-        report = gcu.conformance()
+        report = gcu.conformance_report()
     assert ("main.yaw_raw.signed" in report.keys) is FIRMWARES[gcu_sim_firmware].signed_yaw
     if not FIRMWARES[gcu_sim_firmware].signed_yaw:
         assert report.keys == ()
@@ -86,4 +86,4 @@ async def test_the_client_collects_the_gcu_conformance_report(
 
 async def test_without_the_option_there_is_no_report(gcu_client: GcuClient) -> None:
     with pytest.raises(ValueError, match="conformance=True"):
-        gcu_client.conformance()
+        gcu_client.conformance_report()

@@ -34,6 +34,7 @@ def test_every_client_keyword_goes_to_the_client() -> None:
         "open_timeout": 4.0, "wait": False, "restore": True, "silence_timeout": 0.75,
         "check_support": True,
         "reorder_guard": 0.02, "aircraft_timeout": 2.0, "version": 1, "max_zoom": 30.0,
+        "conformance": True,
     }  # fmt: skip
     gcu = connect("udp://127.0.0.1:4000", local_port=0, **values)
     for name, value in values.items():

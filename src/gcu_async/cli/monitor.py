@@ -123,7 +123,7 @@ async def _monitor(url: str, interval: float, count: int, timeout: float, as_jso
     finally:  # an interrupt too: the report of what came (empty if the GCU never answered)
         if report is not None:
             gcu = opened[0] if opened else None
-            found = gcu.conformance() if gcu is not None else GcuConformance().report()
+            found = gcu.conformance_report() if gcu is not None else GcuConformance().report()
             try:
                 write_report(report, found.text() + "\n")
             except OSError as exc:

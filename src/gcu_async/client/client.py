@@ -151,7 +151,7 @@ class GcuClient(OpenClose):
         max_zoom: camera 1's largest zoom ratio (the pod's datasheet: the protocol reports
             no limit). Given, :meth:`zoom_to` and :meth:`reach_zoom` refuse a larger ratio
             before sending; ``None`` (default): only the field's range, 1–3276.8.
-        conformance: collect the GCU conformance report (:meth:`conformance`): every reply
+        conformance: collect the GCU conformance report (:meth:`conformance_report`): every reply
             and host packet is analysed (a few µs each, bounded memory). Default ``False``.
     """
 
@@ -513,7 +513,13 @@ class GcuClient(OpenClose):
         """A snapshot of the link's health."""
         return self.session.link_health(self._clock())
 
-    def conformance(self) -> GcuReport:
+    @property
+    def conformance(self) -> bool:
+        """Whether the client collects the GCU conformance report (the ``conformance``
+        option; :meth:`conformance_report`)."""
+        return self._driver.conformance is not None
+
+    def conformance_report(self) -> GcuReport:
         """The GCU conformance report so far: everything the GCU's replies did outside
         V2.0.6, with counts and examples (docs/conformance.md). Needs the client built with
         ``conformance=True`` (``ValueError`` otherwise); it covers every reply since."""
