@@ -9,6 +9,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from _protocol_strategies import seal
+from _scale import FULL
 from _z1pro import MOVE_AGREEMENT_DEG, MOVES, YAW_BANDS, main_frame, reply
 from gcu_async.errors import FieldRangeError
 from gcu_async.protocol import GcuMainFrame, GcuPacket, decode_gcu_packet
@@ -28,8 +29,13 @@ def expected_heading(raw: int) -> float:
     return (raw - 36000) / 100
 
 
+EDGES = {0, 17999, 18000, 35999, 36000, 47535, 47536, 0xFFFF}
+RAWS = range(0x10000) if FULL else sorted({*range(0, 0x10000, 13), *EDGES})
+"""Every raw value at full size; a thirteenth of them and every band's edges at reduced size."""
+
+
 def test_every_raw_yaw_reads_as_a_heading_in_0_360_and_keeps_its_raw_value() -> None:
-    for raw in range(0x10000):
+    for raw in RAWS:
         frame = GcuMainFrame(yaw_raw=raw)
         yaw = frame.attitude.yaw
         assert 0.0 <= yaw < 360.0, raw
