@@ -90,6 +90,9 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_cli_demo.py": "subprocess",
     "test_cli_exit_status.py": "subprocess",
     "test_cli_monitor.py": "subprocess",
+    "test_cli_monitor_passive.py": "subprocess",
+    "test_cli_passive_rules.py": FAST,
+    "test_cli_usage_style.py": FAST,
     "test_cli_negative_values.py": FAST,
     "test_cli_gcu_report.py": "subprocess",
     "test_cli_decode_report.py": "subprocess",
@@ -165,6 +168,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_session_sockets.py": ("realtime", ALONE),  # reordering below the 15 ms guard
     "test_sim_cli.py": "subprocess",
     "test_sim_cli_report.py": "subprocess",
+    "test_sim_exports.py": FAST,
     "test_sim_firmware.py": FAST,
     "test_sim_execution_log.py": FAST,
     "test_sim_fault_bounds.py": FAST,
