@@ -30,6 +30,7 @@ from gcu_async.cli._exit import (
     EXIT_OK,
     EXIT_USAGE,
     missing_extra,
+    silence_stdout,
 )
 from gcu_async.cli._report import GCU_REPORT_HELP, add_report_option, write_report
 from gcu_async.conformance import GcuConformance
@@ -164,14 +165,6 @@ class _Failure(Exception):
     def __init__(self, message: str, status: int = EXIT_FAILED) -> None:
         super().__init__(message)
         self.status = status
-
-
-def _silence_stdout() -> None:
-    import os
-
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(devnull, sys.stdout.fileno())
-    os.close(devnull)
 
 
 class _Output:
@@ -337,7 +330,7 @@ def _run(args: argparse.Namespace, output: _Output) -> int:
     except KeyboardInterrupt:  # Ctrl-C while reading a device or a pipe
         return _fail("interrupted", EXIT_INTERRUPTED)
     except BrokenPipeError:  # e.g. piped into `head`: the reader has all it wants
-        _silence_stdout()
+        silence_stdout()
         return EXIT_OK if output.count else EXIT_FAILED
     except _Failure as exc:
         return _fail(str(exc), exc.status)
@@ -354,6 +347,6 @@ def _fail(message: str, status: int) -> int:
     try:
         sys.stdout.flush()
     except BrokenPipeError:
-        _silence_stdout()
+        silence_stdout()
     print(f"gcu-async decode: {message}", file=sys.stderr)
     return status
