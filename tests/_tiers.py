@@ -131,6 +131,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_import_graph.py": FAST,
     "test_mavlink_mapping.py": FAST,
     "test_netns_lan.py": "netns",
+    "test_netns_passive.py": "netns",
     "test_netns_shared_port.py": "netns",
     "test_netns_tcp.py": "netns",
     "test_netns_udp.py": "netns",
