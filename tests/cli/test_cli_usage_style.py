@@ -26,6 +26,8 @@ CASES = [
     (["monitor", "udp://127.0.0.1", "--interval", "0"], "gcu-async monitor: --interval: "),
     (["send", "udp://127.0.0.1", "--bogus", "take-photo"],
      "gcu-async send: unrecognized arguments: --bogus"),
+    (["send", "udp://127.0.0.1"],  # a command may take no argument: ask for none
+     "gcu-async send: the following arguments are required: COMMAND (see gcu-async send"),
     (["decode", "--bogus"], "gcu-async decode: unrecognized arguments: --bogus"),
     (["wireshark"], "gcu-async wireshark: one of the arguments"),
 ]  # fmt: skip

@@ -51,6 +51,12 @@ MAX_KINDS = 1000
 packet (never dropped)."""
 
 
+TERMINAL_HINT = ("gcu-async decode: reading hex from the terminal, decoded line by line; end "
+                 "with Ctrl-D (or give the hex as arguments, or --file FILE)")  # fmt: skip
+"""Said when stdin is a terminal: otherwise ``decode`` without arguments would wait
+silently."""
+
+
 def register(sub: Any) -> None:
     p = sub.add_parser(
         "decode",
@@ -324,6 +330,8 @@ def _run(args: argparse.Namespace, output: _Output) -> int:
         if args.file is not None:
             _decode_file(args.file, output)
         else:
+            if not args.hex and sys.stdin.isatty():  # a new user's `gcu-async decode`
+                print(TERMINAL_HINT, file=sys.stderr, flush=True)
             text = [" ".join(args.hex)] if args.hex else _text_chunks(sys.stdin)
             _scan_bytes(iter_hex(text), output)
         sys.stdout.flush()

@@ -118,8 +118,9 @@ def register(sub: Any) -> None:
     p.add_argument("url", metavar="URL",
                    help="udp://HOST[:PORT], tcp://HOST[:PORT] or serial:///dev/…")
     p.add_argument("name", metavar="COMMAND", help="one of the commands below")
-    p.add_argument("args", nargs=argparse.REMAINDER, metavar="ARG ...",
-                   help="the command's arguments, then options")
+    rest = p.add_argument("args", nargs=argparse.REMAINDER, metavar="ARG ...",
+                          help="the command's arguments, then options")
+    rest.required = False  # argparse takes a REMAINDER for required; a command may take none
     _shared_options(p)
     p.set_defaults(run=run)  # fmt: skip
 
