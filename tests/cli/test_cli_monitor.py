@@ -4,6 +4,7 @@ process): JSON lines, lines during an outage, a clean end on SIGTERM and Ctrl-C.
 from __future__ import annotations
 
 import json
+import re
 import selectors
 import signal
 import subprocess
@@ -106,3 +107,52 @@ def test_a_negative_count_is_a_usage_error() -> None:
                           capture_output=True, text=True, timeout=30, check=False)  # fmt: skip
     assert done.returncode == 2
     assert done.stderr.startswith("gcu-async monitor: --count: -1")
+
+
+def test_no_rate_while_its_window_is_still_filling(sim: SimProcess) -> None:
+    """The reply rate counts the replies of the last second: the lines less than a second
+    after the first reply show none (``-/s``, JSON ``null``) rather than a low figure."""
+    for as_json in (False, True):
+        done = subprocess.run([*CLI, "monitor", f"{sim.url}?local_port=0", "--count", "4",
+                               "--interval", "0.4", *(["--json"] if as_json else [])],
+                              capture_output=True, text=True, timeout=30, check=False)  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        lines = done.stdout.splitlines()
+        assert len(lines) == 4
+        if as_json:
+            rates = [json.loads(line)["link"]["reply_rate"] for line in lines]
+        else:
+            rates = [re.search(r"link up (\S+)/s", line)[1] for line in lines]  # type: ignore[index]
+        # lines at about 0, 0.4, 0.8, 1.2 s after the first reply: the last one past 1 s
+        assert rates[0] in (None, "-"), lines
+        assert rates[-1] not in (None, "-") and float(rates[-1]) > 10, lines
+        known = [r not in (None, "-") for r in rates]
+        assert known == sorted(known), lines  # once known, it stays known
+
+
+def test_a_reader_that_leaves_ends_it_quietly(sim: SimProcess) -> None:
+    """``gcu-async monitor URL | head -n 1``: once the reader has gone, it stops with
+    status 0 and says nothing (no "Broken pipe", no traceback)."""
+    proc = monitor(sim, "--interval", "0.1")
+    read_lines(proc, 1, 10.0)
+    assert proc.stdout is not None
+    proc.stdout.close()
+    try:
+        _, err = proc.communicate(timeout=15)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert (proc.returncode, err) == (0, "")
+
+
+def test_help_says_what_its_heartbeat_does_and_points_to_passive() -> None:
+    done = subprocess.run([*CLI, "monitor", "--help"], capture_output=True, text=True,
+                          timeout=30, check=False)  # fmt: skip
+    text = " ".join(done.stdout.split())
+    assert "sends its own heartbeat (50 packets/s, no aircraft data, control values invalid)" \
+        in text  # fmt: skip
+    assert "a 20 °/s pointing-lock rate came out at 4-16 °/s" in text
+    assert "use --passive (UDP): it sends nothing" in text
+    assert "--passive listen only (udp://)" in text
+    assert "Not for tcp:// or serial://" in text

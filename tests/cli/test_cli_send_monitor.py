@@ -180,3 +180,19 @@ def test_monitor_bad_url_exits_2() -> None:
     result = run("monitor", "udp://")
     assert result.returncode == 2
     assert result.stderr.startswith("gcu-async monitor:")
+
+
+def test_send_whose_reader_has_gone_keeps_its_status_and_says_nothing(sim_url: str) -> None:
+    """``gcu-async send … | head -c 0``: the command still runs and its exit status is
+    its outcome; the closed pipe costs no traceback."""
+    proc = subprocess.Popen([*CLI, "send", f"{sim_url}?local_port=0", "take-photo"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
+    assert proc.stdout is not None
+    proc.stdout.close()  # before the result is printed
+    try:
+        _, err = proc.communicate(timeout=20)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert (proc.returncode, err) == (0, "")

@@ -332,3 +332,26 @@ def test_hex_in_pieces_reads_as_the_whole_text(
         error, got = str(exc), None
     assert got == want
     assert got is not None or error.startswith("not hex: ")
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="a pty")
+def test_hex_typed_at_a_terminal_is_announced_then_decoded() -> None:
+    """``gcu-async decode`` with no argument at a terminal says it reads the terminal and
+    how to end (it would wait silently otherwise); a pipe gets no such line."""
+    import os
+    import pty
+
+    master, slave = pty.openpty()
+    try:
+        proc = subprocess.Popen([*_entry_point(), "decode"], stdin=slave, stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, text=True)  # fmt: skip
+        os.close(slave)
+        os.write(master, GCU_EXAMPLE.hex(" ").encode() + b"\n\x04")  # a line, then Ctrl-D
+        out, err = proc.communicate(timeout=30)
+    finally:
+        os.close(master)
+    assert proc.returncode == 0, err
+    assert err.splitlines()[0] == decode_cli.TERMINAL_HINT
+    assert json.loads(out.splitlines()[0])["direction"] == "gcu_to_host"
+    piped = run_cli(stdin=GCU_EXAMPLE.hex())
+    assert piped.returncode == 0 and decode_cli.TERMINAL_HINT not in piped.stderr

@@ -194,10 +194,10 @@ def test_loss_one_drops_everything(sims: list[Sim]) -> None:
 
 
 BAD_OPTIONS = [
-    (["--listen", "ftp://127.0.0.1"], "listen URL"),
+    (["--listen", "ftp://127.0.0.1"], "--listen: listen URL"),
     (["--listen", "udp://127.0.0.1:70000"], "port"),
     (["--listen", "tcp://"], "host: missing"),
-    (["--pod", "X-1"], "pod model"),
+    (["--pod", "X-1"], "--pod: 'X-1' is not one of"),
     (["--loss", "1.5"], "--loss"),
     (["--delay", "-1"], "--delay"),
     (["--listen", "tcp://127.0.0.1:0", "--reply-to", "127.0.0.1:2338"], "--reply-to"),
@@ -209,7 +209,7 @@ BAD_OPTIONS = [
     (["--reorder-hold", "inf"], "--reorder-hold"),
     (["--stall", "0"], "--stall"),
     (["--stall", "inf"], "--stall"),
-    (["--max-zoom", "0.5"], "max_zoom"),
+    (["--max-zoom", "0.5"], "--max-zoom: 0.5 is outside"),
 ]
 
 
@@ -382,3 +382,62 @@ def test_without_stall_sighup_keeps_its_default_action(sims: list[Sim]) -> None:
     sim.proc.send_signal(signal.SIGHUP)
     sim.proc.communicate(timeout=10)
     assert sim.proc.returncode == -signal.SIGHUP
+
+
+REPORT_HEAD = "Host conformance to V2.0.6"
+
+
+@pytest.mark.parametrize("quiet", [False, True])
+def test_quiet_prints_no_report_at_exit_and_the_file_still_gets_it(
+    sims: list[Sim], tmp_path: Path, quiet: bool
+) -> None:
+    """``-q`` means quiet: no command log and no report at exit on stderr; ``--report``
+    (asking for it) still writes it. Without ``-q`` both are printed."""
+    report = tmp_path / "host.txt"
+    sim = Sim("--listen", "udp://127.0.0.1:0", "--report", str(report), *(["-q"] * quiet))
+    sims.append(sim)
+    _udp_request(_address(sim.url), host_bytes(TakePhoto()))
+    status, err = sim.stop(signal.SIGTERM)
+    assert status == EXIT_INTERRUPTED
+    assert report.read_text(encoding="utf-8").startswith(f"{REPORT_HEAD}: 1 packets")
+    if quiet:
+        assert err == ""
+    else:
+        assert REPORT_HEAD in err and "executed TAKE_PHOTO" in err
+
+
+def test_help_says_what_quiet_leaves_out() -> None:
+    done = subprocess.run([*CLI, "sim", "--help"], capture_output=True, text=True, timeout=20)
+    text = " ".join(done.stdout.split())
+    assert "log nothing and print no report at exit (--report, --report-json and SIGQUIT " \
+           "still give it)" in text  # fmt: skip
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="broadcast on loopback: Linux")
+def test_reply_to_broadcast_on_loopback_reaches_every_listener_on_the_port(
+    sims: list[Sim],
+) -> None:
+    """The loopback interface has no broadcast address of its own, yet Linux delivers a
+    datagram to 127.255.255.255 to every socket on its port: ``--reply-to broadcast``
+    there is a GCU on this machine that every local listener hears (two here, sharing the
+    port as the application and ``monitor --passive`` do)."""
+    listeners = []
+    try:
+        for _ in range(2):
+            s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEPORT, 1)
+            s.bind(("0.0.0.0", listeners[0].getsockname()[1] if listeners else 0))
+            s.settimeout(2.0)
+            listeners.append(s)
+        port = listeners[0].getsockname()[1]
+        sim = Sim("--listen", "udp://127.0.0.1:0", "--reply-to", f"broadcast:{port}")
+        sims.append(sim)
+        assert f"(replies to 127.255.255.255:{port})" in sim.line
+        listeners[0].sendto(host_bytes(TakePhoto()), _address(sim.url))
+        for s in listeners:
+            reply, source = s.recvfrom(4096)
+            assert source == _address(sim.url)
+            assert decode_gcu_packet(reply).feedback.opcode == Opcode.TAKE_PHOTO
+    finally:
+        for s in listeners:
+            s.close()

@@ -41,7 +41,21 @@ def build_parser() -> argparse.ArgumentParser:
     mavlink_bridge.register(sub)
     for command in sub.choices.values():
         command.add_argument("-v", "--verbose", action="count", default=0, help=VERBOSE_HELP)
+        command.set_defaults(command_parser=command)
     return parser
+
+
+def parse(parser: argparse.ArgumentParser, argv: Sequence[str] | None) -> argparse.Namespace:
+    """``parser.parse_args(argv)``, except that an argument no parser knows is reported by
+    the sub-command it was given to (``gcu-async demo: unrecognized arguments: --bogus``),
+    not by ``gcu-async``: each sub-command's usage errors carry its own name."""
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        given = list(sys.argv[1:] if argv is None else argv)
+        before = given[: given.index(args.command)] if args.command in given else given
+        owner = parser if any(arg in before for arg in extra) else args.command_parser
+        owner.error(f"unrecognized arguments: {' '.join(extra)}")
+    return args
 
 
 def configure_logging(verbose: int) -> None:
@@ -55,8 +69,7 @@ def configure_logging(verbose: int) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``gcu-async`` console script; returns the exit status."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parse(build_parser(), argv)
     configure_logging(args.verbose)
     status: int = args.run(args)
     return status

@@ -1,12 +1,14 @@
 """Exit statuses shared by every sub-command (docs/cli.md, "Exit status"), the checks of
-the usage rule they share (a missing extra, a number of seconds), and running a coroutine so
-that Ctrl-C and SIGTERM end it cleanly."""
+the usage rule they share (a missing extra, a number of seconds), running a coroutine so
+that Ctrl-C and SIGTERM end it cleanly, and stopping quietly when the reader of stdout
+leaves (``gcu-async monitor … | head``)."""
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
 import math
+import os
 import signal
 import sys
 from collections.abc import Coroutine
@@ -56,6 +58,17 @@ def check_seconds(option: str, value: float, *, zero: bool = False,
     return value
 
 
+def silence_stdout() -> None:
+    """The reader of stdout has gone (``| head`` has all it wants, a closed pipe): point
+    stdout at the null device, so that nothing more, not even the flush at exit, fails
+    with ``BrokenPipeError``. The caller then ends quietly."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, sys.stdout.fileno())
+    finally:
+        os.close(devnull)
+
+
 class Interrupted(Exception):
     """SIGINT or SIGTERM ended the work (exit status :data:`EXIT_INTERRUPTED`)."""
 
@@ -89,4 +102,4 @@ async def interruptible(work: Coroutine[Any, Any, T]) -> T:
 
 __all__ = ["EXIT_FAILED", "EXIT_INTERRUPTED", "EXIT_MISSING_EXTRA", "EXIT_OK", "EXIT_USAGE",
            "SECONDS_MAX", "Interrupted", "check_seconds", "install_hint", "interruptible",
-           "missing_extra"]
+           "missing_extra", "silence_stdout"]

@@ -30,6 +30,7 @@ from gcu_async.cli._exit import (
     EXIT_OK,
     EXIT_USAGE,
     missing_extra,
+    silence_stdout,
 )
 from gcu_async.cli._report import GCU_REPORT_HELP, add_report_option, write_report
 from gcu_async.conformance import GcuConformance
@@ -48,6 +49,12 @@ stream: an error (``/dev/zero``, a sparse file), not a read to its end."""
 MAX_KINDS = 1000
 """Kinds of anomaly stderr remembers having shown; past that, new kinds are shown at every
 packet (never dropped)."""
+
+
+TERMINAL_HINT = ("gcu-async decode: reading hex from the terminal, decoded line by line; end "
+                 "with Ctrl-D (or give the hex as arguments, or --file FILE)")  # fmt: skip
+"""Said when stdin is a terminal: otherwise ``decode`` without arguments would wait
+silently."""
 
 
 def register(sub: Any) -> None:
@@ -164,14 +171,6 @@ class _Failure(Exception):
     def __init__(self, message: str, status: int = EXIT_FAILED) -> None:
         super().__init__(message)
         self.status = status
-
-
-def _silence_stdout() -> None:
-    import os
-
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(devnull, sys.stdout.fileno())
-    os.close(devnull)
 
 
 class _Output:
@@ -331,13 +330,15 @@ def _run(args: argparse.Namespace, output: _Output) -> int:
         if args.file is not None:
             _decode_file(args.file, output)
         else:
+            if not args.hex and sys.stdin.isatty():  # a new user's `gcu-async decode`
+                print(TERMINAL_HINT, file=sys.stderr, flush=True)
             text = [" ".join(args.hex)] if args.hex else _text_chunks(sys.stdin)
             _scan_bytes(iter_hex(text), output)
         sys.stdout.flush()
     except KeyboardInterrupt:  # Ctrl-C while reading a device or a pipe
         return _fail("interrupted", EXIT_INTERRUPTED)
     except BrokenPipeError:  # e.g. piped into `head`: the reader has all it wants
-        _silence_stdout()
+        silence_stdout()
         return EXIT_OK if output.count else EXIT_FAILED
     except _Failure as exc:
         return _fail(str(exc), exc.status)
@@ -354,6 +355,6 @@ def _fail(message: str, status: int) -> int:
     try:
         sys.stdout.flush()
     except BrokenPipeError:
-        _silence_stdout()
+        silence_stdout()
     print(f"gcu-async decode: {message}", file=sys.stderr)
     return status

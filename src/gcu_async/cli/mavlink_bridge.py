@@ -19,6 +19,10 @@ from gcu_async.cli._exit import (
     interruptible,
     missing_extra,
 )
+from gcu_async.cli._parser import in_option_terms
+
+OPTIONS = {"system_id": "--system-id", "video_url": "--video-url", "max_zoom": "--max-zoom"}
+"""The bridge's parameters the options give (their errors are told in the options' terms)."""
 
 
 def register(sub: Any) -> None:
@@ -73,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
         client = connect(args.gcu_url, check_support=True)
         bridge = MavlinkBridge(client, args.mavlink, system_id=args.system_id, camera=camera)
     except ValueError as exc:
-        print(f"gcu-async mavlink-bridge: {exc}", file=sys.stderr)
+        print(f"gcu-async mavlink-bridge: {in_option_terms(exc, OPTIONS)}", file=sys.stderr)
         return EXIT_USAGE
     try:
         asyncio.run(interruptible(_serve(bridge, args)))

@@ -33,6 +33,7 @@ from gcu_async.cli._exit import (
     Interrupted,
     check_seconds,
     interruptible,
+    silence_stdout,
 )
 from gcu_async.cli._parser import CliParser
 from gcu_async.cli.send_commands import (
@@ -117,8 +118,9 @@ def register(sub: Any) -> None:
     p.add_argument("url", metavar="URL",
                    help="udp://HOST[:PORT], tcp://HOST[:PORT] or serial:///dev/…")
     p.add_argument("name", metavar="COMMAND", help="one of the commands below")
-    p.add_argument("args", nargs=argparse.REMAINDER, metavar="ARG ...",
-                   help="the command's arguments, then options")
+    rest = p.add_argument("args", nargs=argparse.REMAINDER, metavar="ARG ...",
+                          help="the command's arguments, then options")
+    rest.required = False  # argparse takes a REMAINDER for required; a command may take none
     _shared_options(p)
     p.set_defaults(run=run)  # fmt: skip
 
@@ -297,8 +299,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         feedback, state = asyncio.run(interruptible(_send(inv)))
     except (Interrupted, KeyboardInterrupt):  # KeyboardInterrupt: no loop signal handlers
-        print(json.dumps({"ok": False, "error": "interrupted"}))
-        return EXIT_INTERRUPTED
+        return _print({"ok": False, "error": "interrupted"}, EXIT_INTERRUPTED)
     except ValueError as exc:  # a value out of range for the method
         print(f"{PROG}: {exc}", file=sys.stderr)
         return EXIT_USAGE
@@ -308,14 +309,20 @@ def run(args: argparse.Namespace) -> int:
                "failed_cameras": int(exc.failed_cameras),
                "likely_cause": None if cause is None else cause.name,
                "cause_detail": exc.cause_detail}  # fmt: skip
-        print(json.dumps(out))
-        return EXIT_FAILED
+        return _print(out, EXIT_FAILED)
     except (TimeoutError, LinkLost, GcuError, OSError) as exc:
-        print(json.dumps({"ok": False, "error": str(exc) or type(exc).__name__}))
-        return EXIT_FAILED
+        return _print({"ok": False, "error": str(exc) or type(exc).__name__}, EXIT_FAILED)
     if feedback is None:
-        print(json.dumps({"ok": True, "skipped": True}))
-        return EXIT_OK
+        return _print({"ok": True, "skipped": True}, EXIT_OK)
     assert isinstance(feedback, Feedback)
-    print(json.dumps({"ok": True, **feedback.as_dict(), **state}))
-    return EXIT_OK
+    return _print({"ok": True, **feedback.as_dict(), **state}, EXIT_OK)
+
+
+def _print(result: dict[str, Any], status: int) -> int:
+    """Print the result's JSON line; return ``status``, the command's, even when the reader
+    of stdout has gone (``| head -c 0``): quietly then."""
+    try:
+        print(json.dumps(result), flush=True)
+    except BrokenPipeError:
+        silence_stdout()
+    return status

@@ -11,8 +11,8 @@ SIGQUIT (Ctrl-\\ in a terminal) prints the host conformance report to stderr (an
 ``--report`` / ``--report-json``).
 
 At exit it logs a summary and prints the host conformance report (every way the host's
-packets deviated from V2.0.6) to stderr, and writes it to ``--report`` (text) and
-``--report-json`` (JSON: the report and the simulator's counters) when given.
+packets deviated from V2.0.6) to stderr (``-q``: neither), and writes it to ``--report``
+(text) and ``--report-json`` (JSON: the report and the simulator's counters) when given.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import ipaddress
 import json
 import logging
 import signal
@@ -29,6 +30,7 @@ from typing import Any
 
 from gcu_async.capture import CaptureUnavailable, as_capture
 from gcu_async.cli._exit import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_USAGE
+from gcu_async.cli._parser import in_option_terms
 from gcu_async.cli._report import HOST_REPORT_HELP, add_report_option, write_report
 from gcu_async.protocol.enums import opcode_name
 from gcu_async.protocol.links import HOST_UDP_PORT
@@ -47,6 +49,11 @@ PROG = "gcu-async sim"
 DEFAULT_LISTEN = "udp://127.0.0.1:2337"
 DEFAULT_REORDER_HOLD = FaultConfig().reorder_hold
 DIRECTIONS = ("both", "requests", "replies")
+MODEL_OPTIONS = {"pod model": "--pod", "max_zoom": "--max-zoom", "firmware": "--firmware"}
+"""The model's parameters the options give (their errors are told in the options' terms)."""
+LOOPBACK_BROADCAST = "127.255.255.255"
+"""The loopback network's broadcast address: Linux delivers a datagram sent there to every
+socket bound to its port (the loopback interface itself has no broadcast address)."""
 log = logging.getLogger("gcu_async.sim")
 
 DESCRIPTION = """\
@@ -89,8 +96,9 @@ def register(sub: Any) -> None:
     p.add_argument("--reply-to", metavar="HOST:PORT",
                    help="UDP: send every reply here (e.g. the broadcast address, port 2338) "
                    "instead of to the sender; 'broadcast[:PORT]' (Linux): the broadcast "
-                   "address of the listen address's interface, port 2338 unless given, as "
-                   "a real GCU does")  # fmt: skip
+                   "address of the listen address's interface (127.255.255.255 on "
+                   "loopback), port 2338 unless given, as a real GCU does: every listener "
+                   "on that port hears every reply (gcu-async monitor --passive)")  # fmt: skip
     p.add_argument("--reply-port", type=int, metavar="PORT",
                    help="UDP: reply to the sender's host at this port (e.g. 2338)")  # fmt: skip
     p.add_argument("--silence", type=float, default=5.0, metavar="SECONDS",
@@ -131,7 +139,8 @@ def register(sub: Any) -> None:
         "-q",
         "--quiet",
         action="store_true",
-        help="do not log executed commands (the report at exit is still printed)",
+        help="quiet: log nothing and print no report at exit (--report, --report-json and "
+        "SIGQUIT still give it)",
     )
     p.set_defaults(run=run)
 
@@ -142,7 +151,10 @@ class _UsageError(ValueError):
 
 def _build(args: argparse.Namespace) -> tuple[GcuSimulator, ListenSpec]:
     try:
-        spec = parse_listen_url(args.listen)
+        try:
+            spec = parse_listen_url(args.listen)
+        except ValueError as exc:
+            raise ValueError(f"--listen: {exc}") from None
         if args.reply_to is not None or args.reply_port is not None:
             option = "--reply-to" if args.reply_to is not None else "--reply-port"
             if spec.kind != "udp":
@@ -183,8 +195,11 @@ def _build(args: argparse.Namespace) -> tuple[GcuSimulator, ListenSpec]:
             plan = FaultPlan(requests=plan.requests)
         elif args.faults_on == "replies":
             plan = FaultPlan(replies=plan.replies)
-        model = SimulatorModel(args.pod, seed=args.seed, max_zoom=args.max_zoom,
-                               firmware=args.firmware)  # fmt: skip
+        try:
+            model = SimulatorModel(args.pod, seed=args.seed, max_zoom=args.max_zoom,
+                                   firmware=args.firmware)  # fmt: skip
+        except ValueError as exc:
+            raise ValueError(in_option_terms(exc, MODEL_OPTIONS)) from None
         capture = as_capture(args.capture)
     except (ValueError, CaptureUnavailable) as exc:
         raise _UsageError(str(exc)) from None
@@ -201,18 +216,33 @@ def _reply_to(text: str, listen_host: str) -> tuple[str, int]:
     try:
         host = interface_broadcast(listen_host)
     except ValueError as exc:
-        raise ValueError(f"--reply-to broadcast: {exc}") from None
+        if not _linux_loopback(listen_host):
+            raise ValueError(f"--reply-to broadcast: {exc}") from None
+        host = LOOPBACK_BROADCAST  # a GCU on this machine: every local listener hears it
     return host, int(port) if port else HOST_UDP_PORT
+
+
+def _linux_loopback(host: str) -> bool:
+    """``host`` is an IPv4 loopback address on Linux (where :data:`LOOPBACK_BROADCAST`
+    reaches every socket on the port)."""
+    try:
+        ip = ipaddress.ip_address(host)
+    except ValueError:
+        return False
+    return sys.platform.startswith("linux") and ip.version == 4 and ip.is_loopback
 
 
 class Reports:
     """Where the conformance report goes: stderr, and the ``--report`` / ``--report-json``
     files (each rewritten whole, through a temporary file, so a reader never sees half)."""
 
-    def __init__(self, sim: GcuSimulator, text: Path | None, json_path: Path | None) -> None:
+    def __init__(self, sim: GcuSimulator, text: Path | None, json_path: Path | None, *,
+                 quiet: bool = False) -> None:  # fmt: skip
         self.sim = sim
         self.text_path = text
         self.json_path = json_path
+        self.quiet = quiet
+        """At exit, write the files only (``-q``); SIGQUIT still prints the report."""
 
     def document(self) -> dict[str, Any]:
         model = self.sim.model
@@ -231,10 +261,12 @@ class Reports:
             },
         }  # fmt: skip
 
-    def emit(self) -> None:
-        """Print the text report to stderr and rewrite the files."""
+    def emit(self, *, at_exit: bool = False) -> None:
+        """Print the text report to stderr (not at exit when :attr:`quiet`) and rewrite the
+        files."""
         text = self.sim.model.conformance.report().text()
-        print(text, file=sys.stderr, flush=True)
+        if not (at_exit and self.quiet):
+            print(text, file=sys.stderr, flush=True)
         try:
             if self.text_path is not None:
                 write_report(self.text_path, text + "\n")
@@ -326,7 +358,7 @@ async def _serve(
              s.tolerated, s.frame_anomalies, f": {fields}" if fields else "", s.other_versions,
              s.repeated, s.crc_errors, s.malformed, s.bytes_discarded)  # fmt: skip
     if reports is not None:
-        reports.emit()
+        reports.emit(at_exit=True)
     return EXIT_INTERRUPTED  # only a signal ends it
 
 
@@ -340,7 +372,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         sim, spec = _build(args)
     except _UsageError as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        print(f"{PROG}: {exc}", file=sys.stderr)
         return EXIT_USAGE
     if not args.quiet:
         logging.basicConfig(
@@ -349,7 +381,7 @@ def run(args: argparse.Namespace) -> int:
             format="%(asctime)s %(name)s %(levelname)s %(message)s",
         )
     try:
-        reports = Reports(sim, args.report, args.report_json)
+        reports = Reports(sim, args.report, args.report_json, quiet=args.quiet)
         return asyncio.run(_serve(sim, spec, args.silence, args.stall, reports))
     except KeyboardInterrupt:  # platforms without loop signal handlers
         return EXIT_INTERRUPTED

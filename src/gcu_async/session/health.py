@@ -5,6 +5,10 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass
 
+RATE_WINDOW_S = 1.0
+"""Seconds of replies :attr:`LinkHealth.reply_rate` counts (a rate shown less than this
+long after the first reply is still warming up)."""
+
 
 @dataclass(frozen=True)
 class LinkHealth:
@@ -13,7 +17,7 @@ class LinkHealth:
     up: bool
     """True while replies arrive (no silence longer than ``silence_timeout``)."""
     reply_rate: float
-    """Replies per second over the last second."""
+    """Replies per second over the last :data:`RATE_WINDOW_S` (one second)."""
     last_reply_age: float | None
     """Seconds since the last valid reply, ``None`` before the first."""
     packets_sent: int
@@ -65,6 +69,6 @@ class HealthTracker:
 
     def reply_rate(self, now: float) -> float:
         recent = self._recent
-        while recent and now - recent[0] > 1.0:
+        while recent and now - recent[0] > RATE_WINDOW_S:
             recent.popleft()
         return float(len(recent))

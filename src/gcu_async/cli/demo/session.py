@@ -114,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         opts = parse_options(args, isatty=sys.stdout.isatty())
     except ValueError as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        print(f"{PROG}: {exc}", file=sys.stderr)
         return EXIT_USAGE
     try:
         return asyncio.run(_main(opts))
