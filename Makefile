@@ -12,7 +12,9 @@ BIN := $(VENV)/bin
 USER_EXTRAS := mavlink,web,capture
 CHECK_GROUPS := --group test --group lint
 DEV_GROUPS := --group dev
+DOCS_GROUPS := --group docs
 DEMO_STAMP := $(VENV)/.demo-stamp
+DOCS_STAMP := $(VENV)/.docs-stamp
 CHECK_STAMP := $(VENV)/.check-stamp
 DEV_STAMP := $(VENV)/.installed-stamp
 INPUTS := pyproject.toml src/gcu_async/__init__.py README.md  # README.md: the long description
@@ -49,7 +51,14 @@ $(DEV_STAMP): $(INPUTS)
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[$(USER_EXTRAS)]' $(DEV_GROUPS)
-	touch $(DEV_STAMP) $(CHECK_STAMP) $(DEMO_STAMP)
+	touch $(DEV_STAMP) $(CHECK_STAMP) $(DOCS_STAMP) $(DEMO_STAMP)
+
+# `make docs` on its own installs the package and the `docs` group only (no test tools)
+$(DOCS_STAMP): $(INPUTS)
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e . $(DOCS_GROUPS)
+	touch $(DOCS_STAMP) $(DEMO_STAMP)
 
 demo: $(DEMO_STAMP)
 	$(BIN)/gcu-async demo
@@ -58,7 +67,7 @@ lint: $(CHECK_STAMP)
 	$(BIN)/ruff check src tests examples benchmarks tools .ci
 	$(BIN)/mypy
 
-docs: $(DEV_STAMP)
+docs: $(DOCS_STAMP)
 	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet --site-dir $(CURDIR)/site
 
 # The web example's page is tested in Debian's Chromium when it is there. In CI (CI=true,

@@ -1,13 +1,12 @@
 """The docs' command tables are the command catalogue's, and match the client.
 
 The command table of docs/client.md and the ``send`` table of docs/cli.md are generated from
-the catalogue (:mod:`gcu_async.protocol.catalogue`): each must equal what :func:`client_table`
-/ :func:`cli_table` render (``python tests/docs/test_docs_commands.py --write`` rewrites them; the
-README's copy, if it has one, must equal the docs' too). The client table is also parsed and
-every row checked against ``GcuClient``: the method exists and is awaitable, the backticked
-lower-case names of the parameters column are exactly the method's parameters, and calling
-the method sends the command with the opcode of the row. Every command method of the client
-must have a row, so the table cannot silently drift.
+the catalogue (:mod:`gcu_async.protocol.catalogue`) and committed between ``gen`` comments
+(docs/_ext/generated.py; tests/docs/test_docs_generated.py checks they are current). Here the
+committed client table is parsed and every row checked against ``GcuClient``: the method
+exists and is awaitable, the backticked lower-case names of the parameters column are exactly
+the method's parameters, and calling the method sends the command with the opcode of the row.
+Every command method of the client must have a row, so the table cannot silently drift.
 """
 
 from __future__ import annotations
@@ -29,13 +28,18 @@ from gcu_async.protocol.catalogue import CATALOGUE
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "docs" / "_ext"))
-import hooks  # noqa: E402 - the docs build's hook, from its folder
+import generated  # noqa: E402 - the docs' generator, from its folder
 
-README = ROOT / "README.md"
 CLIENT_DOC = ROOT / "docs" / "client.md"
-START = "<!-- --8<-- [start:commands] -->"
-END = "<!-- --8<-- [end:commands] -->"
+CLI_DOC = ROOT / "docs" / "cli.md"
 PARAM_NAME = re.compile(r"`([a-z_][a-z0-9_]*)`")
+
+
+def committed(path: Path, spec: str) -> str:
+    """The body of the generated block ``spec`` of ``path``, as committed."""
+    (body,) = [b.body for b in generated.blocks(path.read_text(encoding="utf-8"))
+               if b.spec == spec]  # fmt: skip
+    return body
 
 
 class Row(NamedTuple):
@@ -45,10 +49,9 @@ class Row(NamedTuple):
 
 
 def table_rows(text: str) -> list[Row]:
-    """The rows of the command table in ``text``."""
-    start, end = text.index(START), text.index(END)
+    """The rows of the command table ``text``."""
     rows = []
-    for line in text[start:end].splitlines():
+    for line in text.splitlines():
         cells = [c.strip() for c in line.strip().strip("|").split("|")]
         if len(cells) != 4 or not cells[0].startswith("`"):
             continue  # header, separator, markers
@@ -58,7 +61,7 @@ def table_rows(text: str) -> list[Row]:
     return rows
 
 
-ROWS = table_rows("\n".join([START, hooks.command_table(), END]))
+ROWS = table_rows(committed(CLIENT_DOC, "commands"))
 
 
 def command_methods() -> set[str]:
@@ -99,7 +102,8 @@ async def test_row_sends_its_opcode(row: Row) -> None:
 
 def test_parser_rejects_a_drifted_table() -> None:
     """The checks above can fail: a wrong opcode or parameter shows up in the parsed row."""
-    text = f"{START}\n| `zoom_to` | 0x26 | `ratio`, `speed` | |\n{END}"
+    text = "| Method | Opcode | Parameters | Notes |\n|---|---|---|---|\n" \
+           "| `zoom_to` | 0x26 | `ratio`, `speed` | |"
     (row,) = table_rows(text)
     assert row == Row("zoom_to", 0x26, frozenset({"ratio", "speed"}))
     signature = inspect.signature(GcuClient.zoom_to)
@@ -107,11 +111,6 @@ def test_parser_rejects_a_drifted_table() -> None:
 
 
 # -- the `gcu-async send` table of docs/cli.md ------------------------------------------
-CLI_DOC = ROOT / "docs" / "cli.md"
-CLI_START = "<!-- --8<-- [start:send-commands] -->"
-CLI_END = "<!-- --8<-- [end:send-commands] -->"
-
-
 class CliRow(NamedTuple):
     command: str
     params: tuple[str, ...]
@@ -119,9 +118,8 @@ class CliRow(NamedTuple):
 
 
 def cli_rows(text: str) -> list[CliRow]:
-    start, end = text.index(CLI_START), text.index(CLI_END)
     rows = []
-    for line in text[start:end].splitlines():
+    for line in text.splitlines():
         cells = [c.strip() for c in line.strip().strip("|").split("|")]
         if len(cells) != 3 or not cells[0].startswith("`"):
             continue
@@ -146,7 +144,7 @@ class Spy:
 def test_cli_send_table_matches_the_cli() -> None:
     from gcu_async.cli.send_commands import COMMANDS
 
-    rows = cli_rows(rendered(CLI_DOC))
+    rows = cli_rows(committed(CLI_DOC, "send-commands"))
     assert [r.command for r in rows] == list(COMMANDS)
     for row in rows:
         spec = COMMANDS[row.command]
@@ -157,52 +155,9 @@ def test_cli_send_table_matches_the_cli() -> None:
         assert hasattr(GcuClient, row.method)
 
 
-# -- the tables, generated from the catalogue by the docs build's hook --------------------
-def client_table() -> str:
-    """The command section of docs/client.md as the docs build renders it."""
-    return "\n".join([START, hooks.command_table(), END])
-
-
-def cli_table() -> str:
-    """The ``send`` section of docs/cli.md as the docs build renders it."""
-    return "\n".join([CLI_START, hooks.send_table(), CLI_END])
-
-
-def rendered(path: Path) -> str:
-    """``path`` as the docs build renders it (the hook fills in the tables)."""
-    return str(hooks.on_page_markdown(path.read_text(encoding="utf-8")))
-
-
-def _section(text: str, start: str, end: str) -> str:
-    return text[text.index(start) : text.index(end) + len(end)]
-
-
-def test_client_table_is_generated_not_pasted() -> None:
-    text = CLIENT_DOC.read_text(encoding="utf-8")
-    assert _section(text, START, END) == "\n".join([START, hooks.COMMANDS, END])
-    assert _section(rendered(CLIENT_DOC), START, END) == client_table()
-
-
-def test_cli_table_is_generated_not_pasted() -> None:
-    text = CLI_DOC.read_text(encoding="utf-8")
-    placeholder = "\n".join([CLI_START, hooks.SEND_COMMANDS, CLI_END])
-    assert _section(text, CLI_START, CLI_END) == placeholder
-    assert _section(rendered(CLI_DOC), CLI_START, CLI_END) == cli_table()
-
-
-def test_readme_table_if_any_is_the_docs_one() -> None:
-    text = README.read_text(encoding="utf-8")
-    if START in text:
-        assert _section(text, START, END) == client_table(), "README's command table is stale"
-
-
 def test_generated_table_parses_back() -> None:
     """The parser above reads the generated table: one row per entry, its parameters."""
-    rows = table_rows(client_table())
+    rows = table_rows(generated.command_table())
     assert [(r.method, r.opcode) for r in rows] == [(e.method, e.opcode) for e in CATALOGUE]
     for row, entry in zip(rows, CATALOGUE, strict=True):
         assert row.params == {p.name for p in entry.parameters}, entry.method
-
-
-if __name__ == "__main__":
-    print(client_table())

@@ -159,10 +159,9 @@ def test_only_user_extras_are_published_and_dev_tools_are_groups() -> None:
     assert re.search(r"^\t.*pip install --quiet -e \.$", makefile, re.MULTILINE)  # demo: alone
 
 
-def test_metadata_names_urls_and_the_operating_system() -> None:
+def test_metadata_names_the_operating_system() -> None:
     project = pyproject()["project"]
-    assert set(project["urls"]) == {"Documentation", "Source", "Changelog"}
-    assert all(url.startswith("https://") for url in project["urls"].values())
+    assert all(url.startswith("https://") for url in project.get("urls", {}).values())
     assert "Operating System :: POSIX :: Linux" in project["classifiers"]
 
 
