@@ -218,6 +218,15 @@ def test_euler_angles_left_out_keep_the_current_attitude_and_yaw_wraps() -> None
         build("enter_euler_control", yaw=360.0)
 
 
+def test_euler_angles_are_checked_yaw_first() -> None:
+    """With several bad angles the yaw is named, then the roll (the order the method always
+    checked them in)."""
+    with pytest.raises(FieldRangeError, match=r"^yaw: "):
+        build("enter_euler_control", roll=999.0, pitch=999.0, yaw=999.0)
+    with pytest.raises(FieldRangeError, match=r"^roll: "):
+        build("enter_euler_control", roll=999.0, pitch=999.0)
+
+
 def test_rate_limits_are_divided_by_the_zoom() -> None:
     assert build("enter_pointing_lock", pitch_rate=150.0).control == ControlValues.rates(
         0.0, 150.0, 0.0)
