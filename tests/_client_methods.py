@@ -1,6 +1,6 @@
 """GcuClient's command methods, found by what they do rather than by a list: a command
-method is one whose body builds a catalogue entry (``self._run("name", ...)`` or
-``self._send("name", ...)``)."""
+method is one whose body runs a command class (``self._run(TakePhoto(...))``) or what a
+builder function makes (``self._build(builder.track, ...)``, ``self._send(...)``)."""
 
 from __future__ import annotations
 
@@ -9,20 +9,21 @@ import re
 
 from gcu_async import GcuClient
 
-BUILDS = re.compile(r"self\._(?:run|send)\(\s*\"([a-z_]+)\"")
+SENDS = re.compile(r"self\._(?:run|build|send)\(\s*(?:builder\.|c\.)?([A-Za-z_]+)\b")
+"""What a method body sends: a command class or a builder function, by name."""
 
 
-def built_entries() -> dict[str, list[str]]:
-    """Every public method of GcuClient that builds an entry → the entries it builds."""
+def sent_names() -> dict[str, list[str]]:
+    """Every public method of GcuClient that sends a command → what its body names."""
     out = {}
     for name, member in inspect.getmembers(GcuClient, inspect.isfunction):
         if name.startswith("_"):
             continue
-        found = BUILDS.findall(inspect.getsource(member))
+        found = SENDS.findall(inspect.getsource(member))
         if found:
             out[name] = found
     return out
 
 
 def command_methods() -> set[str]:
-    return set(built_entries())
+    return set(sent_names())

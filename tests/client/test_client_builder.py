@@ -1,8 +1,9 @@
 """The command builder (gcu_async.protocol.builder) and the client composed around it.
 
-- every catalogue entry has exactly one client method, a one-line call of the builder with
-  the entry's own name (test_catalogue.py checks the method's parameters against the entry:
-  names, order, defaults, annotations);
+- every catalogue entry has exactly one client method, one line naming what it sends: the
+  entry's command class, or the builder function of the entry's own name when the method does
+  more than call the class (test_catalogue.py checks the method's parameters against the
+  entry: names, order, defaults, annotations);
 - the builder and the client method give the same error (type and message) for every bad
   argument of every entry, and the same command for good ones: the method adds nothing;
 - the arguments that depend on the GCU's state (Euler angles left out, rate limits at zoom,
@@ -28,12 +29,13 @@ from _catalogue_samples import required_samples
 from gcu_async import GcuClient, GcuSubFrame
 from gcu_async.cli.send_commands import COMMANDS
 from gcu_async.errors import CommandLinkLost, FieldRangeError
+from gcu_async.protocol import Feedback, command_code
 from gcu_async.protocol import commands as c
-from gcu_async.protocol.builder import MAKERS, Context, Submission, angles, build, check, rates
+from gcu_async.protocol.builder import MAKERS, Context, Submission, angles, build, rates
 from gcu_async.protocol.catalogue import BY_METHOD, CATALOGUE, CatalogueEntry, Kind, Parameter
 from gcu_async.protocol.gcu_frames import GcuMainFrame
 from gcu_async.protocol.host_frames import ControlValues
-from gcu_async.protocol.units import Attitude
+from gcu_async.protocol.units import Attitude, ImageBox, ImagePoint
 from gcu_async.session import Session
 from gcu_async.transport.memory import MemoryTransport
 
@@ -84,25 +86,30 @@ async def through_client(entry: CatalogueEntry, **kwargs: Any) -> tuple[type[Bas
 
 
 # -- one client method per entry, one line each -------------------------------------------
-def test_every_entry_has_exactly_one_client_method_building_it() -> None:
-    built = _client_methods.built_entries()
-    assert set(built) == set(BY_METHOD)
-    for method, entries in built.items():
-        assert entries == [method], f"{method} builds {entries}"
+def test_every_entry_has_exactly_one_client_method_sending_it() -> None:
+    sent = _client_methods.sent_names()
+    assert set(sent) == set(BY_METHOD)
+    for method, names in sent.items():
+        expected = method if method in MAKERS else BY_METHOD[method].command.__name__
+        assert names == [expected], f"{method} sends {names}"
 
 
 @pytest.mark.parametrize("entry", CATALOGUE, ids=IDS)
 def test_the_method_is_one_line_of_delegation(entry: CatalogueEntry) -> None:
     source = inspect.getsource(getattr(GcuClient, entry.method))
     body = source.split('"""')[-1].strip().splitlines()
-    assert body[0].startswith(("return await self._run(", "return await self._send("))
+    assert body[0].startswith(("return await self._run(", "return await self._build(",
+                               "return await self._send("))  # fmt: skip
     assert len([line for line in body if "# fmt: skip" not in line or line is body[-1]]) <= 2
 
 
 def test_the_one_line_check_can_fail() -> None:
-    """A method that does more than delegate is caught: execute is not a builder call."""
-    assert "execute" not in _client_methods.built_entries()
-    assert _client_methods.BUILDS.findall('self._run("zoom_to", ratio=ratio)') == ["zoom_to"]
+    """A method that does more than delegate is caught: execute names no command."""
+    assert "execute" not in _client_methods.sent_names()
+    assert _client_methods.SENDS.findall("self._build(builder.zoom_to, ratio=ratio)") == [
+        "zoom_to"]
+    assert _client_methods.SENDS.findall("self._run(c.TakePhoto(cameras=cameras))") == [
+        "TakePhoto"]
 
 
 # -- builder == client method --------------------------------------------------------------
@@ -133,16 +140,27 @@ async def test_good_arguments_build_and_the_client_only_refuses_to_send(
 
 @pytest.mark.parametrize("entry", [e for e in CATALOGUE if e.method not in MAKERS],
                          ids=lambda e: e.method)  # fmt: skip
-def test_a_positional_command_gets_each_value_in_its_field_of_the_same_name(
-    entry: CatalogueEntry,
+async def test_a_plain_command_gets_each_value_in_its_field_of_the_same_name(
+    entry: CatalogueEntry, monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    """The default maker calls the class with the values in the catalogue's order: the
-    class's fields must be in that order (a drift puts a value in the wrong field)."""
+    """A method without a builder function calls its class with its arguments by name, as
+    ``build`` does: each value lands in the field of the same name (a swap in the method's
+    body shows), and the method submits exactly what ``build`` makes."""
     distinct = {p.name: p for p in entry.parameters}
     given = {name: _non_default(p, i) for i, (name, p) in enumerate(distinct.items())}
-    command = build(entry, **given).command
-    for name, p in distinct.items():
-        assert getattr(command, name) == check(p, given[name]), (entry.method, name)
+    submission = build(entry, **given)
+    for name in distinct:
+        assert getattr(submission.command, name) == given[name], (entry.method, name)
+    gcu = GcuClient(MemoryTransport())
+    submitted: list[Submission] = []
+
+    async def run(made: Submission, **options: Any) -> Feedback:
+        submitted.append(made)
+        return Feedback(command_code(made.command), 0)
+
+    monkeypatch.setattr(gcu._driver, "run", run)
+    await getattr(gcu, entry.method)(**given)
+    assert submitted == [submission]
 
 
 def _non_default(p: Parameter, i: int) -> object:
@@ -181,10 +199,10 @@ def test_submissions_carry_control_recording_intent_and_timeout() -> None:
     assert build("stop_recording", cameras=3) == Submission(c.Record(3), recording_target=False)
     assert build("toggle_recording").recording_target is None
     assert build("track", box=[0.1, 0.2, 0.3, 0.4]).command == c.Track(
-        True, c.ImageBox(0.1, 0.2, 0.3, 0.4))
+        True, ImageBox(0.1, 0.2, 0.3, 0.4))
     assert build("stop_tracking", cameras=2).command == c.Track(False, cameras=2)
     assert build("set_spot_temperature", enabled=False, x=0.25).command == c.SpotTemperature(
-        False, c.ImagePoint(0.25, 0.5))
+        False, ImagePoint(0.25, 0.5))
     assert build("zoom_to_fraction", fraction=0.5).command == c.ZoomTo(fraction=0.5)
     assert build("gaze_at", **good(BY_METHOD["gaze_at"])).control is None
     assert build("enter_fpv", yaw=-10).control == ControlValues.angles(0.0, 0.0, -10.0)
@@ -198,6 +216,15 @@ def test_euler_angles_left_out_keep_the_current_attitude_and_yaw_wraps() -> None
         0.0, 0.0, -90.0)
     with pytest.raises(FieldRangeError, match=r"^yaw: 360\.0 .*\[-180, 360\) deg"):
         build("enter_euler_control", yaw=360.0)
+
+
+def test_euler_angles_are_checked_yaw_first() -> None:
+    """With several bad angles the yaw is named, then the roll (the order the method always
+    checked them in)."""
+    with pytest.raises(FieldRangeError, match=r"^yaw: "):
+        build("enter_euler_control", roll=999.0, pitch=999.0, yaw=999.0)
+    with pytest.raises(FieldRangeError, match=r"^roll: "):
+        build("enter_euler_control", roll=999.0, pitch=999.0)
 
 
 def test_rate_limits_are_divided_by_the_zoom() -> None:
@@ -336,7 +363,7 @@ SURFACE = {
         "call (self, *, roll: 'float' = 0.0, pitch: 'float' = 0.0, yaw: 'float' = 0.0) -> 'None'"
     ),
     "set_area_temperature": (
-        "await (self, enabled: 'bool' = True, box: 'c.ImageBox | tuple[float, float, float, "
+        "await (self, enabled: 'bool' = True, box: 'ImageBox | tuple[float, float, float, "
         "float] | list[float]' = (0.0, 0.0, 1.0, 1.0), *, "
         "cameras: 'int' = <CameraMask.CAMERA_2: 2>) -> 'Feedback'"
     ),
@@ -395,7 +422,7 @@ SURFACE = {
         "await (self, *, cameras: 'int' = <CameraMask.CAMERA_1: 1>) -> 'Feedback'"
     ),
     "track": (
-        "await (self, box: 'c.ImageBox | tuple[float, float, float, float] | list[float]', *, "
+        "await (self, box: 'ImageBox | tuple[float, float, float, float] | list[float]', *, "
         "cameras: 'int' = <CameraMask.CAMERA_1: 1>) -> 'Feedback'"
     ),
     "update_aircraft": (

@@ -5,7 +5,7 @@ and under ``TYPE_CHECKING`` alike: a cycle hidden from the interpreter is still 
 the reader) is parsed with :mod:`ast`, reduced to an edge between the package's units (a
 subpackage or a top-level module), and checked against :data:`ALLOWED`, the table the docs
 page repeats (a test checks the two agree). Then: no cycle between units, and none between
-the modules inside ``sim/``.
+modules (:data:`PENDING` lists the edges whose removal is under way).
 """
 
 from __future__ import annotations
@@ -51,15 +51,16 @@ ALLOWED: Mapping[str, frozenset[str]] = {
 """unit → the units it may import (``gcu_async``: the package's own ``__init__``)."""
 
 
-def module_name(path: Path) -> str:
-    parts = path.relative_to(SRC).with_suffix("").parts
+def module_name(path: Path, root: Path = SRC) -> str:
+    parts = path.relative_to(root).with_suffix("").parts
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def imported_modules(path: Path) -> Iterable[str]:
-    """Every module of the package ``path`` imports (absolute names; relative imports
-    resolved), wherever the import statement stands."""
-    name = module_name(path)
+def imported_modules(path: Path, root: Path = SRC) -> Iterable[str]:
+    """Every module ``path`` imports (absolute names; relative imports resolved), wherever
+    the import statement stands: at module level, inside a function, under
+    ``TYPE_CHECKING``."""
+    name = module_name(path, root)
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
         if isinstance(node, ast.Import):
@@ -70,12 +71,19 @@ def imported_modules(path: Path) -> Iterable[str]:
                 anchor = package.split(".")
                 anchor = anchor[: len(anchor) - (node.level - 1)]
                 base = ".".join([*anchor, base] if base else anchor)
-            yield base
-            for alias in node.names:  # `from gcu_async import protocol` imports a module
-                if (SRC / base.replace(".", "/") / alias.name).exists() or (
-                    SRC / base.replace(".", "/") / f"{alias.name}.py"
-                ).exists():
+            names = False  # `from gcu_async import protocol` imports a module, not a name
+            for alias in node.names:
+                if _is_module(f"{base}.{alias.name}", root):
                     yield f"{base}.{alias.name}"
+                else:
+                    names = True
+            if names:
+                yield base
+
+
+def _is_module(name: str, root: Path) -> bool:
+    path = root / name.replace(".", "/")
+    return path.is_dir() or path.with_suffix(".py").exists()
 
 
 def unit(module: str) -> str:
@@ -169,6 +177,64 @@ def test_the_named_rules() -> None:
 def test_no_cycle_between_units() -> None:
     assert find_cycle(UNITS) is None, find_cycle(UNITS)
     assert find_cycle(ALLOWED) is None, "the table itself has a cycle"
+
+
+PENDING: Mapping[tuple[str, str], str] = {
+    ("gcu_async.bridge.links", "gcu_async.bridge.stream_link"):
+        "make_link imports the link classes that import links: it moves beside its caller "
+        "(issue 26, agent str)",
+    ("gcu_async.bridge.links", "gcu_async.bridge.udp_link"): "make_link, as above",
+    ("gcu_async.client.restore", "gcu_async.client.driver"):
+        "restore() takes the Driver that imports it (a TYPE_CHECKING import): not yet assigned",
+    ("gcu_async.cli.send", "gcu_async.cli"):
+        "send imports VERBOSE_HELP and configure_logging from the package that imports it "
+        "(inside functions): the command line's (issue 25, agent cli)",
+}
+"""Module edges that close a cycle, each with the work that removes it (none should be added:
+a new cycle is fixed, not listed)."""
+
+
+def test_no_cycle_between_modules() -> None:
+    """No module imports, however lazily, a module that imports it back (a cycle inside a
+    unit is still a cycle for the reader)."""
+    graph = {m: targets - {t for s, t in PENDING if s == m} for m, targets in MODULES.items()}
+    assert find_cycle(graph) is None, " -> ".join(find_cycle(graph) or [])
+
+
+def test_every_pending_edge_still_closes_a_cycle() -> None:
+    """A pending edge whose import is gone is dropped, not kept."""
+    for source, target in PENDING:
+        assert target in MODULES[source], f"{source} -> {target} is gone: drop it from PENDING"
+        assert _reaches(MODULES, target, source), f"{source} -> {target} closes no cycle"
+
+
+def _reaches(graph: Mapping[str, Iterable[str]], start: str, goal: str) -> bool:
+    seen, todo = set(), [start]
+    while todo:
+        node = todo.pop()
+        if node == goal:
+            return True
+        if node not in seen:
+            seen.add(node)
+            todo.extend(graph.get(node, ()))
+    return False
+
+
+def test_the_module_graph_reads_lazy_and_type_checking_imports(tmp_path: Path) -> None:
+    """An import inside a function or under ``TYPE_CHECKING`` is an edge, and
+    ``from package import module`` is an edge to the module, not to the package."""
+    pkg = tmp_path / "pkg"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("from pkg import a\n", encoding="utf-8")
+    (pkg / "a.py").write_text(
+        "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from pkg.b import B\n",
+        encoding="utf-8")  # fmt: skip
+    (pkg / "b.py").write_text("def f():\n    from pkg import a\n", encoding="utf-8")
+    found = {path.stem: set(imported_modules(path, root=tmp_path)) for path in pkg.glob("*.py")}
+    assert found == {"__init__": {"pkg.a"}, "a": {"typing", "pkg.b"}, "b": {"pkg.a"}}
+    graph = {f"pkg.{name}": {t for t in targets if t.startswith("pkg.")}
+             for name, targets in found.items()}  # fmt: skip
+    assert find_cycle(graph) == ["pkg.a", "pkg.b", "pkg.a"]
 
 
 def test_no_cycle_between_the_simulators_modules() -> None:

@@ -29,6 +29,7 @@ SCHEMA_MODULES = {
     "protocol/frame_schema.py",
     "protocol/command_fields.py",
     "protocol/commands.py",
+    "protocol/opcodes.py",
     "protocol/gcu_frames.py",
     "protocol/host_frames.py",
     "protocol/layout.py",

@@ -86,6 +86,7 @@ from gcu_async.protocol import (
     wrap_degrees_360,
 )
 from gcu_async.protocol.catalogue import CATALOGUE as COMMAND_CATALOGUE
+from gcu_async.protocol.command_decode import MAX_PARAMS
 from gcu_async.protocol.command_fields import (
     ZOOM_FRACTION,
     ZOOM_RATIO,
@@ -99,7 +100,6 @@ from gcu_async.protocol.command_fields import (
     Thresholds,
     ZoomValue,
 )
-from gcu_async.protocol.commands import MAX_PARAMS
 from gcu_async.protocol.enums import PIP_MODE_MASK
 from gcu_async.protocol.gpstime import GPS_EPOCH, gps_minus_utc
 

@@ -18,8 +18,9 @@ from typing import Any, NamedTuple
 from gcu_async.client.client import GcuClient
 from gcu_async.protocol import builder
 from gcu_async.protocol.catalogue import CATALOGUE, CatalogueEntry, Kind, Parameter
-from gcu_async.protocol.commands import IMAGE_SCALE, ImageBox
+from gcu_async.protocol.command_fields import IMAGE_SCALE
 from gcu_async.protocol.enums import CameraMask
+from gcu_async.protocol.units import ImageBox
 
 
 def _switch(text: str) -> bool:

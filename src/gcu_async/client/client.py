@@ -5,11 +5,10 @@ client is built").
 sans-I/O session driven over the transport: timers, futures, the packet pump), a
 :class:`~gcu_async.client.telemetry.Telemetry` fan-out and the link-event callbacks, and a
 :class:`~gcu_async.client.waiting.Waiting` part; none of them reaches into another through
-abstract hooks. Each command method is one line: the command builder
-(:func:`gcu_async.protocol.builder.build`) checks its arguments against the command
-catalogue and the driver submits the result. Every rule (pacing, separation, matching,
-timeouts, control values, link health) lives in the session (docs/client.md, "The session
-contract").
+abstract hooks. Its command methods come from its base
+:class:`~gcu_async.client.command_methods.GcuCommands`, one line each naming what it sends.
+Every rule (pacing, separation, matching, timeouts, control values, link health) lives in the
+session (docs/client.md, "The session contract").
 """
 
 from __future__ import annotations
@@ -38,6 +37,7 @@ from gcu_async._checks import (
 from gcu_async._lifecycle import OpenClose
 from gcu_async._lograte import LogLimiter
 from gcu_async.capture.writer import PacketCapture
+from gcu_async.client.command_methods import GcuCommands
 from gcu_async.client.driver import ENDED, ClientState, Driver
 from gcu_async.client.telemetry import Callbacks, Telemetry
 from gcu_async.client.waiting import (
@@ -49,11 +49,11 @@ from gcu_async.client.waiting import (
 )
 from gcu_async.conformance import GcuConformance, GcuReport
 from gcu_async.errors import ClientStateError, LinkLost
-from gcu_async.protocol import commands as c
 from gcu_async.protocol.aircraft import AircraftState, aircraft_update
-from gcu_async.protocol.builder import Submission, angles, build, rates
-from gcu_async.protocol.commands import ZOOM_RATIO_MAX, Command
-from gcu_async.protocol.enums import CameraMask, NightVisionMode, OsdCoordinateSource, PodModel
+from gcu_async.protocol.builder import Submission, angles, rates
+from gcu_async.protocol.command_base import Command
+from gcu_async.protocol.commands import ZOOM_RATIO_MAX
+from gcu_async.protocol.enums import PodModel
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
 from gcu_async.protocol.host_frames import ControlValues
@@ -67,9 +67,6 @@ from gcu_async.transport.tap import with_capture
 __all__ = ["KEEP", "ClientState", "GcuClient", "Keep"]
 
 log = logging.getLogger("gcu_async.client")
-
-CAM1 = CameraMask.CAMERA_1
-CAM2 = CameraMask.CAMERA_2
 
 DEFAULT_REORDER_GUARD = 0.015
 """Seconds; the reordering guard on links that may reorder (UDP)."""
@@ -99,7 +96,7 @@ OPEN_ATTEMPT_LOG_WINDOW = 60.0
 """Seconds between two log lines of failed open attempts (a GCU away for hours)."""
 
 
-class GcuClient(OpenClose):
+class GcuClient(GcuCommands, OpenClose):
     """An asyncio session with one GCU.
 
     ``async with GcuClient(transport) as gcu:`` opens the transport, starts the heartbeat,
@@ -570,14 +567,6 @@ class GcuClient(OpenClose):
         return await self._driver.run(Submission(command, timeout=timeout),
                                       queue_timeout=queue_timeout)  # fmt: skip
 
-    async def _run(self, method: str, /, **arguments: Any) -> Feedback:
-        """Build catalogue entry ``method``'s command from ``arguments`` and run it."""
-        return await self._driver.run(build(method, self._driver.context(), **arguments))
-
-    async def _send(self, method: str, /, **arguments: Any) -> Feedback | None:
-        """Like :meth:`_run`, for a command the session may skip (``None``)."""
-        return await self._driver.submit(build(method, self._driver.context(), **arguments))
-
     # -- waiting for the physical world (docs/client.md, "Waiting for the gimbal, the zoom
     # and the link") ----------------------------------------------------------------------
     async def wait_for(self, predicate: Predicate, *, timeout: float = WAIT_TIMEOUT,
@@ -639,211 +628,6 @@ class GcuClient(OpenClose):
         async with contextlib.aclosing(events):
             async for event in events:
                 yield event
-
-    # -- commands: pod modes --------------------------------------------------------------
-    async def enter_euler_control(
-        self, *, roll: float | None = None, pitch: float | None = None,
-        yaw: float | None = None,
-    ) -> Feedback:  # fmt: skip
-        """Euler-angle control mode (0x14) holding roll/pitch/yaw Euler angles in degrees;
-        an angle left out keeps the camera's current one (``status.attitude``), so
-        ``enter_euler_control(pitch=-45)`` does not swing the yaw. ``yaw`` may be given in
-        [-180, 360): [180, 360) is sent as its −180…0 equivalent. The angles go out valid
-        once the GCU confirmed the mode; :meth:`reach_attitude` also waits until the camera
-        is there."""
-        return await self._run("enter_euler_control", roll=roll, pitch=pitch, yaw=yaw)
-
-    async def enter_angle_control(
-        self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0
-    ) -> Feedback:
-        """Angle-control mode (0x10): roll/pitch Euler angles, yaw relative to the aircraft
-        (degrees, ±180)."""
-        return await self._run("enter_angle_control", roll=roll, pitch=pitch, yaw=yaw)
-
-    async def enter_fpv(
-        self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0
-    ) -> Feedback:
-        """FPV mode (0x1C): roll/pitch/yaw angles relative to the aircraft, degrees (±180)."""
-        return await self._run("enter_fpv", roll=roll, pitch=pitch, yaw=yaw)
-
-    async def enter_pointing_lock(
-        self, *, pitch_rate: float = 0.0, yaw_rate: float = 0.0
-    ) -> Feedback:
-        """Pointing-lock mode (0x11) with pitch/yaw rates in °/s at the current zoom
-        (at most 150 / zoom °/s)."""
-        return await self._run("enter_pointing_lock", pitch_rate=pitch_rate, yaw_rate=yaw_rate)
-
-    async def enter_pointing_follow(
-        self, *, pitch_rate: float = 0.0, yaw_rate: float = 0.0
-    ) -> Feedback:
-        """Pointing-follow mode (0x12); yaw rate 0 follows the aircraft's heading."""
-        return await self._run("enter_pointing_follow", pitch_rate=pitch_rate, yaw_rate=yaw_rate)
-
-    async def enter_top_down(self, *, yaw_rate: float = 0.0) -> Feedback:
-        """Top-down mode (0x13): pitch −90°, yaw rate in °/s."""
-        return await self._run("enter_top_down", yaw_rate=yaw_rate)
-
-    async def enter_gaze_lock(self, *, pitch_rate: float = 0.0, yaw_rate: float = 0.0) -> Feedback:
-        """Gaze (geographic target lock) at the image centre (0x16); needs valid INS data."""
-        return await self._run("enter_gaze_lock", pitch_rate=pitch_rate, yaw_rate=yaw_rate)
-
-    async def gaze_at(self, latitude: float, longitude: float, altitude: float) -> Feedback:
-        """Gaze at a coordinate (0x15): degrees, degrees, metres MSL; needs valid INS data.
-        Control values stay invalid (the pod locks the point) until :meth:`set_rates`."""
-        return await self._run("gaze_at", latitude=latitude, longitude=longitude, altitude=altitude)
-
-    # -- commands: pod, other --------------------------------------------------------------
-    async def calibrate(self, *, timeout: float = 15.0) -> Feedback:
-        """Calibrate (0x01); keeps waiting while the GCU answers "in progress", up to
-        ``timeout`` seconds (a finite real number > 0)."""
-        return await self._run("calibrate", timeout=timeout)
-
-    async def centre(self) -> Feedback:
-        """Centre pitch and heading (0x03). Control values go out invalid while it runs and
-        are cleared afterwards (they would steer away from the centre)."""
-        return await self._run("centre")
-
-    async def track(
-        self, box: c.ImageBox | tuple[float, float, float, float] | list[float], *,
-        cameras: int = CAM1,
-    ) -> Feedback:  # fmt: skip
-        """Track the target in ``box`` (left, top, right, bottom as image fractions; an
-        ImageBox, a tuple or a list of four). The pod steers itself while tracking: control
-        values go out invalid."""
-        return await self._run("track", box=box, cameras=cameras)
-
-    async def stop_tracking(self, *, cameras: int = CAM1) -> Feedback:
-        """Exit tracking (0x17 with TT = 0); control values stay invalid until a mode
-        command is confirmed."""
-        return await self._run("stop_tracking", cameras=cameras)
-
-    async def click_to_pan(self, x: float, y: float, *, cameras: int = CAM1) -> Feedback:
-        """Bring image point (x, y) (fractions) to the centre (0x1A). The pod ends in
-        pointing-lock; control values stay invalid until a mode command is confirmed."""
-        return await self._run("click_to_pan", x=x, y=y, cameras=cameras)
-
-    # -- commands: camera -----------------------------------------------------------------
-    async def take_photo(self, *, cameras: int = CAM1) -> Feedback:
-        """Take a photo (0x20)."""
-        return await self._run("take_photo", cameras=cameras)
-
-    async def toggle_recording(self, *, cameras: int = CAM1) -> Feedback:
-        """Start or stop recording (0x21, a toggle), unconditionally."""
-        return await self._run("toggle_recording", cameras=cameras)
-
-    async def start_recording(self, *, cameras: int = CAM1) -> Feedback | None:
-        """Start recording unless the camera already records (then ``None``, nothing sent).
-        Record commands run one at a time and the state is checked when this one's turn
-        comes, so concurrent calls start recording once (docs/client.md, "Recording")."""
-        return await self._send("start_recording", cameras=cameras)
-
-    async def stop_recording(self, *, cameras: int = CAM1) -> Feedback | None:
-        """Stop recording if the camera records (else ``None``, nothing sent)."""
-        return await self._send("stop_recording", cameras=cameras)
-
-    async def zoom_in(self, *, cameras: int = CAM1) -> Feedback:
-        """Start zooming in (0x22) until :meth:`stop_zoom`."""
-        return await self._run("zoom_in", cameras=cameras)
-
-    async def zoom_out(self, *, cameras: int = CAM1) -> Feedback:
-        """Start zooming out (0x23) until :meth:`stop_zoom`."""
-        return await self._run("zoom_out", cameras=cameras)
-
-    async def stop_zoom(self, *, cameras: int = CAM1) -> Feedback:
-        """Stop a continuous zoom (0x24)."""
-        return await self._run("stop_zoom", cameras=cameras)
-
-    async def zoom_to(self, ratio: float, *, cameras: int = CAM1) -> Feedback:
-        """Zoom to a ratio (0x25), e.g. ``10.0`` for 10×, 0.1× resolution, 1 … 3276.8, and
-        at most :attr:`max_zoom` when the client was given it (the GCU itself answers
-        success and stops at its limit)."""
-        return await self._run("zoom_to", ratio=ratio, cameras=cameras)
-
-    async def zoom_to_fraction(self, fraction: float, *, cameras: int = CAM1) -> Feedback:
-        """Zoom to a fraction (0, 1] of the maximum ratio (0x25, positive form; resolution
-        1/10000)."""
-        return await self._run("zoom_to_fraction", fraction=fraction, cameras=cameras)
-
-    async def focus(self, *, cameras: int = CAM1) -> Feedback:
-        """Trigger focus (0x26)."""
-        return await self._run("focus", cameras=cameras)
-
-    async def set_palette(self, palette: int = 0, *, cameras: int = CAM2) -> Feedback:
-        """Thermal palette 1–10, or 0 to cycle (0x2A)."""
-        return await self._run("set_palette", palette=palette, cameras=cameras)
-
-    async def set_night_vision(
-        self, mode: NightVisionMode | int = NightVisionMode.ON, *, cameras: int = CAM1
-    ) -> Feedback:
-        """Night vision off / on / auto (0x2B)."""
-        return await self._run("set_night_vision", mode=mode, cameras=cameras)
-
-    async def set_area_temperature(
-        self,
-        enabled: bool = True,
-        box: c.ImageBox | tuple[float, float, float, float] | list[float] = (0.0, 0.0, 1.0, 1.0),
-        *,
-        cameras: int = CAM2,
-    ) -> Feedback:
-        """Area temperature measurement over ``box`` (0x30)."""
-        return await self._run("set_area_temperature", enabled=enabled, box=box, cameras=cameras)
-
-    async def set_temperature_alarm(
-        self, enabled: bool = True, *, high: float = 0.0, low: float = 0.0, cameras: int = CAM2
-    ) -> Feedback:
-        """Temperature alarm with high/low thresholds in °C (0x31)."""
-        return await self._run("set_temperature_alarm", enabled=enabled, high=high, low=low,
-                               cameras=cameras)  # fmt: skip
-
-    async def set_isotherm(
-        self, enabled: bool = True, *, high: float = 0.0, low: float = 0.0, cameras: int = CAM2
-    ) -> Feedback:
-        """Isotherm between ``low`` and ``high`` °C (0x32)."""
-        return await self._run("set_isotherm", enabled=enabled, high=high, low=low, cameras=cameras)
-
-    async def set_spot_temperature(
-        self, enabled: bool = True, x: float = 0.5, y: float = 0.5, *, cameras: int = CAM2
-    ) -> Feedback:
-        """Spot temperature at image point (x, y) (0x33)."""
-        return await self._run("set_spot_temperature", enabled=enabled, x=x, y=y, cameras=cameras)
-
-    async def set_osd(self, enabled: bool = True) -> Feedback:
-        """On-screen display on/off (0x73)."""
-        return await self._run("set_osd", enabled=enabled)
-
-    async def set_osd_coordinates(
-        self, coordinates: OsdCoordinateSource | int = OsdCoordinateSource.AIRCRAFT
-    ) -> Feedback:
-        """OSD shows aircraft or target coordinates (0x06)."""
-        return await self._run("set_osd_coordinates", coordinates=coordinates)
-
-    async def set_image_auto_flip(self, enabled: bool = True) -> Feedback:
-        """Image auto-flip on/off (0x07)."""
-        return await self._run("set_image_auto_flip", enabled=enabled)
-
-    async def set_time_zone(self, offset_hours: int) -> Feedback:
-        """The pod's UTC offset in whole hours, −12 … +14 (0x08)."""
-        return await self._run("set_time_zone", offset_hours=offset_hours)
-
-    async def set_picture_in_picture(self, mode: int = 0) -> Feedback:
-        """Picture-in-picture mode 1–4, or 0 to cycle (0x74)."""
-        return await self._run("set_picture_in_picture", mode=mode)
-
-    async def set_target_detection(self, enabled: bool = True) -> Feedback:
-        """AI target detection on/off (0x75)."""
-        return await self._run("set_target_detection", enabled=enabled)
-
-    async def set_digital_zoom(self, enabled: bool = True) -> Feedback:
-        """Digital zoom on/off (0x76)."""
-        return await self._run("set_digital_zoom", enabled=enabled)
-
-    async def set_fill_light(self, brightness: int) -> Feedback:
-        """Fill light brightness 0–255, 0 = off (0x80); on also turns night vision on."""
-        return await self._run("set_fill_light", brightness=brightness)
-
-    async def set_ranging(self, enabled: bool = True) -> Feedback:
-        """Continuous laser ranging on/off (0x81)."""
-        return await self._run("set_ranging", enabled=enabled)
 
 
 def _caller_stacklevel() -> int:

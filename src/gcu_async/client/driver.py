@@ -34,7 +34,9 @@ from gcu_async.errors import (
 )
 from gcu_async.protocol.builder import Context, Submission
 from gcu_async.protocol.catalogue import NEEDS_INS
-from gcu_async.protocol.commands import Command, ZoomTo, command_code
+from gcu_async.protocol.command_base import Command
+from gcu_async.protocol.command_decode import command_code
+from gcu_async.protocol.commands import ZoomTo
 from gcu_async.protocol.enums import PodModel, opcode_name
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame

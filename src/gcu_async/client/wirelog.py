@@ -16,7 +16,7 @@ import logging
 
 from gcu_async.errors import RemoteProtocolError
 from gcu_async.protocol.anomalies import Anomaly
-from gcu_async.protocol.commands import AnomalousCommand, command_code
+from gcu_async.protocol.command_decode import AnomalousCommand, command_code
 from gcu_async.protocol.gcu_frames import GcuSubFrame
 from gcu_async.protocol.packets import decode_gcu_packet, decode_host_packet
 

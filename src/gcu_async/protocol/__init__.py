@@ -17,8 +17,9 @@ package that takes user values checks type and range before anything is stored:
   (stored as the NamedTuple; lists and other NamedTuples raise ``TypeError``), checked
   element by element with the element in the field name (``box.left``, ``aircraft roll``).
 
-Nothing is coerced, clipped or wrapped (real values are rounded to the wire resolution;
-the range applies to the rounded value). Errors are ``TypeError`` or ``ValueError``
+Nothing is coerced, clipped or wrapped (real values are rounded to the wire resolution; a
+command's parameter must lie in its range as given, a frame field's range applies to the
+rounded value). Errors are ``TypeError`` or ``ValueError``
 (usually :class:`~gcu_async.errors.FieldRangeError`) and name the field, the allowed range or
 type, and the value. Frames, packets and ``ControlValues`` are NamedTuples that can be
 built raw and cannot check themselves on construction: ``validate()`` / ``encode()`` check
@@ -31,16 +32,21 @@ wrong header, length or CRC raises, any other unexpected value is kept and flagg
 from gcu_async.protocol.aircraft import AircraftState
 from gcu_async.protocol.anomalies import Anomaly
 from gcu_async.protocol.camera_axes import axes_to_euler, euler_to_axes
+from gcu_async.protocol.command_base import Command
+from gcu_async.protocol.command_decode import (
+    AnomalousCommand,
+    UnknownCommand,
+    command_code,
+    decode_command,
+)
 from gcu_async.protocol.commands import (
     COMMAND_TYPES,
     MODE_COMMANDS,
     AngleControl,
-    AnomalousCommand,
     AreaTemperature,
     Calibration,
     Centre,
     ClickToPan,
-    Command,
     DigitalZoom,
     EulerControl,
     FillLight,
@@ -49,8 +55,6 @@ from gcu_async.protocol.commands import (
     GazeAtCoordinates,
     GazeLock,
     ImageAutoFlip,
-    ImageBox,
-    ImagePoint,
     Isotherm,
     NightVision,
     NullCommand,
@@ -69,13 +73,10 @@ from gcu_async.protocol.commands import (
     TimeZone,
     TopDown,
     Track,
-    UnknownCommand,
     ZoomIn,
     ZoomOut,
     ZoomStop,
     ZoomTo,
-    command_code,
-    decode_command,
 )
 from gcu_async.protocol.crc import crc16_xmodem
 from gcu_async.protocol.deframer import Deframer, DeframerStats
@@ -120,6 +121,8 @@ from gcu_async.protocol.units import (
     Attitude,
     AxisAngles,
     GeoPosition,
+    ImageBox,
+    ImagePoint,
     NorthEastUp,
     wrap_degrees_180,
     wrap_degrees_360,

@@ -17,7 +17,6 @@ from datetime import datetime
 from typing import Any, NamedTuple
 
 from gcu_async._checks import check_instance, check_int, check_real
-from gcu_async.protocol.catalogue import YAW_INPUT_RANGE
 from gcu_async.protocol.enums import SubFrameRequest
 from gcu_async.protocol.fields import WireField
 from gcu_async.protocol.gpstime import utc_to_gps
@@ -30,6 +29,7 @@ from gcu_async.protocol.host_frames import (
     HostSubFrame,
 )
 from gcu_async.protocol.units import (
+    YAW_INPUT_RANGE,
     Attitude,
     GeoPosition,
     NorthEastUp,

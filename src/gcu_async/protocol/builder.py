@@ -1,50 +1,46 @@
-"""The sans-I/O command builder: a catalogue entry and the caller's arguments give a checked
+"""The sans-I/O command builder: a client method's arguments give a checked
 :class:`Submission` (the command, its control values, its recording intent, its timeout),
 with no client, no session and no event loop.
 
-``build("zoom_to", ratio=10.0)`` checks every argument against the entry's parameters (the
-command catalogue, :mod:`gcu_async.protocol.catalogue`: the one place their ranges are
-written) and returns what the client hands to its session. The client's command methods are
-one-line calls of it; ``gcu-async send`` calls it to check its arguments before it opens a
-link. The boundary (:mod:`gcu_async._checks`): a flag is a ``bool``, a mask or count an
-``int`` (an IntFlag/IntEnum member counts as its value), a real number a finite
+A command checks its own parameters when it is built (:mod:`gcu_async.protocol.commands`),
+so a method that only sends its command calls the class. The functions here, one per method
+that does more, add what only the method knows: the control values of the mode commands (and
+calibration's timeout), checked against the parameters its catalogue entry lists; the
+method's shapes (a box as a list, a point as ``x`` and ``y``, tracking's enter/exit flag, the
+record commands' intent); and three arguments that depend on the GCU's state, given as a
+:class:`Context`: an Euler angle left ``None`` keeps the camera's current one, a rate's limit
+at 1× is divided by camera 1's current zoom, and a zoom ratio is capped at the pod's
+``max_zoom`` when it is known. Each takes the context first (most need none of it).
+
+:func:`build` does the same for a catalogue entry named by its method:
+``build("zoom_to", ratio=10.0)``; ``gcu-async send`` calls it to check its arguments before
+it opens a link. The boundary (:mod:`gcu_async._checks`): a flag is a ``bool``, a mask or
+count an ``int`` (an IntFlag/IntEnum member counts as its value), a real number a finite
 ``int``/``float``, an enum one of its members or exact values, a box an
 :class:`~gcu_async.protocol.ImageBox` or a plain 4-tuple or list. Nothing is coerced,
 clipped or wrapped. A bad argument raises ``TypeError`` or
 :class:`~gcu_async.errors.FieldRangeError` whose message starts with the parameter name as
 the caller wrote it (``pitch_rate``, ``box.right``) and gives the allowed range and the value.
-
-Three arguments depend on the GCU's state, given as a :class:`Context`: an Euler angle left
-``None`` keeps the camera's current one; a rate's limit (150 °/s at 1×) is divided by camera
-1's current zoom; a zoom ratio is capped at the pod's ``max_zoom`` when it is known.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import replace
 from types import MappingProxyType
-from typing import Any, NamedTuple, TypeVar
+from typing import Any, NamedTuple
 
-from gcu_async._checks import check_bool, check_int, check_real
+from gcu_async._checks import check_real, type_error
 from gcu_async.errors import FieldRangeError
 from gcu_async.protocol import commands as c
-from gcu_async.protocol.catalogue import BY_METHOD, CatalogueEntry, Kind, Parameter
+from gcu_async.protocol.catalogue import BY_METHOD, CatalogueEntry
+from gcu_async.protocol.command_base import Command
+from gcu_async.protocol.command_fields import ZOOM_RATIO, Point, RealRange
+from gcu_async.protocol.command_schema import Parameter
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
 from gcu_async.protocol.host_frames import ControlValues
-from gcu_async.protocol.units import Attitude, check_member, check_sequence
+from gcu_async.protocol.units import Attitude, ImageBox, ImagePoint, check_sequence
 
 __all__ = ["Context", "Submission", "angles", "build", "check_sequence", "rates"]
-
-_NT = TypeVar("_NT", bound=tuple[Any, ...])
-
-RATE_UNIT = "deg/s"
-"""The unit of a rate parameter: its limit is divided by camera 1's current zoom (the
-control field carries rate × zoom)."""
-ZOOM_UNIT = "x"
-"""The unit of a zoom-ratio parameter: capped at :attr:`Context.max_zoom` when known."""
-CAMERA_MASK = "camera mask"
-"""What a :attr:`Kind.CAMERAS` parameter's error names as its unit."""
 
 
 class Context(NamedTuple):
@@ -69,7 +65,7 @@ class Context(NamedTuple):
 class Submission(NamedTuple):
     """A checked command, ready for :meth:`gcu_async.session.Session.submit`."""
 
-    command: c.Command
+    command: Command
     control: ControlValues | None = None
     """Control values for the mode it enters (``None``: sent invalid)."""
     recording_target: bool | None = None
@@ -85,184 +81,213 @@ NO_CONTEXT = Context()
 def build(method: str | CatalogueEntry, context: Context = NO_CONTEXT, /,
           **arguments: object) -> Submission:  # fmt: skip
     """The :class:`Submission` of catalogue entry ``method`` (its name or the entry) called
-    with ``arguments``, checked parameter by parameter in the entry's order; defaults fill
-    the arguments left out. Raises ``TypeError`` for a missing or unknown argument or a
-    wrong type, :class:`~gcu_async.errors.FieldRangeError` for a value out of range."""
+    with ``arguments``; defaults fill the arguments left out. Raises ``TypeError`` for a
+    missing or unknown argument or a wrong type, :class:`~gcu_async.errors.FieldRangeError`
+    for a value out of range."""
     entry = BY_METHOD[method] if isinstance(method, str) else method
     unknown = set(arguments).difference(p.name for p in entry.parameters)
     if unknown:
         raise TypeError(f"{entry.method}() got an unexpected argument {min(unknown)!r}")
     values: dict[str, Any] = {}
-    for p in CHECK_ORDER.get(entry.method, entry.parameters):
+    for p in entry.parameters:
         if p.name in arguments:
-            value = arguments[p.name]
+            values[p.name] = arguments[p.name]
         elif p.required:
             raise TypeError(f"{entry.method}() missing required argument: {p.name!r}")
         else:
-            value = p.default
-        values[p.name] = check(p, value, context)
-    return MAKERS.get(entry.method, _positional)(entry, values, context)
+            values[p.name] = p.default
+    make = MAKERS.get(entry.method)
+    if make is None:  # the class called with the method's arguments
+        command: Callable[..., Command] = entry.command
+        return Submission(command(**values))
+    return make(context, **values)
 
 
-CHECK_ORDER: Mapping[str, tuple[Parameter, ...]] = MappingProxyType({
-    "enter_euler_control": tuple(sorted(BY_METHOD["enter_euler_control"].parameters,
-                                        key=lambda p: p.name != "yaw")),
-})  # fmt: skip
-"""Entries whose arguments are checked in another order than the catalogue's (which one a
-call with several bad arguments names; the client's methods always did it this way)."""
+# -- checks of what the command classes do not hold -----------------------------------------
+def _explicit(command: type[Command]) -> dict[str, Parameter]:
+    """The explicit parameters (control values, a timeout) of ``command``'s methods."""
+    return {p.name: p for m in command.SCHEMA.methods for p in m.params or ()
+            if isinstance(p, Parameter)}  # fmt: skip
 
 
-def check(p: Parameter, value: object, context: Context = NO_CONTEXT) -> Any:
-    """``value`` of parameter ``p`` checked (:func:`build`'s rule for one argument)."""
-    kind = p.kind
-    if kind is Kind.REAL:
-        if value is None and p.default is None:  # an angle left out keeps the current one
-            value = getattr(context.attitude, p.name)
-        return _real(p, value, context)
-    if kind is Kind.CAMERAS or kind is Kind.INTEGER:
-        assert p.low is not None
-        assert p.high is not None
-        unit = CAMERA_MASK if kind is Kind.CAMERAS else p.unit
-        return check_int(p.name, value, int(p.low), int(p.high), unit)
-    if kind is Kind.SWITCH:
-        return check_bool(p.name, value)
-    if kind is Kind.CHOICE:
-        assert p.choices is not None
-        return check_member(p.name, value, p.choices)
-    if kind is Kind.BOX:
-        return _box(p.name, value)
-    raise AssertionError(f"{p.name}: no check for {kind}")
-
-
-def _real(p: Parameter, value: object, context: Context) -> float:
+def _real(p: Parameter, value: object) -> float:
+    """``value`` checked against ``p``'s range."""
     assert p.low is not None
     assert p.high is not None
-    low, high, unit, detail = p.low, p.high, p.unit, ""
-    if unit == RATE_UNIT:
-        zoom = context.zoom
-        low, high, unit = low / zoom, high / zoom, f"{RATE_UNIT} at zoom {zoom:g}x"
-    elif unit == ZOOM_UNIT and context.max_zoom is not None:
-        high = context.max_zoom
-        detail = f"camera 1's maximum zoom is {high:g}x (max_zoom)"
-    f = check_real(p.name, value, low, high, unit, high_open=p.high_open, detail=detail)
-    if p.low_open and f == low:
-        raise FieldRangeError(p.name, value, low, high, unit, high_open=p.high_open,
-                              detail=f"must be greater than {low:g}")  # fmt: skip
+    f = check_real(p.name, value, p.low, p.high, p.unit, high_open=p.high_open)
+    if p.low_open and f == p.low:
+        raise FieldRangeError(p.name, value, p.low, p.high, p.unit, high_open=p.high_open,
+                              detail=f"must be greater than {p.low:g}")  # fmt: skip
     return f
 
 
-def _box(name: str, value: object) -> c.ImageBox:
-    """An ImageBox, a plain 4-tuple or a list of 4, each edge a fraction checked under
-    ``box.<edge>``."""
-    box = check_sequence(name, value, c.ImageBox)
-    low, high = FRACTION.low, FRACTION.high
-    assert low is not None
-    assert high is not None
-    return c.ImageBox(*(check_real(f"{name}.{f}", v, low, high, FRACTION.unit)
-                        for f, v in zip(c.ImageBox._fields, box, strict=True)))  # fmt: skip
+def _rate(p: Parameter, value: object, zoom: float, name: str = "") -> float:
+    """A rate checked against ``p``'s limit divided by ``zoom`` (the control field carries
+    rate × zoom), under ``name`` (default ``p``'s)."""
+    assert p.low is not None
+    assert p.high is not None
+    unit = f"{p.unit} at zoom {zoom:g}x"
+    return check_real(name or p.name, value, p.low / zoom, p.high / zoom, unit)
+
+
+_EULER = _explicit(c.EulerControl)
+_ANGLES = _explicit(c.AngleControl)
+_FPV = _explicit(c.Fpv)
+_TIMEOUT = _explicit(c.Calibration)["timeout"]
+_RATE = _explicit(c.PointingLock)["pitch_rate"]
+_POINT = next(kind for kind in c.ClickToPan.SCHEMA.params if isinstance(kind, Point)).limits
+_SPOT = next(kind for kind in c.SpotTemperature.SCHEMA.params if isinstance(kind, Point)).limits
+_ZOOM_RATIO = RealRange.of(ZOOM_RATIO)
+
+
+def _angles(params: dict[str, Parameter], roll: object, pitch: object,
+            yaw: object) -> ControlValues:  # fmt: skip
+    r, p, y = (_real(params[n], v) for n, v in (("roll", roll), ("pitch", pitch), ("yaw", yaw)))
+    return ControlValues.angles(r, p, y)
+
+
+def _rates(command: Command, context: Context, **given: object) -> Submission:
+    """A rate mode's submission: ``given`` (``pitch_rate``, ``yaw_rate``) checked at
+    ``context.zoom``; the roll rate is 0."""
+    params = _explicit(type(command))
+    rates = {name: _rate(params[name], v, context.zoom) for name, v in given.items()}
+    control = ControlValues.rates(0.0, rates.get("pitch_rate", 0.0), rates["yaw_rate"],
+                                  zoom=context.zoom)  # fmt: skip
+    return Submission(command, control=control)
+
+
+def _point(limits: tuple[RealRange, ...], x: object, y: object) -> ImagePoint:
+    """``x``, ``y`` checked under the method's names (the command names them ``point.x``)."""
+    lx, ly = limits
+    return ImagePoint(lx.check(x, "x"), ly.check(y, "y"))
+
+
+def _number(name: str, value: float) -> float:
+    """A zoom-to value as the methods take it: never ``None`` (the command reads ``None`` as
+    "the other one is given"); the command checks the rest."""
+    if value is None:
+        raise type_error(name, "a real number", value)
+    return value
+
+
+def _box(box: object) -> ImageBox:
+    """A box as the methods take it: an ImageBox, a plain 4-tuple or a list of 4 (JSON gives
+    lists); the command checks each edge."""
+    return check_sequence("box", box, ImageBox)
 
 
 # -- control values outside the catalogue: set_angles, set_rates ----------------------------
-FRACTION = BY_METHOD["click_to_pan"].parameter("x")
-"""An image fraction (a box's edge has its range)."""
-ANGLES = BY_METHOD["enter_angle_control"].parameters
-"""Roll, pitch, yaw as :meth:`~gcu_async.client.GcuClient.set_angles` takes them."""
-RATE = BY_METHOD["enter_pointing_lock"].parameter("pitch_rate")
-"""A rate as :meth:`~gcu_async.client.GcuClient.set_rates` takes it."""
-
-
 def angles(roll: object, pitch: object, yaw: object) -> ControlValues:
-    """Angle control values (degrees, ±180), each checked under its name."""
-    r, p, y = (_real(param, v, NO_CONTEXT) for param, v in zip(ANGLES, (roll, pitch, yaw),
-                                                                strict=True))  # fmt: skip
-    return ControlValues.angles(r, p, y)
+    """Angle control values (degrees, the range of ``enter_angle_control``), each checked
+    under its name."""
+    return _angles(_ANGLES, roll, pitch, yaw)
 
 
 def rates(context: Context, **given: object) -> ControlValues:
     """Rate control values from three rates given as ``name=value`` (roll, pitch, yaw in
     that order), each checked under the name the caller used at ``context.zoom``."""
-    r, p, y = (_real(replace(RATE, name=name), v, context) for name, v in given.items())
+    r, p, y = (_rate(_RATE, v, context.zoom, name) for name, v in given.items())
     return ControlValues.rates(r, p, y, zoom=context.zoom)
 
 
-# -- how each entry's checked values make its submission -----------------------------------
-Maker = Callable[[CatalogueEntry, dict[str, Any], Context], Submission]
+# -- one function per client method that does more than call its class ----------------------
+def enter_euler_control(context: Context, /, *, roll: float | None, pitch: float | None,
+                        yaw: float | None) -> Submission:  # fmt: skip
+    """An angle left ``None`` keeps the camera's current one; a yaw past the half turn goes
+    out as its negative equivalent. The yaw is checked first (a call with several bad
+    angles names it)."""
+    now = context.attitude
+    y = _real(_EULER["yaw"], now.yaw if yaw is None else yaw)
+    r = _real(_EULER["roll"], now.roll if roll is None else roll)
+    p = _real(_EULER["pitch"], now.pitch if pitch is None else pitch)
+    control = ControlValues.angles(r, p, y - 360.0 if y >= 180.0 else y)
+    return Submission(c.EulerControl(), control=control)
 
 
-def _positional(entry: CatalogueEntry, v: dict[str, Any], context: Context) -> Submission:
-    """The command class called with the values in the catalogue's order."""
-    command: Callable[..., c.Command] = entry.command
-    return Submission(command(*v.values()))
+def enter_angle_control(context: Context, /, *, roll: float, pitch: float,
+                        yaw: float) -> Submission:  # fmt: skip
+    return Submission(c.AngleControl(), control=_angles(_ANGLES, roll, pitch, yaw))
 
 
-def _euler(entry: CatalogueEntry, v: dict[str, Any], context: Context) -> Submission:
-    yaw = v["yaw"]  # [180, 360) goes out as its -180...0 equivalent
-    control = ControlValues.angles(v["roll"], v["pitch"], yaw - 360.0 if yaw >= 180.0 else yaw)
-    return Submission(entry.command(), control=control)
+def enter_fpv(context: Context, /, *, roll: float, pitch: float, yaw: float) -> Submission:
+    return Submission(c.Fpv(), control=_angles(_FPV, roll, pitch, yaw))
 
 
-def _angles(entry: CatalogueEntry, v: dict[str, Any], context: Context) -> Submission:
-    return Submission(entry.command(), control=ControlValues.angles(v["roll"], v["pitch"],
-                                                                   v["yaw"]))  # fmt: skip
+def enter_pointing_lock(context: Context, /, *, pitch_rate: float,
+                        yaw_rate: float) -> Submission:  # fmt: skip
+    return _rates(c.PointingLock(), context, pitch_rate=pitch_rate, yaw_rate=yaw_rate)
 
 
-def _rates(entry: CatalogueEntry, v: dict[str, Any], context: Context) -> Submission:
-    control = ControlValues.rates(0.0, v.get("pitch_rate", 0.0), v["yaw_rate"],
-                                  zoom=context.zoom)  # fmt: skip
-    return Submission(entry.command(), control=control)
+def enter_pointing_follow(context: Context, /, *, pitch_rate: float,
+                          yaw_rate: float) -> Submission:  # fmt: skip
+    return _rates(c.PointingFollow(), context, pitch_rate=pitch_rate, yaw_rate=yaw_rate)
 
 
-def _keywords(entry: CatalogueEntry, v: dict[str, Any], context: Context) -> Submission:
-    """The command class called with the values by name (gaze_at, zoom_to...)."""
-    command: Callable[..., c.Command] = entry.command
-    return Submission(command(**v))
+def enter_top_down(context: Context, /, *, yaw_rate: float) -> Submission:
+    return _rates(c.TopDown(), context, yaw_rate=yaw_rate)
 
 
-def _timeout(entry: CatalogueEntry, v: dict[str, Any], context: Context) -> Submission:
-    return Submission(entry.command(), timeout=v["timeout"])
+def enter_gaze_lock(context: Context, /, *, pitch_rate: float, yaw_rate: float) -> Submission:
+    return _rates(c.GazeLock(), context, pitch_rate=pitch_rate, yaw_rate=yaw_rate)
 
 
-def _track(entry: CatalogueEntry, v: dict[str, Any], context: Context) -> Submission:
-    return Submission(c.Track(True, v["box"], v["cameras"]))
+def calibrate(context: Context, /, *, timeout: float) -> Submission:
+    return Submission(c.Calibration(), timeout=_real(_TIMEOUT, timeout))
 
 
-def _stop_tracking(entry: CatalogueEntry, v: dict[str, Any], context: Context) -> Submission:
-    return Submission(c.Track(False, cameras=v["cameras"]))
+def track(context: Context, /, *, box: ImageBox | tuple[float, float, float, float] | list[float],
+          cameras: int) -> Submission:  # fmt: skip
+    return Submission(c.Track(True, _box(box), cameras))
 
 
-def _point(entry: CatalogueEntry, v: dict[str, Any], context: Context) -> Submission:
-    """``x``, ``y`` as one :class:`~gcu_async.protocol.ImagePoint`, in the place they take."""
-    args = dict(v)
-    point = c.ImagePoint(args.pop("x"), args.pop("y"))
-    cameras = args.pop("cameras")
-    command: Callable[..., c.Command] = entry.command
-    return Submission(command(*args.values(), point, cameras))
+def stop_tracking(context: Context, /, *, cameras: int) -> Submission:
+    return Submission(c.Track(False, cameras=cameras))
 
 
-def _recording(target: bool) -> Maker:
-    def make(entry: CatalogueEntry, v: dict[str, Any], context: Context) -> Submission:
-        return Submission(c.Record(v["cameras"]), recording_target=target)
-
-    return make
+def click_to_pan(context: Context, /, *, x: float, y: float, cameras: int) -> Submission:
+    return Submission(c.ClickToPan(_point(_POINT, x, y), cameras))
 
 
-MAKERS: Mapping[str, Maker] = MappingProxyType({
-    "enter_euler_control": _euler,
-    "enter_angle_control": _angles,
-    "enter_fpv": _angles,
-    "enter_pointing_lock": _rates,
-    "enter_pointing_follow": _rates,
-    "enter_top_down": _rates,
-    "enter_gaze_lock": _rates,
-    "gaze_at": _keywords,
-    "calibrate": _timeout,
-    "track": _track,
-    "stop_tracking": _stop_tracking,
-    "click_to_pan": _point,
-    "start_recording": _recording(True),
-    "stop_recording": _recording(False),
-    "zoom_to": _keywords,
-    "zoom_to_fraction": _keywords,
-    "set_spot_temperature": _point,
-})  # fmt: skip
-"""The entries whose command is not their class called with the values in order."""
+def start_recording(context: Context, /, *, cameras: int) -> Submission:
+    return Submission(c.Record(cameras), recording_target=True)
+
+
+def stop_recording(context: Context, /, *, cameras: int) -> Submission:
+    return Submission(c.Record(cameras), recording_target=False)
+
+
+def zoom_to(context: Context, /, *, ratio: float, cameras: int) -> Submission:
+    """``ratio`` capped at ``context.max_zoom`` when it is known."""
+    if context.max_zoom is not None:
+        r = _ZOOM_RATIO
+        check_real(r.name, ratio, r.low, context.max_zoom, r.unit,
+                   detail=f"camera 1's maximum zoom is {context.max_zoom:g}x (max_zoom)")
+    return Submission(c.ZoomTo(ratio=_number("ratio", ratio), cameras=cameras))
+
+
+def zoom_to_fraction(context: Context, /, *, fraction: float, cameras: int) -> Submission:
+    return Submission(c.ZoomTo(fraction=_number("fraction", fraction), cameras=cameras))
+
+
+def set_area_temperature(context: Context, /, *, enabled: bool,
+                         box: ImageBox | tuple[float, float, float, float] | list[float],
+                         cameras: int) -> Submission:  # fmt: skip
+    return Submission(c.AreaTemperature(enabled, _box(box), cameras))
+
+
+def set_spot_temperature(context: Context, /, *, enabled: bool, x: float, y: float,
+                         cameras: int) -> Submission:  # fmt: skip
+    return Submission(c.SpotTemperature(enabled, _point(_SPOT, x, y), cameras))
+
+
+Maker = Callable[..., Submission]
+MAKERS: Mapping[str, Maker] = MappingProxyType({make.__name__: make for make in (
+    enter_euler_control, enter_angle_control, enter_fpv, enter_pointing_lock,
+    enter_pointing_follow, enter_top_down, enter_gaze_lock, calibrate, track, stop_tracking,
+    click_to_pan, start_recording, stop_recording, zoom_to, zoom_to_fraction,
+    set_area_temperature,
+    set_spot_temperature,
+)})  # fmt: skip
+"""The methods whose submission is not their class called with their arguments, each with
+its function of the same name (:func:`build` calls it with the context and the arguments by
+name)."""

@@ -5,15 +5,15 @@ command class (the protocol's noun: the :class:`~gcu_async.protocol.Opcode` memb
 CamelCase), its opcode, its ``gcu-async send`` name (the method name with dashes), its
 parameters (:class:`Parameter`: name, kind, unit, range, default), a one-line doc and how
 its feedback's execution status reads (:class:`StatusRule`, docs/protocol-notes.md §2
-"Execution status per command"). Every entry is derived from the command schema
+"Execution status per command"). Every entry is derived from the command table
 (:mod:`gcu_async.protocol.commands`, each class's ``SCHEMA``): nothing is written here. The
 command line's ``send`` subcommands, the web example's table and the docs' command table are
 made from it; the client's methods and the command
 classes' own validation are checked against it by tests (tests/protocol/test_catalogue.py), so the
 copies cannot drift. Sans-I/O and immutable: tuples of frozen dataclasses.
 
-One opcode may have several entries (``track`` / ``stop_tracking`` both send 0x17); the
-null command (0x00) has none: the client sends it by itself (docs/protocol-notes.md §4 "The
+One opcode may have several entries (``track`` and ``stop_tracking`` both send TRACK); the
+null command has none: the client sends it by itself (docs/protocol-notes.md §4 "The
 same-opcode rule").
 """
 
@@ -23,18 +23,17 @@ from collections.abc import Mapping
 from dataclasses import MISSING, dataclass, fields, replace
 from types import MappingProxyType
 
-from gcu_async.protocol import commands as c
-from gcu_async.protocol.command_fields import REQUIRED as REQUIRED
-from gcu_async.protocol.command_fields import Kind as Kind
-from gcu_async.protocol.command_fields import Method
-from gcu_async.protocol.command_fields import Parameter as Parameter
-from gcu_async.protocol.command_fields import Required as Required
-from gcu_async.protocol.command_fields import StatusRule as StatusRule
+from gcu_async.protocol.command_base import Command
+from gcu_async.protocol.command_schema import REQUIRED as REQUIRED
+from gcu_async.protocol.command_schema import Kind as Kind
+from gcu_async.protocol.command_schema import Method
+from gcu_async.protocol.command_schema import Parameter as Parameter
+from gcu_async.protocol.command_schema import Required as Required
+from gcu_async.protocol.command_schema import StatusRule as StatusRule
+from gcu_async.protocol.commands import COMMAND_TYPES
 from gcu_async.protocol.commands import RATE_LIMIT as RATE_LIMIT
-from gcu_async.protocol.commands import TEMPERATURE_RAW
-from gcu_async.protocol.commands import YAW_INPUT_RANGE as YAW_INPUT_RANGE
-from gcu_async.protocol.enums import Opcode
-from gcu_async.protocol.layout import S32
+from gcu_async.protocol.opcodes import Opcode
+from gcu_async.protocol.units import YAW_INPUT_RANGE as YAW_INPUT_RANGE
 
 
 @dataclass(frozen=True, slots=True)
@@ -43,7 +42,7 @@ class CatalogueEntry:
 
     method: str
     """The :class:`~gcu_async.client.GcuClient` method (a verb phrase)."""
-    command: type[c.Command]
+    command: type[Command]
     """The command class it sends (the protocol's noun)."""
     doc: str
     """One line."""
@@ -75,13 +74,7 @@ class CatalogueEntry:
         raise KeyError(f"{self.method} has no parameter {name!r}")
 
 
-ALTITUDE_RANGE = (S32[0] / 1000, S32[1] / 1000)
-"""Metres: what the gaze-at altitude field (S32, 1 mm) carries."""
-TEMPERATURE_RANGE = (TEMPERATURE_RAW[0] / 10, TEMPERATURE_RAW[1] / 10)
-"""°C: what a threshold field (S16, 0.1 °C) carries."""
-
-
-def _parameters(command: type[c.Command], method: Method) -> tuple[Parameter, ...]:
+def _parameters(command: type[Command], method: Method) -> tuple[Parameter, ...]:
     """The method's parameters: each named command attribute's kind gives its name(s), range,
     unit and doc, the class its default (``method.required`` drops it)."""
     defaults = {f.name: REQUIRED if f.default is MISSING else f.default for f in fields(command)}
@@ -106,7 +99,7 @@ def _parameters(command: type[c.Command], method: Method) -> tuple[Parameter, ..
 
 CATALOGUE: tuple[CatalogueEntry, ...] = tuple(
     CatalogueEntry(m.name, cls, m.doc, _parameters(cls, m), cls.SCHEMA.needs_ins)
-    for cls in c.COMMAND_TYPES.values()
+    for cls in COMMAND_TYPES.values()
     for m in cls.SCHEMA.methods
 )
 """Every command method of the client, in the order of the docs' command table (the order

@@ -1,223 +1,80 @@
-"""The kinds of command parameter the schema (:mod:`gcu_async.protocol.commands`) is made of.
+"""The kinds of command parameter a command's schema is made of (the parameter codecs).
 
-A command's schema lists its parameters in wire order as kinds: :class:`Cameras`,
-:class:`Switch`, :class:`Integer`, :class:`Choice`, :class:`Real`, :class:`Point`,
-:class:`Box`, :class:`Thresholds`, :class:`ZoomValue`. Each kind maps one or more attributes
-of the command class to one or more :class:`~gcu_async.protocol.fields.WireField` and knows,
-once for every command that uses it, the send-side check (``encode``), the receive side
-(``decode``, which raises ``ValueError`` for a value V2.0.6 does not allow, and
-``anomalies``, which lists them), the JSON form and the catalogue's :class:`Parameter`. The
-command codecs are compiled from these at import time (:mod:`gcu_async.protocol.commands`).
+A command's schema (:mod:`gcu_async.protocol.commands`) lists its parameters in wire order as
+kinds: :class:`Cameras`, :class:`Switch`, :class:`Integer`, :class:`Choice`, :class:`Real`,
+:class:`Point`, :class:`Box`, :class:`Thresholds`, :class:`ZoomValue`. Each maps one or more
+attributes of the command class to one or more
+:class:`~gcu_async.protocol.fields.WireField` and implements, once for every command that uses
+it, the interface of :class:`~gcu_async.protocol.command_schema.ParamKind`: the send-side
+check (``encode``), the receive side (``decode``, ``anomalies``), the JSON form and the
+catalogue's :class:`~gcu_async.protocol.command_schema.Parameter`.
+
+A real parameter is checked in engineering units against its range as given, then rounded to
+the wire resolution (:class:`RealRange`): ``ZoomTo(ratio=3276.84)`` is refused, as the client
+method refuses it.
 """
 
 from __future__ import annotations
 
 import enum
-import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, Literal, NamedTuple
+from typing import Any, ClassVar, NamedTuple
 
-from gcu_async._checks import check_bool, check_int
+from gcu_async._checks import check_bool, check_int, check_real
 from gcu_async.errors import FieldRangeError
 from gcu_async.protocol.anomalies import Anomaly, check_raw
-from gcu_async.protocol.enums import CameraMask, Mode
+from gcu_async.protocol.command_schema import REQUIRED, Kind, Parameter, ParamKind
+from gcu_async.protocol.enums import CameraMask
 from gcu_async.protocol.fields import WireField
-from gcu_async.protocol.units import check_member, check_tuple, quantize
+from gcu_async.protocol.units import ImageBox, ImagePoint, check_member, check_tuple
 
 
-# -- the catalogue's description of a parameter (re-exported by protocol.catalogue) ---------
-class Required(enum.Enum):
-    """The marker of a parameter without a default (:data:`REQUIRED`)."""
-
-    REQUIRED = "required"
-
-    def __repr__(self) -> str:
-        return "REQUIRED"
-
-
-REQUIRED = Required.REQUIRED
-"""``Parameter.default`` of a parameter the caller must give."""
-
-
-class Kind(enum.Enum):
-    """What a parameter takes (the package rule, :mod:`gcu_async.protocol`)."""
-
-    REAL = "real"
-    """A finite ``int`` or ``float`` in ``[low, high]``."""
-    INTEGER = "integer"
-    """An ``int`` (not a bool) in ``[low, high]``."""
-    SWITCH = "switch"
-    """``True`` or ``False``."""
-    CAMERAS = "cameras"
-    """A camera mask, an ``int`` 1–255 (docs/protocol-notes.md §3 "Camera masks")."""
-    CHOICE = "choice"
-    """A member of ``Parameter.choices`` or its exact value."""
-    BOX = "box"
-    """An :class:`~gcu_async.protocol.ImageBox` or a plain 4-tuple of image fractions."""
-
-
-@dataclass(frozen=True, slots=True)
-class Parameter:
-    """One parameter of a command method, as the caller writes it."""
+class RealRange(NamedTuple):
+    """The send side of a real field: its range in engineering units and its scale."""
 
     name: str
-    kind: Kind
-    doc: str
-    """A few words: what it is, beyond unit and range."""
-    unit: str = ""
-    low: float | None = None
-    """Smallest value (``None``: no numeric range: switches, boxes, choices)."""
-    high: float | None = None
-    low_open: bool = False
-    """``low`` itself is excluded."""
-    high_open: bool = False
-    """``high`` itself is excluded."""
-    default: object = REQUIRED
-    choices: type[enum.IntEnum] | None = None
-    """The enum of a :attr:`Kind.CHOICE` parameter."""
-
-    @property
-    def required(self) -> bool:
-        return self.default is REQUIRED
-
-    def range_text(self) -> str:
-        """The range in words (``"-180 to 180"``, ``"OFF, ON or AUTO"``), ``""`` if none."""
-        if self.choices is not None:
-            names = [m.name for m in self.choices]
-            return f"{', '.join(names[:-1])} or {names[-1]}"
-        if self.low is None or self.high is None:
-            return ""
-        low = f"{self.low:.12g}" + (" (excluded)" if self.low_open else "")
-        high = "no limit" if math.isinf(self.high) else f"{self.high:.12g}"
-        return f"{low} to {high}" + (" (excluded)" if self.high_open else "")
-
-
-class StatusRule(enum.Enum):
-    """How the execution status of a command's feedback reads (docs/protocol-notes.md §2
-    "Execution status per command"); the value is the rule in words."""
-
-    STANDARD = "0x00 success, any other value failure (0x01)"
-    CALIBRATION = "0x00 success, 0x02 in progress (a later reply brings the result), else failure"
-    THERMAL = "0x00 success, any other value failure (0x02)"
-    ZOOM = "0x00 success, else the camera mask of the cameras that failed"
+    low: float
+    high: float
+    scale: float
+    unit: str
 
     @classmethod
-    def of(cls, opcode: int) -> StatusRule:
-        """The rule for ``opcode`` (a command's schema says it; unknown opcodes: standard)."""
-        from gcu_async.protocol.commands import COMMAND_TYPES  # the schema imports this module
+    def of(cls, w: WireField) -> RealRange:
+        return cls(w.name, w.raw_low / w.scale, w.raw_high / w.scale, w.scale, w.unit)
 
-        command = COMMAND_TYPES.get(opcode)
-        return cls.STANDARD if command is None else command.SCHEMA.status
+    def check(self, value: Any, name: str | None = None) -> float:
+        """``value`` checked against the range as given, not rounded first (``TypeError`` /
+        :class:`~gcu_async.errors.FieldRangeError` naming ``name`` or the field)."""
+        if type(value) is float and self.low <= value <= self.high:
+            return value
+        return check_real(name or self.name, value, self.low, self.high, self.unit)
 
-
-ControlReads = Literal["angles", "rates", "none"]
-"""What a mode reads from the control values (session ``ControlKind`` values)."""
-
-
-class ModeSpec(NamedTuple):
-    """What a mode command does: the mode byte the GCU then reports (GCU main frame byte 5)
-    and what that mode reads from the control values."""
-
-    mode: Mode
-    control: ControlReads
-
-
-class Method(NamedTuple):
-    """One client method (and ``gcu-async send`` subcommand) sending a command.
-
-    ``params``: the method's parameters, each the name of a command attribute (a
-    :class:`Point` gives ``x`` and ``y``) or an explicit :class:`Parameter` (control values,
-    timeouts); ``None`` means every attribute in the class's order. ``required`` names the
-    ones without a default though the class has one."""
-
-    name: str
-    doc: str
-    params: tuple[str | Parameter, ...] | None = None
-    required: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True, slots=True)
-class CommandSchema:
-    """Everything about one command but its opcode and attributes (the class has those)."""
-
-    params: tuple[ParamKind, ...] = ()
-    """The parameters in wire order."""
-    methods: tuple[Method, ...] = ()
-    """The client methods sending it, in the docs' order (none: the client sends it itself)."""
-    status: StatusRule = StatusRule.STANDARD
-    mode: ModeSpec | None = None
-    """Set for a command that switches the pod's working mode."""
-    matrix_row: int | None = None
-    """Its row in Appendix 8 (the support matrix, :mod:`gcu_async.protocol.pods`); ``None``:
-    every pod model supports it."""
-    needs_ins: bool = False
-    """The GCU executes it only with valid aircraft INS data (host byte 11 B0)."""
-    changes_mode: bool = False
-    """Control values must be sent invalid while it is queued or in flight (besides the mode
-    commands)."""
-    catalogue_order: int = 0
-    """Where its methods appear in the catalogue (ascending; ties by opcode)."""
-
-    @property
-    def wire(self) -> tuple[WireField, ...]:
-        return tuple(w for p in self.params for w in p.wire)
-
-
-# -- parameter kinds ----------------------------------------------------------------------------
-IMAGE_SCALE = 10000
-"""Image coordinates: U16 [0, 10000], origin top-left."""
-IMAGE_UNIT = "1/10000 of the image"
+    def raw(self, value: Any) -> int:
+        """``value`` checked, rounded to the raw integer."""
+        return round(self.check(value) * self.scale)
 
 
 @dataclass(frozen=True)
-class ParamKind:
-    """One parameter of a command: ``attrs`` of the class ↔ ``wire`` fields."""
+class _Reals(ParamKind):
+    """A kind whose wire fields carry real numbers."""
 
-    attrs: tuple[str, ...] = field(init=False)
-    wire: tuple[WireField, ...] = field(init=False)
-    scalar: ClassVar[bool] = True
-    """One attribute ↔ one wire field: ``encode``/``decode`` take and give one value."""
-    normalizes: ClassVar[bool] = False
-    """``normalize`` stores a different value (a NamedTuple, an enum member)."""
-
-    def normalize(self, value: Any) -> Any:
-        return value
-
-    def encoder(self) -> Callable[..., Any]:
-        """``encode`` with this parameter's constants bound (the compiled codec calls it)."""
-        return self.encode
-
-    def encode(self, *values: Any) -> Any:
-        """Send side: the raw integer(s), checked (``TypeError`` / ``FieldRangeError``)."""
-        raise NotImplementedError
-
-    def decode(self, *raw: int) -> Any:
-        """Receive side: the attribute value(s); ``ValueError`` if V2.0.6 does not allow it."""
-        raise NotImplementedError
-
-    def anomalies(self, *raw: int) -> tuple[Anomaly, ...]:
-        found: tuple[Anomaly, ...] = ()
-        for w, r in zip(self.wire, raw, strict=True):
-            found += w.anomalies(r)
-        return found
-
-    def json(self, value: Any) -> Any:
-        return value
-
-    def parameters(self, defaults: dict[str, object]) -> dict[str, Parameter]:
-        """The catalogue's parameter(s), by name, given each attribute's default."""
-        raise NotImplementedError
+    limits: tuple[RealRange, ...] = field(init=False, repr=False, compare=False)
+    """Each wire field's send side, in wire order."""
 
     def _set(self, attrs: tuple[str, ...], wire: tuple[WireField, ...]) -> None:
-        object.__setattr__(self, "attrs", attrs)
-        object.__setattr__(self, "wire", wire)
+        super()._set(attrs, wire)
+        object.__setattr__(self, "limits", tuple(RealRange.of(w) for w in wire))
 
 
 def _in_range(w: WireField, raw: int) -> int:
     if not w.raw_low <= raw <= w.raw_high:
         raise ValueError(f"{w.name}: {raw} is outside {w.raw_low}..{w.raw_high}")
     return raw
+
+
+def _real_parameter(w: WireField, name: str, default: object) -> Parameter:
+    return Parameter(name, Kind.REAL, w.doc, w.unit, w.raw_low / w.scale, w.raw_high / w.scale,
+                     default=default)  # fmt: skip
 
 
 CAMERA_MASK = WireField("cameras", "B", "camera mask", 1, 0xFF, raw_unit="camera mask")
@@ -234,34 +91,26 @@ class Cameras(ParamKind):
     def __post_init__(self) -> None:
         self._set(("cameras",), (CAMERA_MASK,))
 
-    def encode(self, value: Any) -> int:
-        return check_int("cameras", value, CAMERA_MASK.raw_low, CAMERA_MASK.raw_high,
-                         "camera mask")  # fmt: skip
+    def encode(self, value: Any) -> tuple[int]:
+        if type(value) is int and 1 <= value <= 0xFF:  # the common case, one test
+            return (value,)
+        w = CAMERA_MASK
+        return (check_int(w.name, value, w.raw_low, w.raw_high, w.raw_unit),)
 
-    def encoder(self) -> Callable[[Any], int]:
-        low, high = CAMERA_MASK.raw_low, CAMERA_MASK.raw_high
-
-        def encode(value: Any) -> int:
-            if type(value) is int and low <= value <= high:  # the common case, one test
-                return value
-            return check_int("cameras", value, low, high, "camera mask")
-
-        return encode
-
-    def decode(self, raw: int) -> Any:  # type: ignore[override]
-        return CameraMask(_in_range(self.wire[0], raw))
+    def decode(self, raw: int) -> tuple[CameraMask]:  # type: ignore[override]
+        return (CameraMask(_in_range(CAMERA_MASK, raw)),)
 
     def anomalies(self, raw: int) -> tuple[Anomaly, ...]:  # type: ignore[override]
-        return check_raw("cameras", raw, CAMERA_MASK.raw_low, CAMERA_MASK.raw_high,
-                         "camera mask", "0x00 selects no camera")  # fmt: skip
+        w = CAMERA_MASK
+        return check_raw(w.name, raw, w.raw_low, w.raw_high, w.raw_unit, "0x00 selects no camera")
 
     def json(self, value: Any) -> Any:
         return int(value)
 
     def parameters(self, defaults: dict[str, object]) -> dict[str, Parameter]:
-        w = self.wire[0]
-        return {"cameras": Parameter("cameras", Kind.CAMERAS, w.doc, "", w.raw_low, w.raw_high,
-                                     default=defaults["cameras"])}  # fmt: skip
+        w = CAMERA_MASK
+        return {w.name: Parameter(w.name, Kind.CAMERAS, w.doc, "", w.raw_low, w.raw_high,
+                                  default=defaults[w.name])}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -279,14 +128,12 @@ class Switch(ParamKind):
         self._set((self.name,), (WireField(self.name, "B", self.doc, min(self.on, self.off),
                                            max(self.on, self.off)),))  # fmt: skip
 
-    def encode(self, value: Any) -> int:
-        return self.on if check_bool(self.name, value) else self.off
+    def encode(self, value: Any) -> tuple[int]:
+        return (self.on if check_bool(self.name, value) else self.off,)
 
-    def decode(self, raw: int) -> bool:  # type: ignore[override]
-        if raw == self.on:
-            return True
-        if raw == self.off:
-            return False
+    def decode(self, raw: int) -> tuple[bool]:  # type: ignore[override]
+        if raw == self.on or raw == self.off:
+            return (raw == self.on,)
         raise ValueError(f"{self.name}: byte 0x{raw:02X} is neither 0x{self.off:02X} nor "
                          f"0x{self.on:02X}")  # fmt: skip
 
@@ -307,16 +154,21 @@ class Integer(ParamKind):
 
     field_: WireField = field(default=None)  # type: ignore[assignment]
     detail: str = ""
+    bounds: tuple[int, int] = field(init=False, repr=False, compare=False)
+    """The raw range (``field_``'s)."""
 
     def __post_init__(self) -> None:
         self._set((self.field_.name,), (self.field_,))
+        object.__setattr__(self, "bounds", (self.field_.raw_low, self.field_.raw_high))
 
-    def encode(self, value: Any) -> int:
-        w = self.field_
-        return check_int(w.name, value, w.raw_low, w.raw_high, w.unit)
+    def encode(self, value: Any) -> tuple[int]:
+        low, high = self.bounds
+        if type(value) is int and low <= value <= high:  # the common case, one test
+            return (value,)
+        return (check_int(self.field_.name, value, low, high, self.field_.unit),)
 
-    def decode(self, raw: int) -> int:  # type: ignore[override]
-        return _in_range(self.field_, raw)
+    def decode(self, raw: int) -> tuple[int]:  # type: ignore[override]
+        return (_in_range(self.field_, raw),)
 
     def anomalies(self, raw: int) -> tuple[Anomaly, ...]:  # type: ignore[override]
         w = self.field_
@@ -345,11 +197,11 @@ class Choice(ParamKind):
     def normalize(self, value: Any) -> Any:
         return check_member(self.name, value, self.enum)
 
-    def encode(self, value: Any) -> int:
-        return int(value)
+    def encode(self, value: Any) -> tuple[int]:
+        return (int(value),)
 
-    def decode(self, raw: int) -> Any:  # type: ignore[override]
-        return self.enum(_in_range(self.wire[0], raw))
+    def decode(self, raw: int) -> tuple[Any]:  # type: ignore[override]
+        return (self.enum(_in_range(self.wire[0], raw)),)
 
     def anomalies(self, raw: int) -> tuple[Anomaly, ...]:  # type: ignore[override]
         w = self.wire[0]
@@ -364,7 +216,7 @@ class Choice(ParamKind):
 
 
 @dataclass(frozen=True)
-class Real(ParamKind):
+class Real(_Reals):
     """A real number in engineering units, rounded to the field's resolution (``scale``)."""
 
     field_: WireField = field(default=None)  # type: ignore[assignment]
@@ -372,26 +224,20 @@ class Real(ParamKind):
     def __post_init__(self) -> None:
         self._set((self.field_.name,), (self.field_,))
 
-    def encode(self, value: Any) -> int:
-        w = self.field_
-        return quantize(w.name, value, w.scale, w.raw_low, w.raw_high, w.unit)
+    def encode(self, value: Any) -> tuple[int]:
+        return (self.limits[0].raw(value),)
 
-    def encoder(self) -> Callable[[Any], int]:
-        w = self.field_
-        name, scale, low, high, unit = w.name, w.scale, w.raw_low, w.raw_high, w.unit
-
-        def encode(value: Any) -> int:
-            return quantize(name, value, scale, low, high, unit)
-
-        return encode
-
-    def decode(self, raw: int) -> float:  # type: ignore[override]
-        return _in_range(self.field_, raw) / self.field_.scale
+    def decode(self, raw: int) -> tuple[float]:  # type: ignore[override]
+        return (_in_range(self.field_, raw) / self.field_.scale,)
 
     def parameters(self, defaults: dict[str, object]) -> dict[str, Parameter]:
         w = self.field_
-        return {w.name: Parameter(w.name, Kind.REAL, w.doc, w.unit, w.raw_low / w.scale,
-                                  w.raw_high / w.scale, default=defaults[w.name])}  # fmt: skip
+        return {w.name: _real_parameter(w, w.name, defaults[w.name])}
+
+
+IMAGE_SCALE = 10000
+"""Image coordinates: U16 [0, 10000], origin top-left."""
+IMAGE_UNIT = "1/10000 of the image"
 
 
 def _image(name: str, doc: str = "") -> WireField:
@@ -399,68 +245,54 @@ def _image(name: str, doc: str = "") -> WireField:
 
 
 @dataclass(frozen=True)
-class Point(ParamKind):
+class Point(_Reals):
     """An :class:`~gcu_async.protocol.ImagePoint` (image fractions), two U16 1/10000."""
 
     name: str = "point"
-    scalar: ClassVar[bool] = False
     normalizes: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         self._set((self.name,), (_image(f"{self.name}.x", "from the left"),
                                  _image(f"{self.name}.y", "from the top")))  # fmt: skip
 
-    def normalize(self, value: Any) -> Any:
-        from gcu_async.protocol.commands import ImagePoint
-
+    def normalize(self, value: Any) -> ImagePoint:
         return check_tuple(self.name, value, ImagePoint)
 
-    def encode(self, value: Any) -> tuple[int, int]:
-        x, y = self.wire
-        return (x.to_raw(value.x), y.to_raw(value.y))
+    def encode(self, value: ImagePoint) -> tuple[int, int]:
+        x, y = self.limits
+        return (x.raw(value.x), y.raw(value.y))
 
-    def decode(self, *raw: int) -> Any:
-        from gcu_async.protocol.commands import ImagePoint
-
+    def decode(self, *raw: int) -> tuple[ImagePoint]:
         x, y = self.wire
-        return ImagePoint(x.from_raw(_in_range(x, raw[0])), y.from_raw(_in_range(y, raw[1])))
+        return (ImagePoint(x.from_raw(_in_range(x, raw[0])), y.from_raw(_in_range(y, raw[1]))),)
 
     def json(self, value: Any) -> Any:
         return value._asdict()
 
     def parameters(self, defaults: dict[str, object]) -> dict[str, Parameter]:
         point = defaults[self.name]
-        found = {}
-        for w, axis in zip(self.wire, ("x", "y"), strict=True):
-            default = REQUIRED if point is REQUIRED else getattr(point, axis)
-            found[axis] = Parameter(axis, Kind.REAL, w.doc, w.unit, w.raw_low / w.scale,
-                                    w.raw_high / w.scale, default=default)  # fmt: skip
-        return found
-
-
-_EDGES = ("left", "top", "right", "bottom")
+        return {axis: _real_parameter(w, axis, REQUIRED if point is REQUIRED
+                                      else getattr(point, axis))
+                for w, axis in zip(self.wire, ImagePoint._fields, strict=True)}  # fmt: skip
 
 
 @dataclass(frozen=True)
-class Box(ParamKind):
+class Box(_Reals):
     """An :class:`~gcu_async.protocol.ImageBox`, four U16 1/10000; right not left of left,
     bottom not above top."""
 
     name: str = "box"
     doc: str = "(left, top, right, bottom) image fractions 0-1"
-    scalar: ClassVar[bool] = False
     normalizes: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
-        self._set((self.name,), tuple(_image(f"{self.name}.{e}") for e in _EDGES))
+        self._set((self.name,), tuple(_image(f"{self.name}.{e}") for e in ImageBox._fields))
 
-    def normalize(self, value: Any) -> Any:
-        from gcu_async.protocol.commands import ImageBox
-
+    def normalize(self, value: Any) -> ImageBox:
         return check_tuple(self.name, value, ImageBox)
 
-    def encode(self, box: Any) -> tuple[int, int, int, int]:
-        x0, y0, x1, y1 = (w.to_raw(v) for w, v in zip(self.wire, box, strict=True))
+    def encode(self, box: ImageBox) -> tuple[int, int, int, int]:
+        x0, y0, x1, y1 = (r.raw(v) for r, v in zip(self.limits, box, strict=True))
         n = self.name
         if x1 < x0:
             detail = "right edge must not be left of the left edge"
@@ -471,12 +303,10 @@ class Box(ParamKind):
                                   detail="bottom edge must not be above the top edge")  # fmt: skip
         return x0, y0, x1, y1
 
-    def decode(self, *raw: int) -> Any:
-        from gcu_async.protocol.commands import ImageBox
-
+    def decode(self, *raw: int) -> tuple[ImageBox]:
         if self.anomalies(*raw):
             raise ValueError(f"{self.name}: {raw} is not a box")
-        return ImageBox(*(r / IMAGE_SCALE for r in raw))
+        return (ImageBox(*(r / IMAGE_SCALE for r in raw)),)
 
     def anomalies(self, *raw: int) -> tuple[Anomaly, ...]:
         found = super().anomalies(*raw)
@@ -504,11 +334,9 @@ TEMPERATURE = WireField("temperature", "h", "", scale=10, unit="degC", raw_unit=
 
 
 @dataclass(frozen=True)
-class Thresholds(ParamKind):
+class Thresholds(_Reals):
     """``high`` and ``low`` temperature thresholds (S16 0.1 °C each), ``low`` not above
     ``high``."""
-
-    scalar: ClassVar[bool] = False
 
     def __post_init__(self) -> None:
         t = TEMPERATURE
@@ -517,10 +345,10 @@ class Thresholds(ParamKind):
                       t.scale, t.unit, t.raw_unit) for n in ("high", "low")))  # fmt: skip
 
     def encode(self, high: Any, low: Any) -> tuple[int, int]:
-        h, lo = self.wire
-        hh, ll = h.to_raw(high), lo.to_raw(low)
+        h, lo = self.limits
+        hh, ll = h.raw(high), lo.raw(low)
         if ll > hh:
-            raise FieldRangeError("low", low, lo.raw_low / lo.scale, high, lo.unit,
+            raise FieldRangeError("low", low, lo.low, high, lo.unit,
                                   detail="low must not exceed high")  # fmt: skip
         return hh, ll
 
@@ -536,15 +364,14 @@ class Thresholds(ParamKind):
         return (Anomaly("low", ll, lo.raw_low, hh, lo.raw_unit, "low must not exceed high"),)
 
     def parameters(self, defaults: dict[str, object]) -> dict[str, Parameter]:
-        return {w.name: Parameter(w.name, Kind.REAL, w.doc, w.unit, w.raw_low / w.scale,
-                                  w.raw_high / w.scale, default=defaults[w.name])
-                for w in self.wire}  # fmt: skip
+        return {w.name: _real_parameter(w, w.name, defaults[w.name]) for w in self.wire}
 
 
 ZOOM_RATIO = WireField("ratio", "i", "zoom ratio, 0.1 steps", 10, 32768, 10, "x")
 """``ZoomTo.ratio``: sent as −(ratio × 10) in the S16 ZZ ZZ."""
 ZOOM_FRACTION = WireField("fraction", "h", "1/10000 steps", 1, 10000, 10000, "of maximum ratio")
 """``ZoomTo.fraction``: sent as fraction × 10000 in the S16 ZZ ZZ."""
+_RATIO, _FRACTION = RealRange.of(ZOOM_RATIO), RealRange.of(ZOOM_FRACTION)
 
 
 @dataclass(frozen=True)
@@ -552,35 +379,16 @@ class ZoomValue(ParamKind):
     """The S16 ZZ ZZ of zoom-to: a ``ratio`` (sent negative, ×10) or a ``fraction`` of the
     maximum ratio (×10000); exactly one is given."""
 
-    scalar: ClassVar[bool] = False
-
     def __post_init__(self) -> None:
-        low = -ZOOM_RATIO.raw_high
-        self._set(("ratio", "fraction"), (WireField("raw_value", "h", "", low,
+        self._set(("ratio", "fraction"), (WireField("raw_value", "h", "", -ZOOM_RATIO.raw_high,
                                                     ZOOM_FRACTION.raw_high),))  # fmt: skip
 
-    def encoder(self) -> Callable[[Any, Any], tuple[int]]:
-        r, f = ZOOM_RATIO, ZOOM_FRACTION
-        r_args = (r.name, r.scale, r.raw_low, r.raw_high, r.unit)
-        f_args = (f.name, f.scale, f.raw_low, f.raw_high, f.unit)
-
-        def encode(ratio: Any, fraction: Any) -> tuple[int]:
-            if fraction is None and ratio is not None:
-                name, scale, low, high, unit = r_args
-                return (-quantize(name, ratio, scale, low, high, unit),)
-            if ratio is None and fraction is not None:
-                name, scale, low, high, unit = f_args
-                return (quantize(name, fraction, scale, low, high, unit),)
-            raise ValueError("ZoomTo: give exactly one of ratio= or fraction=")
-
-        return encode
-
     def encode(self, ratio: Any, fraction: Any) -> tuple[int]:
-        if (ratio is None) == (fraction is None):
-            raise ValueError("ZoomTo: give exactly one of ratio= or fraction=")
-        if ratio is not None:
-            return (-ZOOM_RATIO.to_raw(ratio),)
-        return (ZOOM_FRACTION.to_raw(fraction),)
+        if fraction is None and ratio is not None:
+            return (-_RATIO.raw(ratio),)
+        if ratio is None and fraction is not None:
+            return (_FRACTION.raw(fraction),)
+        raise ValueError("ZoomTo: give exactly one of ratio= or fraction=")
 
     def decode(self, zz: int) -> tuple[float | None, float | None]:  # type: ignore[override]
         if zz <= -ZOOM_RATIO.raw_low:
@@ -602,8 +410,7 @@ class ZoomValue(ParamKind):
         return ()
 
     def parameters(self, defaults: dict[str, object]) -> dict[str, Parameter]:
-        return {w.name: Parameter(w.name, Kind.REAL, w.doc, w.unit, w.raw_low / w.scale,
-                                  w.raw_high / w.scale, default=defaults[w.name])
+        return {w.name: _real_parameter(w, w.name, defaults[w.name])
                 for w in (ZOOM_RATIO, ZOOM_FRACTION)}  # fmt: skip
 
 
@@ -622,6 +429,3 @@ def real(name: str, fmt: str, doc: str, low: int | None, high: int | None, scale
 def choice(name: str, enum_: type[enum.IntEnum], doc: str, detail: str) -> Choice:
     """A :class:`Choice` parameter."""
     return Choice(name, enum_, doc, detail)
-
-
-Encoder = Callable[..., Any]

@@ -29,7 +29,7 @@ from typing import Any
 from gcu_async._checks import check_int
 from gcu_async.errors import RemoteProtocolError
 from gcu_async.protocol.anomalies import Anomaly
-from gcu_async.protocol.commands import AnomalousCommand, UnknownCommand, command_code
+from gcu_async.protocol.command_decode import AnomalousCommand, UnknownCommand, command_code
 from gcu_async.protocol.enums import Opcode, opcode_name
 from gcu_async.protocol.gcu_frames import UnknownSubFrame
 from gcu_async.protocol.host_frames import AIRCRAFT_YAW, HostMainFrame, HostSubFrame

@@ -1,5 +1,5 @@
-"""Modes, pod models and every bit field of the protocol (opcodes: re-exported from the
-command schema, :mod:`gcu_async.protocol.commands`).
+"""Modes, pod models and every bit field of the protocol (opcodes: re-exported from
+:mod:`gcu_async.protocol.opcodes`).
 
 Enums carry the protocol's own names; unknown raw values map to an ``UNKNOWN`` member so
 decoding never fails on a newer firmware (the raw integer always stays on the frame).
@@ -8,11 +8,10 @@ decoding never fails on a newer firmware (the raw integer always stays on the fr
 from __future__ import annotations
 
 from enum import IntEnum, IntFlag
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-if TYPE_CHECKING:  # at run time: __getattr__ below (the schema module imports this one)
-    from gcu_async.protocol.commands import Opcode as Opcode
-    from gcu_async.protocol.commands import opcode_name as opcode_name
+from gcu_async.protocol.opcodes import Opcode as Opcode
+from gcu_async.protocol.opcodes import opcode_name as opcode_name
 
 
 class _UnknownIfUnlisted:
@@ -170,13 +169,3 @@ class SubFrameRequest(IntEnum):
     NONE = 0x00
     STANDARD = 0x01
 
-
-def __getattr__(name: str) -> Any:
-    """``Opcode`` and ``opcode_name`` live with the command schema
-    (:mod:`gcu_async.protocol.commands`, so a command is added in one file); they are
-    re-exported here, loaded on first use to keep the import graph acyclic."""
-    if name in ("Opcode", "opcode_name"):
-        from gcu_async.protocol import commands
-
-        return getattr(commands, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -15,9 +15,11 @@ from typing import Any, NamedTuple
 
 from gcu_async._checks import check_int
 from gcu_async.protocol.anomalies import Anomaly
-from gcu_async.protocol.command_fields import CAMERA_MASK, StatusRule
-from gcu_async.protocol.commands import COMMAND_TYPES, Opcode, opcode_name
+from gcu_async.protocol.command_fields import CAMERA_MASK
+from gcu_async.protocol.command_schema import StatusRule
+from gcu_async.protocol.commands import COMMAND_TYPES
 from gcu_async.protocol.enums import CameraMask, ExecutionStatus
+from gcu_async.protocol.opcodes import Opcode, opcode_name
 
 
 def _ruled(rule: StatusRule) -> frozenset[Opcode]:

@@ -20,14 +20,14 @@ from typing import Any, NamedTuple, NoReturn
 from gcu_async._checks import check_int, type_error
 from gcu_async.errors import ProtocolErrorReason, RemoteProtocolError
 from gcu_async.protocol.anomalies import VERSION_DETAIL, Anomaly
-from gcu_async.protocol.commands import (
+from gcu_async.protocol.command_base import Command
+from gcu_async.protocol.command_decode import (
     AnomalousCommand,
-    Command,
-    NullCommand,
     UnknownCommand,
     command_code,
     decode_command,
 )
+from gcu_async.protocol.commands import NullCommand
 from gcu_async.protocol.crc import crc16_xmodem
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.fields import WIRE_RANGES

@@ -1,18 +1,22 @@
 """Pod models (Appendix 7) and which commands each supports (Appendix 8).
 
-Appendix 8 lists 18 commands; commands it does not list are supported by every model.
+Appendix 8 lists 18 commands (:data:`MATRIX_COMMANDS`, by opcode: this module needs nothing
+of the command table); commands it does not list are supported by every model.
 """
 
 from __future__ import annotations
 
 from gcu_async._checks import check_int, type_error
-from gcu_async.protocol.commands import COMMAND_TYPES, Opcode
 from gcu_async.protocol.enums import PodModel
+from gcu_async.protocol.opcodes import Opcode
 
-MATRIX_COMMANDS: tuple[Opcode, ...] = tuple(
-    c.OPCODE for c in sorted((c for c in COMMAND_TYPES.values() if c.SCHEMA.matrix_row is not None),
-                             key=lambda c: c.SCHEMA.matrix_row or 0)
-)  # fmt: skip
+MATRIX_COMMANDS: tuple[Opcode, ...] = (
+    Opcode.TRACK, Opcode.OSD_COORDINATES, Opcode.IMAGE_AUTO_FLIP, Opcode.TIME_ZONE,
+    Opcode.ZOOM_TO, Opcode.FOCUS, Opcode.PALETTE, Opcode.NIGHT_VISION, Opcode.AREA_TEMPERATURE,
+    Opcode.TEMPERATURE_ALARM, Opcode.ISOTHERM, Opcode.SPOT_TEMPERATURE, Opcode.OSD,
+    Opcode.PICTURE_IN_PICTURE, Opcode.TARGET_DETECTION, Opcode.DIGITAL_ZOOM, Opcode.FILL_LIGHT,
+    Opcode.RANGING,
+)
 """The rows of Appendix 8, in the document's order."""
 
 # Each model: its vendor spelling ((T) thermometric, (V) observation, (TA)/(VA) + AI core)

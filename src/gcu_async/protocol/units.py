@@ -55,6 +55,29 @@ class GeoPosition(NamedTuple):
     altitude: float
 
 
+class ImagePoint(NamedTuple):
+    """A point in the image as fractions of its width/height: (0, 0) top-left, (1, 1)
+    bottom-right. Wire resolution 1/10000."""
+
+    x: float
+    y: float
+
+
+class ImageBox(NamedTuple):
+    """A box in the image as fractions (0 … 1) of width/height, top-left and bottom-right."""
+
+    left: float
+    top: float
+    right: float
+    bottom: float
+
+
+YAW_INPUT_RANGE = (-180.0, 360.0)
+"""Degrees, half-open: how every absolute yaw or heading may be given (the Euler yaw of
+``enter_euler_control``, the aircraft's yaw of ``update_aircraft``, the waits): MAVLink's
+±180° headings and compass 0–360° alike; each is sent in the range its wire field takes."""
+
+
 METRES_PER_DEGREE = 111_320.0
 """Length of one degree of latitude (and of longitude at the equator), metres: the
 flat-earth approximation, good to well under a metre over the few kilometres a gimbal camera

@@ -20,7 +20,8 @@ from __future__ import annotations
 
 import enum
 
-from gcu_async.protocol.commands import COMMAND_TYPES, Command, Track
+from gcu_async.protocol.command_base import Command
+from gcu_async.protocol.commands import COMMAND_TYPES, Track
 from gcu_async.protocol.enums import Mode, Opcode
 from gcu_async.protocol.host_frames import ControlValues
 from gcu_async.session.tickets import Ticket, TicketState

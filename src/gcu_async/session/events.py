@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-from gcu_async.protocol.commands import Command
+from gcu_async.protocol.command_base import Command
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
 from gcu_async.protocol.host_frames import ControlValues

@@ -31,7 +31,8 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-from gcu_async.protocol.commands import Command, ZoomTo
+from gcu_async.protocol.command_base import Command
+from gcu_async.protocol.commands import ZoomTo
 from gcu_async.protocol.enums import CameraFlags, Mode, Opcode, PodStatus
 from gcu_async.protocol.gcu_frames import GCU_SUB_SCHEMA, GcuMainFrame, GcuSubFrame
 from gcu_async.session.control import MODE_CHANGING

@@ -48,7 +48,9 @@ from gcu_async.errors import (
 )
 from gcu_async.protocol.aircraft import AircraftState
 from gcu_async.protocol.anomalies import Anomaly
-from gcu_async.protocol.commands import AnomalousCommand, Command, NullCommand, command_code
+from gcu_async.protocol.command_base import Command
+from gcu_async.protocol.command_decode import AnomalousCommand, command_code
+from gcu_async.protocol.commands import NullCommand
 from gcu_async.protocol.deframer import Deframer
 from gcu_async.protocol.enums import (
     CameraFlags,

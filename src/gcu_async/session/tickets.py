@@ -6,7 +6,7 @@ import enum
 from dataclasses import dataclass, field
 
 from gcu_async.errors import GcuError, Outcome
-from gcu_async.protocol.commands import Command
+from gcu_async.protocol.command_base import Command
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.session.runs import Run
 

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from gcu_async.protocol.commands import ImageBox, ImagePoint
 from gcu_async.protocol.enums import CameraFlags, NightVisionMode, ThermalFlags
+from gcu_async.protocol.units import ImageBox, ImagePoint
 from gcu_async.sim.profiles import PodProfile
 from gcu_async.sim.zoom import ZoomDrive
 

@@ -21,14 +21,14 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, TypeVar
 
+from gcu_async.protocol.command_base import Command
+from gcu_async.protocol.command_decode import AnomalousCommand, UnknownCommand, command_code
 from gcu_async.protocol.commands import (
     COMMAND_TYPES,
-    AnomalousCommand,
     AreaTemperature,
     Calibration,
     Centre,
     ClickToPan,
-    Command,
     DigitalZoom,
     FillLight,
     Focus,
@@ -49,14 +49,12 @@ from gcu_async.protocol.commands import (
     TemperatureAlarm,
     TimeZone,
     Track,
-    UnknownCommand,
     ZoomIn,
     ZoomOut,
     ZoomStop,
     ZoomTo,
-    command_code,
 )
-from gcu_async.protocol.enums import Mode, Opcode, OsdCoordinateSource
+from gcu_async.protocol.enums import Mode, NightVisionMode, Opcode, OsdCoordinateSource
 from gcu_async.protocol.feedback import CALIBRATION_IN_PROGRESS, failure_status
 from gcu_async.protocol.host_frames import HostMainFrame
 from gcu_async.protocol.pods import supports
@@ -286,7 +284,7 @@ def _palette(ex: Executor, command: Palette, main: HostMainFrame, now: float) ->
 def _night_vision(ex: Executor, command: NightVision, main: HostMainFrame, now: float) -> int:
     if not ex.has_cameras(command.cameras):
         return FAILED
-    ex.state.camera.night_vision = command.mode
+    ex.state.camera.night_vision = NightVisionMode(command.mode)  # stored as its member
     return SUCCESS
 
 

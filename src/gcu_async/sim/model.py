@@ -19,7 +19,8 @@ from typing import NamedTuple
 from gcu_async._checks import check_bool
 from gcu_async.errors import ProtocolErrorReason, RemoteProtocolError
 from gcu_async.protocol.anomalies import Anomaly
-from gcu_async.protocol.commands import AnomalousCommand, Command, command_code
+from gcu_async.protocol.command_base import Command
+from gcu_async.protocol.command_decode import AnomalousCommand, command_code
 from gcu_async.protocol.conformance import HostConformance, field_diagnosis, frame_anomalies
 from gcu_async.protocol.deframer import Deframer
 from gcu_async.protocol.enums import Mode, Opcode, PodModel, SubFrameRequest, opcode_name

@@ -30,12 +30,13 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass, field
 
-from gcu_async.protocol.commands import ImageBox, ImagePoint
 from gcu_async.protocol.enums import Mode
 from gcu_async.protocol.host_frames import ControlValues
 from gcu_async.protocol.units import (
     Attitude,
     GeoPosition,
+    ImageBox,
+    ImagePoint,
     offset_position,
     wrap_degrees_180,
     wrap_degrees_360,

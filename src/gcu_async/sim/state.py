@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from gcu_async.protocol.commands import Command
+from gcu_async.protocol.command_base import Command
 from gcu_async.protocol.enums import Mode
 from gcu_async.protocol.units import Attitude, AxisAngles
 from gcu_async.sim.aircraft import ReceivedAircraft

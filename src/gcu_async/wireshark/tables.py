@@ -6,7 +6,7 @@ commands with one generic decoder driven by :func:`render`'s tables:
 * the names: opcodes (from the command rows), modes, pod models and their vendor spellings,
   every flag bit, the enums of choice parameters;
 * ``COMMAND_ROWS``: per opcode, its parameters in wire order (name, struct code, scale, unit,
-  raw range, enum: the protocol's command rows);
+  raw range, enum: the command table as plain rows, :func:`wire_rows`);
 * what the rows do not say, learnt by asking the library's own receive path
   (:func:`gcu_async.protocol.decode_command`) about raw values, so that the two decoders word
   every value and anomaly alike: how a one-byte field reads (a switch's ``True``/``False``
@@ -23,7 +23,7 @@ import struct
 from collections.abc import Iterator, Sequence
 from enum import IntEnum, IntFlag
 from functools import lru_cache
-from typing import Any, Literal
+from typing import Any, Literal, NamedTuple
 
 import gcu_async.protocol as protocol
 from gcu_async.protocol import AnomalousCommand, decode_command
@@ -43,13 +43,61 @@ from gcu_async.protocol.enums import (
 from gcu_async.protocol.feedback import CALIBRATION_IN_PROGRESS, THERMAL_OPCODES, ZOOM_OPCODES
 from gcu_async.protocol.fields import WIRE_RANGES
 from gcu_async.protocol.headings import PAST_TURN_DETAIL, SIGNED_DETAIL
+from gcu_async.protocol.opcodes import Opcode
 from gcu_async.protocol.pods import POD_NAMES
-from gcu_async.protocol.schema_tables import WireParam, WireRow, wire_rows
 
 FULL_PROBE_BYTES = 2
 """A parameter this wide or narrower may be probed at every raw value its wire type has."""
 
 _MISSING = object()
+
+
+# -- the command table as plain rows: every command's parameter bytes, field by field ------
+class WireParam(NamedTuple):
+    """One parameter field on the wire, for table-driven decoders (the Lua dissector)."""
+
+    name: str
+    """``"cameras"``, ``"box.left"``, ``"point.x"``."""
+    fmt: str
+    """One struct code: B b H h I i (little-endian)."""
+    scale: float
+    """Engineering value = raw / scale (1 for plain integers)."""
+    unit: str
+    """Engineering unit, ``""`` if none."""
+    low: int | None
+    """Raw range, inclusive; ``None`` = the wire type's own range."""
+    high: int | None
+    enum: str | None
+    """Name of the IntEnum of a choice field, or of the IntFlag whose bits a mask field names
+    (in :mod:`gcu_async.protocol`), else ``None``."""
+
+
+class WireRow(NamedTuple):
+    """One command's parameter bytes, field by field in wire order (a fixed length: the sum
+    of its fields' sizes)."""
+
+    opcode: int
+    command: str
+    """The :class:`~gcu_async.protocol.Opcode` member name, e.g. ``"ZOOM_TO"``."""
+    params: tuple[WireParam, ...]
+
+
+def wire_rows() -> tuple[WireRow, ...]:
+    """Every opcode (the null command included), ascending, with its parameter fields (made
+    from the command table, :data:`~gcu_async.protocol.COMMAND_TYPES`)."""
+    found = []
+    for opcode in sorted(protocol.COMMAND_TYPES):
+        params = []
+        for kind in protocol.COMMAND_TYPES[opcode].SCHEMA.params:
+            enum_name = getattr(getattr(kind, "enum", None), "__name__", None)
+            for w in kind.wire:
+                own = WIRE_RANGES[w.fmt]
+                low = None if w.raw_low == own[0] else w.raw_low
+                high = None if w.raw_high == own[1] else w.raw_high
+                params.append(WireParam(w.name, w.fmt, float(w.scale), w.unit, low, high,
+                                        enum_name))  # fmt: skip
+        found.append(WireRow(opcode, Opcode(opcode).name, tuple(params)))
+    return tuple(found)
 
 
 def rows() -> tuple[WireRow, ...]:
