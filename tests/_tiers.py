@@ -54,6 +54,7 @@ MARKERS = {
 TIERS: dict[str, str | tuple[str, ...]] = {
     "test_aircraft_feed.py": FAST,
     "test_protocol_aircraft_update.py": FAST,
+    "test_protocol_frame_code.py": FAST,
     "test_protocol_frame_schema.py": FAST,
     "test_protocol_decode_differential.py": FAST,
     "test_aircraft_feed_sockets.py": "subprocess",

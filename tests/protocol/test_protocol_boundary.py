@@ -101,6 +101,7 @@ from gcu_async.protocol.command_fields import (
     ZoomValue,
 )
 from gcu_async.protocol.enums import PIP_MODE_MASK
+from gcu_async.protocol.frame_schema import Code, Flags, Value
 from gcu_async.protocol.gpstime import GPS_EPOCH, gps_minus_utc
 
 INF, NAN = math.inf, math.nan
@@ -371,7 +372,7 @@ def _host_sub_read(attr: str) -> Callable[[Any], Any]:
 for _e, (_lo, _hi, _st) in _GEO_RANGES.items():
     add(P(_HSB, _e, _e, lambda v, e=_e: _sub(**{e: v}), "real", _lo, _hi, _st,
           valid=(_lo, _hi), read=_host_sub_read(_e)))  # fmt: skip
-add(P(_HSB, "relative_altitude", "relative altitude", lambda v: _sub(relative_altitude=v),
+add(P(_HSB, "relative_altitude", "relative_altitude", lambda v: _sub(relative_altitude=v),
       "real", _REL_LOW, _REL_HIGH, _REL_STEP, valid=(_REL_LOW, _REL_HIGH),
       read=lambda s: _host_rt(HostMainFrame(), s).sub.relative_altitude),
     *(P(_HSB, _n, _n, lambda v, n=_n: _sub(**{n: v}), "int", *_ints(HostSubFrame, _n),
@@ -438,37 +439,41 @@ def _gsub_read(attr: str) -> Callable[[Any], Any]:
     return lambda s: getattr(_gcu_rt(GcuMainFrame(), s).sub, attr)
 
 
-_GSB_PARAMS = {"pod_code": ("pod_model", "pod model"), "fault_raw": ("faults", "faults"),
-               "camera1_zoom_raw": ("camera1_zoom", "camera 1 zoom"),
-               "camera2_zoom_raw": ("camera2_zoom", "camera 2 zoom")}  # fmt: skip
-"""GcuSubFrame.build's parameters with other names than their field's (``x_raw`` → ``x``,
-labelled ``x`` with spaces); the target's fields have rows of their own."""
-for _f in FRAME_SCHEMAS[GcuSubFrame].fields:
-    if _f.name.startswith("target_"):
-        continue
-    _name, _field = _GSB_PARAMS.get(_f.name, (_f.name.removesuffix("_raw"),
-                                              _f.name.removesuffix("_raw").replace("_", " ")))
+_GSB_PARAMS = {v.name: v.fields[0] for v in FRAME_SCHEMAS[GcuSubFrame].views
+               if isinstance(v, (Value, Code, Flags)) and v.write is None}  # fmt: skip
+"""GcuSubFrame.build's keywords that write one field each (errors name the keyword); the
+target's and the pip mode's have rows of their own."""
+for _name, _fname in _GSB_PARAMS.items():
+    _f = FRAME_SCHEMAS[GcuSubFrame].by_name[_fname]
     _lo, _hi, _st, _ = _units(GcuSubFrame, _f.name)
     _kind = "int" if _f.scale == 1 else "real"
     if _kind == "int":
         _lo, _hi, _st = int(_lo), int(_hi), 0.0
     _attr = _f.name if _f.scale == 1 else _name
     flags = _name == "camera_flags"  # bits 2-0 carry pip_mode: never dropped silently
-    add(P(_GSB, _name, _field, lambda v, n=_name: _gsub(v, n), _kind, _lo, _hi, _st,
+    add(P(_GSB, _name, _name, lambda v, n=_name: _gsub(v, n), _kind, _lo, _hi, _st,
           valid=(_lo, _hi & ~PIP_MODE_MASK if flags else _hi), read=_gsub_read(_attr),
           excluded=(lambda v: bool(v & PIP_MODE_MASK)) if flags else lambda v: False,
           bad=(1, PIP_MODE_MASK, _hi) if flags else ()))  # fmt: skip
-add(P(_GSB, "pip_mode", "pip mode", lambda v: _gsub(v, "pip_mode"), "int", 0, PIP_MODE_MASK,
+add(P(_GSB, "pip_mode", "pip_mode", lambda v: _gsub(v, "pip_mode"), "int", 0, PIP_MODE_MASK,
       valid=(0, PIP_MODE_MASK), read=_gsub_read("pip_mode")))
-add(P(_GSB, "target_distance", "target distance", lambda v: _gsub(v, "target_distance"),
+
+
+def _ranged(position: Any) -> GcuSubFrame:
+    return GcuSubFrame.build(target_distance=1.0, target_position=position)
+
+
+add(P(_GSB, "target_distance", "target_distance", lambda v: _gsub(v, "target_distance"),
       "real", 0.0, 214748364.7, 0.1, optional=True, valid=(None, 0.1, 214748364.7),
       read=_gsub_read("target_distance")),
-    P(_GSB, "target_position", "target_position", lambda v: _gsub(v, "target_position"),
+    P(_GSB, "target_position", "target_position", _ranged,
       "tuple", optional=True, valid=(None, (1.0, 2.0, 3.0)), wrong=_tuple_wrong(GeoPosition)),
+    P(_GSB, "target_position (no distance)", "target_position",
+      lambda v: _gsub(v, "target_position"), "part", bad=((1.0, 2.0, 3.0),)),
 )  # fmt: skip
 for _i, (_e, (_lo, _hi, _st)) in enumerate(_GEO_RANGES.items()):
     add(P(_GSB, f"target_position.{_e}", f"target {_e}",
-          lambda v, e=_e: _gsub(_with(GeoPosition, e, v), "target_position"), "real",
+          lambda v, e=_e: _ranged(_with(GeoPosition, e, v)), "real",
           _lo, _hi, _st, valid=(_lo, _hi),
           read=lambda s, i=_i: _gsub_read("target_position")(s)[i]))  # fmt: skip
 
@@ -494,7 +499,7 @@ for _e, (_lo, _hi, _st) in _GEO_RANGES.items():
           _st, valid=(_lo, _hi),
           read=lambda s, e=_e: getattr(_host_rt(s.main_frame(), s.sub_frame()).sub,
                                        e)))  # fmt: skip
-add(P(_AS, "relative_altitude", "relative altitude",
+add(P(_AS, "relative_altitude", "relative_altitude",
       lambda v: AircraftState(relative_altitude=v), "real", _REL_LOW, _REL_HIGH, _REL_STEP,
       valid=(_REL_LOW,)),
     *(P(_AS, _n, _n, lambda v, n=_n: AircraftState(**{n: v}), "int", *_ints(HostSubFrame, _n),

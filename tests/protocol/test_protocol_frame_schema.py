@@ -1,9 +1,10 @@
 """The frame schemas: layout, documented byte positions and the generated fast paths.
 
 Each frame's fields are written once, in a :class:`FrameSchema`; the struct, the offsets,
-``validate``, ``anomalies``, the unit views and the packet slices derive from it. These tests
-hold the derivations to the document (byte positions) and the generated fast paths to the
-field-by-field checks they shortcut.
+the generated classes (``validate``, ``anomalies``, the unit views, ``as_dict``) and the
+packet slices derive from it. These tests hold the derivations to the document (byte
+positions) and the generated fast paths to the schema's field-by-field checks they shortcut
+(tests/protocol/test_protocol_frame_code.py holds the generated code to the tables).
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import inspect
 import itertools
 import re
 import struct
-from typing import Any, NamedTuple
+from typing import Any
 
 import pytest
 from hypothesis import given, settings
@@ -21,6 +22,7 @@ from hypothesis import strategies as st
 
 from _protocol_strategies import FRAME_SCHEMAS
 from _scale import scaled
+from gcu_async.errors import FieldRangeError
 from gcu_async.protocol import (
     GcuMainFrame,
     GcuPacket,
@@ -31,7 +33,7 @@ from gcu_async.protocol import (
     decode_gcu_packet,
 )
 from gcu_async.protocol.fields import WireField
-from gcu_async.protocol.frame_schema import FrameSchema
+from gcu_async.protocol.frame_schema import FrameSchema, Value
 
 SPANS = {HostMainFrame: (5, 36), HostSubFrame: (38, 68), GcuMainFrame: (5, 36),
          GcuSubFrame: (38, 68)}  # fmt: skip
@@ -74,10 +76,7 @@ def test_each_field_lands_at_its_offset_on_the_wire(cls: type[Any]) -> None:
     """Encode a frame whose every field holds a distinct value; read each field back from the
     wire bytes at its offset with int.from_bytes (independently of struct)."""
     schema = FRAME_SCHEMAS[cls]
-    values = {}
-    for i, f in enumerate(schema.fields):
-        flags = schema.flags.get(f.name)
-        values[f.name] = max(int(m) for m in flags) if flags else (f.raw_high - i) or f.raw_low
+    values = _distinct(schema)
     frame = cls(**values)
     wire = {HostMainFrame: lambda: HostPacket(frame).encode(),
             HostSubFrame: lambda: HostPacket(HostMainFrame(), frame).encode(),
@@ -89,6 +88,15 @@ def test_each_field_lands_at_its_offset_on_the_wire(cls: type[Any]) -> None:
         assert raw == values[f.name], f.name
     used = sum(f.size for f in schema.fields)
     assert wire[schema.start + used : schema.end] == bytes(schema.size - used)  # reserved
+
+
+def _distinct(schema: FrameSchema) -> dict[str, int]:
+    """A value for every field, each distinct and in range (flags: their highest member)."""
+    values = {}
+    for i, f in enumerate(schema.fields):
+        flags = schema.flags.get(f.name)
+        values[f.name] = max(int(m) for m in flags) if flags else (f.raw_high - i) or f.raw_low
+    return values
 
 
 def _raw_values(schema: FrameSchema) -> st.SearchStrategy[list[Any]]:
@@ -107,50 +115,72 @@ def _outcome(call: Any) -> Any:
         return (type(exc), str(exc))
 
 
+class _Fallback(Exception):
+    """Raised by the schema's field-by-field check where a test forbids the fallback."""
+
+
+def _no_fallback(self: FrameSchema, frame: Any) -> None:
+    raise _Fallback
+
+
 @pytest.mark.parametrize("cls", list(FRAME_SCHEMAS), ids=lambda c: c.__name__)
 @settings(max_examples=scaled(400, 40), deadline=None)
 @given(data=st.data())
 def test_generated_validate_is_the_field_by_field_check(cls: type[Any], data: Any) -> None:
+    """A frame's generated ``validate`` gives the outcome of the schema's field-by-field
+    check, and falls back to it exactly for the frames it refuses."""
     schema = FRAME_SCHEMAS[cls]
     frame = cls(*data.draw(_raw_values(schema)))
-    slow = _outcome(lambda: schema._validate_slow(frame))
+    slow = _outcome(lambda: schema.validate(frame))
     assert _outcome(frame.validate) == slow
-    # the generated test itself passes exactly the frames the slow path passes
-    fast = schema._generate("fast", typed=True, ok="return True", slow=lambda f: False)
-    assert fast(frame) == (slow[0] == "ok")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(FrameSchema, "validate", _no_fallback)
+        assert _passes(frame.validate) == (slow[0] == "ok")
+
+
+def _passes(call: Any) -> bool:
+    try:
+        call()
+    except _Fallback:
+        return False
+    return True
 
 
 @pytest.mark.parametrize("cls", list(FRAME_SCHEMAS), ids=lambda c: c.__name__)
 @settings(max_examples=scaled(400, 40), deadline=None)
 @given(data=st.data())
 def test_generated_anomalies_are_the_field_by_field_ones(cls: type[Any], data: Any) -> None:
+    """Likewise ``anomalies``: the schema's list, and its fallback only for a frame with one."""
     schema = FRAME_SCHEMAS[cls]
     values = [v if type(v) is int else 0 for v in data.draw(_raw_values(schema))]
     frame = cls(*values)
-    assert schema.anomalies(frame) == schema._anomalies_slow(frame)
-    fast = schema._generate("fast", typed=False, ok="return True", slow=lambda f: False)
-    assert fast(frame) == (schema._anomalies_slow(frame) == ())
-    if hasattr(cls, "anomalies"):
-        assert frame.anomalies == schema._anomalies_slow(frame)
+    slow = schema.anomalies(frame)
+    assert frame.anomalies == slow
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(FrameSchema, "anomalies", _no_fallback)
+        assert _passes(lambda: frame.anomalies) == (slow == ())
 
 
-def test_a_frame_must_declare_its_schema_fields() -> None:
-    class Short(NamedTuple):
-        a: int = 0
-
-    schema = FrameSchema("test frame", 5, 4, (WireField("a", "h"), WireField("b", "h")))
-    with pytest.raises(TypeError, match="not the test frame schema's"):
-        schema.install(Short)
+def test_a_schema_refuses_what_it_cannot_lay_out() -> None:
     with pytest.raises(ValueError, match="more than the frame's"):
-        FrameSchema("big", 5, 3, (WireField("a", "i"),))
+        FrameSchema("Big", "big", 5, 3, (WireField("a", "i"),))
+    with pytest.raises(ValueError, match="name no field"):
+        FrameSchema("T", "test frame", 5, 4, (WireField("a", "h"),),
+                    (Value(name="b", fields=("b",)),))  # fmt: skip
+    with pytest.raises(ValueError, match="duplicate"):
+        FrameSchema("T", "test frame", 5, 4, (WireField("a", "h"), WireField("a", "h")))
 
 
-def test_a_field_without_a_presentation_still_reaches_as_dict() -> None:
-    """``plain_dict``: a field the frame does not present its own way appears raw (and in
-    units when scaled), so a new field is never missing from ``as_dict``."""
-    fields = (WireField("a_raw", "h", scale=10), WireField("b", "B"), WireField("c", "B"))
-    schema = FrameSchema("test frame", 5, 6, fields)
-    assert schema.plain_dict((15, 2, 3), done=("c",)) == {"a": 1.5, "a_raw": 15, "b": 2}
+@pytest.mark.parametrize("cls", list(FRAME_SCHEMAS), ids=lambda c: c.__name__)
+def test_every_field_reaches_as_dict_raw(cls: type[Any]) -> None:
+    """Each raw field of a frame whose every field holds a distinct value appears in its
+    ``as_dict``: under its own name or in a view's ``*_raw`` list, at its place."""
+    schema = FRAME_SCHEMAS[cls]
+    frame = cls(**_distinct(schema))
+    shown = frame.as_dict()
+    for i, f in enumerate(schema.fields):
+        lists = [v for k, v in shown.items() if k.endswith("_raw") and isinstance(v, list)]
+        assert shown.get(f.name) == frame[i] or any(frame[i] in v for v in lists), f.name
 
 
 def test_decode_takes_the_fields_from_the_schema_slices() -> None:
@@ -161,14 +191,17 @@ def test_decode_takes_the_fields_from_the_schema_slices() -> None:
     assert struct.calcsize("<" + FRAME_SCHEMAS[GcuMainFrame].format) == 32
 
 
-def test_a_reply_lists_its_sub_frame_anomalies(monkeypatch: pytest.MonkeyPatch) -> None:
-    """GcuPacket.anomalies includes the sub frame's (in wire order: main, sub, feedback), so
-    a sub-frame field given a range narrower than its wire type is flagged on receive."""
-    from gcu_async.protocol.anomalies import Anomaly
-
-    flagged = (Anomaly("time_zone", 99, -12, 14, "h"),)
-    monkeypatch.setattr(GcuSubFrame, "anomalies", property(lambda self: flagged))
-    assert GcuPacket(GcuMainFrame(), GcuSubFrame(), version=3).anomalies[1:] == flagged
+def test_a_reply_lists_its_sub_frame_anomalies() -> None:
+    """GcuPacket.anomalies includes the sub frame's (in wire order: version, main, sub,
+    feedback): a ranged target longitude past 180° is kept and flagged on receive, and
+    refused on send."""
+    field = FRAME_SCHEMAS[GcuSubFrame]["target_longitude_raw"]
+    sub = GcuSubFrame(target_distance_raw=10, target_longitude_raw=field.raw_high + 1)
+    flagged = GcuPacket(GcuMainFrame(), sub, version=3).anomalies
+    assert [a.field for a in flagged] == ["version", "target_longitude_raw"]
+    assert flagged[1].value == field.raw_high + 1 and flagged[1].high == field.raw_high
+    with pytest.raises(FieldRangeError, match="target_longitude_raw"):
+        GcuPacket(GcuMainFrame(), sub).encode()
     assert GcuPacket(GcuMainFrame(), None).anomalies == ()
 
 

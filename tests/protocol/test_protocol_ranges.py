@@ -104,6 +104,10 @@ def _sub(**kw: Any) -> HostSubFrame:
     return HostSubFrame.build(**{"latitude": 0.0, "longitude": 0.0, "altitude": 0.0, **kw})
 
 
+def _target(position: GeoPosition) -> GcuSubFrame:
+    return GcuSubFrame.build(target_distance=1.0, target_position=position)
+
+
 # --- build() unit arguments ---------------------------------------------------------------------
 # fmt: off
 BUILD_CASES = [
@@ -129,7 +133,7 @@ BUILD_CASES = [
     *_cases(lambda v: _sub(latitude=v), "latitude", -90.0, 90.0, 90.0000001, -90.1, INF),
     *_cases(lambda v: _sub(altitude=v), "altitude", -2147483.648, 2147483.647,
             2147483.648, -2147483.649, 1e300),
-    *_cases(lambda v: _sub(relative_altitude=v), "relative altitude", -2147483.648,
+    *_cases(lambda v: _sub(relative_altitude=v), "relative_altitude", -2147483.648,
             2147483.647, 2147483.648, NAN),
     *_cases(lambda v: _sub(satellites=v), "satellites", 0, 255, 256, -1),
     *_cases(lambda v: _sub(gnss_ms=v), "gnss_ms", 0, 604_799_999, 604_800_000, -1),
@@ -153,27 +157,27 @@ BUILD_CASES = [
     *[c for i, axis in enumerate("XYZ")
       for c in _cases(lambda v, i=i: GcuMainFrame.build(angular_rates=_att(i, v)),
                       f"{axis} angular rate", -3276.8, 3276.7, 3276.8, -3276.9, INF)],
-    *_cases(lambda v: GcuSubFrame.build(hardware_version=v), "hardware version", 0.0, 25.5,
+    *_cases(lambda v: GcuSubFrame.build(hardware_version=v), "hardware_version", 0.0, 25.5,
             25.6, -0.1),
-    *_cases(lambda v: GcuSubFrame.build(firmware_version=v), "firmware version", 0.0, 25.5,
+    *_cases(lambda v: GcuSubFrame.build(firmware_version=v), "firmware_version", 0.0, 25.5,
             25.6, NAN),
-    *_cases(lambda v: GcuSubFrame.build(pod_model=v), "pod model", 0, 255, 256),
+    *_cases(lambda v: GcuSubFrame.build(pod_model=v), "pod_model", 0, 255, 256),
     *_cases(lambda v: GcuSubFrame.build(faults=v), "faults", 0, 0xFFFF, 0x10000),
-    *_cases(lambda v: GcuSubFrame.build(target_distance=v), "target distance", 0.0,
+    *_cases(lambda v: GcuSubFrame.build(target_distance=v), "target_distance", 0.0,
             214748364.7, -0.1, 214748364.8, INF),
-    *_cases(lambda v: GcuSubFrame.build(target_position=GeoPosition(0.0, v, 0.0)),
+    *_cases(lambda v: _target(GeoPosition(0.0, v, 0.0)),
             "target longitude", -180.0, 180.0, 180.1),
-    *_cases(lambda v: GcuSubFrame.build(target_position=GeoPosition(v, 0.0, 0.0)),
+    *_cases(lambda v: _target(GeoPosition(v, 0.0, 0.0)),
             "target latitude", -90.0, 90.0, -90.1),
-    *_cases(lambda v: GcuSubFrame.build(target_position=GeoPosition(0.0, 0.0, v)),
+    *_cases(lambda v: _target(GeoPosition(0.0, 0.0, v)),
             "target altitude", -2147483.648, 2147483.647, 2147483.648),
-    *_cases(lambda v: GcuSubFrame.build(camera1_zoom=v), "camera 1 zoom", 0.0, 6553.5,
+    *_cases(lambda v: GcuSubFrame.build(camera1_zoom=v), "camera1_zoom", 0.0, 6553.5,
             6553.6, -0.1),
-    *_cases(lambda v: GcuSubFrame.build(camera2_zoom=v), "camera 2 zoom", 0.0, 6553.5, NAN),
-    *_cases(lambda v: GcuSubFrame.build(thermal_flags=v), "thermal flags", 0, 0xFF, 256),
-    *_cases(lambda v: GcuSubFrame.build(camera_flags=v), "camera flags", 0, 0xFFFF, 0x10000),
-    *_cases(lambda v: GcuSubFrame.build(pip_mode=v), "pip mode", 0, 7, 8, -1),
-    *_cases(lambda v: GcuSubFrame.build(time_zone=v), "time zone", -128, 127, 128, -129),
+    *_cases(lambda v: GcuSubFrame.build(camera2_zoom=v), "camera2_zoom", 0.0, 6553.5, NAN),
+    *_cases(lambda v: GcuSubFrame.build(thermal_flags=v), "thermal_flags", 0, 0xFF, 256),
+    *_cases(lambda v: GcuSubFrame.build(camera_flags=v), "camera_flags", 0, 0xFFFF, 0x10000),
+    *_cases(lambda v: GcuSubFrame.build(pip_mode=v), "pip_mode", 0, 7, 8, -1),
+    *_cases(lambda v: GcuSubFrame.build(time_zone=v), "time_zone", -128, 127, 128, -129),
 ]
 # fmt: on
 

@@ -40,6 +40,7 @@ from gcu_async.protocol import (
     HostSubFrame,
     NullCommand,
     Opcode,
+    PodStatus,
     UnknownCommand,
     UnknownSubFrame,
     command_code,
@@ -233,11 +234,9 @@ def test_gcu_main_build_from_units(frame: GcuMainFrame) -> None:
 
 @given(
     frame=gcu_sub_frames.map(
-        lambda f: f._replace(
-            target_distance_raw=max(f.target_distance_raw, 0),
-            target_longitude_raw=f.target_longitude_raw % 1_800_000_001,
-            target_latitude_raw=f.target_latitude_raw % 900_000_001,
-        )
+        lambda f: f._replace(target_distance_raw=max(f.target_distance_raw, 0)) if
+        f.target_distance_raw > 0 else f._replace(target_distance_raw=0, target_latitude_raw=0,
+                                                  target_longitude_raw=0, target_altitude_raw=0)
     )
 )
 def test_gcu_sub_build_from_units(frame: GcuSubFrame) -> None:
@@ -261,11 +260,25 @@ def test_gcu_sub_build_from_units(frame: GcuSubFrame) -> None:
 
 def test_gcu_sub_target_distance_not_positive_means_no_measurement() -> None:
     for raw in (0, -10, -(2**31)):
-        assert GcuSubFrame(target_distance_raw=raw).target_distance is None
+        no_measurement = GcuSubFrame(target_distance_raw=raw, target_latitude_raw=5)
+        assert no_measurement.target_distance is None
+        assert no_measurement.target_position is None
+        shown = no_measurement.as_dict()
+        assert shown["target_position"] is None and shown["target_distance_m"] is None
+        assert shown["target_position_raw"] == [5, 0, 0]
     assert GcuSubFrame(target_distance_raw=1).target_distance == 0.1
+    assert GcuSubFrame(target_distance_raw=1).target_position == (0.0, 0.0, 0.0)
     assert GcuSubFrame.build(target_distance=None).target_distance_raw == 0
-    assert GcuSubFrame.build(target_position=GeoPosition(1.5, -2.5, 3.0)).target_position == (
-        1.5,
-        -2.5,
-        3.0,
-    )
+    ranged = GcuSubFrame.build(target_distance=5.0, target_position=GeoPosition(1.5, -2.5, 3.0))
+    assert ranged.target_position == (1.5, -2.5, 3.0)
+    with pytest.raises(ValueError, match="target_position: a ranged position needs"):
+        GcuSubFrame.build(target_position=GeoPosition(1.5, -2.5, 3.0))
+
+
+def test_gcu_main_miss_distance_only_while_tracking() -> None:
+    """The miss distances are valid only while a target is tracked (pod status B0)."""
+    lost = GcuMainFrame(miss_x=-5, miss_y=7)
+    assert lost.miss_distance is None and lost.as_dict()["miss_distance"] is None
+    assert lost.as_dict()["miss_distance_raw"] == [-5, 7]
+    tracked = lost._replace(pod_status_raw=PodStatus.TRACKING_OK)
+    assert tracked.miss_distance == (-5, 7) and tracked.as_dict()["miss_distance"] == [-5, 7]

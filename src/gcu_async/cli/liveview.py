@@ -40,17 +40,16 @@ _CAMERA_FLAGS = (
 
 def relative_attitude(status: GcuMainFrame) -> Attitude:
     """The camera's roll, pitch and yaw relative to the aircraft, degrees, from the main
-    frame's relative axis angles (bytes 12–17): roll = Y, pitch = −X, yaw = Z, as the
+    frame's relative axis angles (``relative_angles``): roll = Y, pitch = −X, yaw = Z, as the
     protocol's example packet shows (relative X −8.03° with a camera pitch of 9.33°)."""
     rel = status.relative_angles
     return Attitude(rel.y, -rel.x if rel.x else 0.0, rel.z)
 
 
 def format_status(sample: TelemetrySample | None, link: LinkHealth) -> str:
-    """One compact status line: mode (GCU main frame byte 5), camera attitude (18–23),
-    attitude relative to the aircraft (12–17, :func:`relative_attitude`), pod status flags
-    (6–7), camera-1 zoom (sub frame 59–60), camera flags (64–65), laser distance (43–46)
-    and link health."""
+    """One compact status line: the GCU main frame's mode, camera attitude, attitude
+    relative to the aircraft (:func:`relative_attitude`) and pod status flags, the sub
+    frame's camera-1 zoom, camera flags and laser distance, and link health."""
     parts: list[str] = []
     if sample is None:
         parts.append("waiting for telemetry")

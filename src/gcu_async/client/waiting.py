@@ -21,6 +21,8 @@ from gcu_async.client.telemetry import Callbacks, Telemetry
 from gcu_async.errors import LinkLost, WaitTimeout
 from gcu_async.protocol.builder import build
 from gcu_async.protocol.catalogue import BY_METHOD
+from gcu_async.protocol.fields import CAMERA_ZOOM
+from gcu_async.protocol.host_frames import ZOOM_MAX
 from gcu_async.protocol.units import wrap_degrees_180
 from gcu_async.session import SessionState, TelemetrySample
 from gcu_async.transport.base import LinkEvent
@@ -31,8 +33,9 @@ WAIT_TIMEOUT = 10.0
 """Default seconds for a wait (a full slew of a large pod takes a few seconds)."""
 ANGLE_TOLERANCE = 0.5
 """Default degrees between the reported and the target angle that count as there."""
-ZOOM_TOLERANCE = 0.05
-"""Default zoom-ratio difference that counts as there (the sub frame reports 0.1× steps)."""
+ZOOM_TOLERANCE = CAMERA_ZOOM.from_raw(1) / 2
+"""Default zoom-ratio difference that counts as there: half the step the sub frame reports
+its zoom in."""
 LINK_EVENTS_MAX = 256
 """Link events kept for a slow ``link_events()`` consumer (the oldest go first)."""
 
@@ -45,7 +48,7 @@ def angle_error(a: float, b: float) -> float:
 def _attitude_targets(roll: float | None, pitch: float | None,
                       yaw: float | None) -> dict[str, float]:  # fmt: skip
     """The angles given, checked against the ranges :meth:`enter_euler_control` takes (the
-    command catalogue's): roll and pitch ±180, yaw [-180, 360) degrees."""
+    command catalogue's)."""
     euler = BY_METHOD["enter_euler_control"]
     given = {"roll": roll, "pitch": pitch, "yaw": yaw}
     out = {}
@@ -135,7 +138,7 @@ class Waiting:
     async def wait_zoom(self, ratio: float, *, tolerance: float = ZOOM_TOLERANCE,
                         timeout: float = WAIT_TIMEOUT) -> TelemetrySample:  # fmt: skip
         """See :meth:`GcuClient.wait_zoom <gcu_async.client.GcuClient.wait_zoom>`."""
-        target = check_real("ratio", ratio, 1.0, 6553.5, "x")
+        target = check_real("ratio", ratio, 1.0, ZOOM_MAX, "x")
         tol = check_positive("tolerance", tolerance, unit="x")
 
         def there(sample: TelemetrySample) -> bool:

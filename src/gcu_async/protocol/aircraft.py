@@ -44,7 +44,7 @@ _ZERO_NEU = NorthEastUp(0.0, 0.0, 0.0)
 
 @dataclass(frozen=True, slots=True)
 class AircraftState:
-    """Aircraft attitude (°; yaw in [0, 360)), acceleration (m/s², N/E/U, gravity excluded),
+    """Aircraft attitude (°; yaw a heading), acceleration (m/s², N/E/U, gravity excluded),
     velocity (m/s, N/E/U), position (°, ° , m MSL), relative altitude (m), satellites and
     GNSS week + milliseconds of week. Validated on construction under the package rule: each
     tuple field is ``None``, its NamedTuple or a plain tuple (stored as the NamedTuple),
@@ -78,7 +78,7 @@ class AircraftState:
         check("satellites", self.satellites)
         check("gnss_week", self.gnss_week)
         check("gnss_ms", self.gnss_ms)
-        _S["relative_altitude_raw"].to_raw(self.relative_altitude, "relative altitude")
+        _S["relative_altitude_raw"].to_raw(self.relative_altitude, "relative_altitude")
         self.sub_frame()
 
     @staticmethod
@@ -161,8 +161,8 @@ AIRCRAFT_INPUTS: dict[str, tuple[type[Any], tuple[InputRange, ...]]] = {
                                input_range(_S["altitude_raw"]))),
 }  # fmt: skip
 """The aircraft values given as triples: their type and each element's range, derived from
-the host frame schema (host bytes 12–29 and the sub frame); the attitude's yaw also takes
-MAVLink's ±180° (:data:`~gcu_async.protocol.catalogue.YAW_INPUT_RANGE`)."""
+the host frame schema (the main frame's aircraft data and the sub frame); the attitude's yaw
+also takes MAVLink's signed yaw (:data:`~gcu_async.protocol.catalogue.YAW_INPUT_RANGE`)."""
 RELATIVE_ALTITUDE_INPUT = input_range(_S["relative_altitude_raw"])
 AIRCRAFT_UPDATE_FIELDS = ("attitude", "acceleration", "velocity", "position",
                           "relative_altitude", "satellites", "gnss_week", "gnss_ms",
@@ -186,8 +186,8 @@ def aircraft_update(given: Mapping[str, object]) -> dict[str, Any]:
     of :data:`AIRCRAFT_UPDATE_FIELDS` that were given to their values (a triple: a
     NamedTuple, a tuple or a list of three, or ``None`` to clear it; ``gnss_time``: an
     aware UTC ``datetime``, ``None`` meaning not given). Returns the changes for
-    ``Session.update_aircraft``: the triples as their NamedTuples (the attitude's yaw in
-    [0, 360)), ``gnss_time`` as ``gnss_week`` + ``gnss_ms`` (leap seconds applied).
+    ``Session.update_aircraft``: the triples as their NamedTuples (the attitude's yaw
+    wrapped into a heading), ``gnss_time`` as ``gnss_week`` + ``gnss_ms`` (leap seconds applied).
 
     Raises, checking in the order of :data:`AIRCRAFT_UPDATE_FIELDS`, ``TypeError`` or
     :class:`FieldRangeError` naming the value (``attitude.pitch``, ``gnss_week``), or

@@ -12,10 +12,8 @@ the same value (:meth:`Anomaly.error`).
 
 from __future__ import annotations
 
-from collections.abc import Iterable
-from typing import Any, NamedTuple
+from typing import NamedTuple, TypedDict
 
-from gcu_async._checks import check_int
 from gcu_async.errors import FieldRangeError
 
 
@@ -39,9 +37,23 @@ class Anomaly(NamedTuple):
     def __str__(self) -> str:
         return str(self.error())
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> AnomalyDict:
+        """The anomaly for JSON output, its message included."""
         return {"field": self.field, "value": self.value, "low": self.low, "high": self.high,
                 "unit": self.unit, "detail": self.detail, "message": str(self)}  # fmt: skip
+
+
+class AnomalyDict(TypedDict):
+    """What :meth:`Anomaly.as_dict` returns."""
+
+    field: str
+    value: int
+    low: int
+    high: int
+    unit: str
+    detail: str
+    message: str
+    """``str(anomaly)``: the words of the send side's :class:`FieldRangeError`."""
 
 
 def check_raw(field: str, value: int, low: int, high: int, unit: str = "",
@@ -58,29 +70,3 @@ VERSION_DETAIL = "V2.0.6 defines versions 1 and 2; decoded with its layout"
 def reserved_bits_detail(reserved: int) -> str:
     """The detail of a flags value with ``reserved`` bits set, on both sides."""
     return f"reserved bits 0x{reserved:X} must be zero"
-
-
-class FieldRange(NamedTuple):
-    """The raw range V2.0.6 gives one frame field: what the frame's ``validate()`` enforces
-    on the send side and what its ``anomalies`` flag on the receive side (one table, so the
-    two sides cannot disagree)."""
-
-    field: str
-    low: int
-    high: int
-    unit: str = ""
-
-
-def check_ranges(frame: tuple[Any, ...], ranges: Iterable[FieldRange]) -> None:
-    """Send side: raise ``TypeError`` / :class:`FieldRangeError` for the first field of
-    ``frame`` (a NamedTuple) that is not an ``int`` in its range."""
-    for r in ranges:
-        check_int(r.field, getattr(frame, r.field), r.low, r.high, r.unit)
-
-
-def range_anomalies(frame: tuple[Any, ...], ranges: Iterable[FieldRange]) -> tuple[Anomaly, ...]:
-    """Receive side: one :class:`Anomaly` per field of a decoded ``frame`` outside its range."""
-    found: tuple[Anomaly, ...] = ()
-    for r in ranges:
-        found += check_raw(r.field, getattr(frame, r.field), r.low, r.high, r.unit)
-    return found

@@ -25,14 +25,16 @@ def _angles(field: str, value: object, cls: type[Attitude] | type[AxisAngles]) -
 
 
 def axes_to_euler(axes: AxisAngles | tuple[float, float, float]) -> Attitude:
-    """Euler roll/pitch/yaw (yaw in [0, 360)) from camera X/Y/Z axis angles, degrees.
+    """Euler roll/pitch/yaw (the yaw wrapped by :func:`wrap_degrees_360`) from camera X/Y/Z
+    axis angles, degrees.
     ``axes`` is an :class:`AxisAngles` or a plain 3-tuple of real numbers in [-360, 360]."""
     x, y, z = _angles("axes", axes, AxisAngles)
     return Attitude(roll=y, pitch=-x, yaw=wrap_degrees_360(z + 90.0))
 
 
 def euler_to_axes(attitude: Attitude | tuple[float, float, float]) -> AxisAngles:
-    """Inverse of :func:`axes_to_euler`; the Z angle comes back in [-180, 180).
+    """Inverse of :func:`axes_to_euler`; the Z angle comes back wrapped by
+    :func:`wrap_degrees_180`.
     ``attitude`` is an :class:`Attitude` or a plain 3-tuple of real numbers in [-360, 360]."""
     roll, pitch, yaw = _angles("attitude", attitude, Attitude)
     return AxisAngles(x=-pitch, y=roll, z=wrap_degrees_180(yaw - 90.0))

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import struct
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from gcu_async.protocol.anomalies import Anomaly, check_raw
 from gcu_async.protocol.units import quantize
@@ -26,6 +26,16 @@ WIRE_RANGES: dict[str, tuple[int, int]] = {
     "i": (-(2**31), 2**31 - 1),
 }
 """Every struct code a field may have, with the raw range of its wire type."""
+LONGITUDE_RANGE = (-1_800_000_000, 1_800_000_000)
+"""A WGS-84 longitude in 1e-7° steps, east and west: the aircraft's, the ranged target's
+(what a GCU can physically report) and a gaze command's."""
+LATITUDE_RANGE = (-900_000_000, 900_000_000)
+"""A WGS-84 latitude in 1e-7° steps, pole to pole (as :data:`LONGITUDE_RANGE`)."""
+ANGLE_RANGE = (-18000, 18000)
+"""An angle of up to half a turn either way in 0.01° steps, as the document gives it to the
+camera's relative angles and pitch, the aircraft's roll and the control values."""
+TILT_RANGE = (-9000, 9000)
+"""Up to a quarter turn either way in 0.01° steps: the camera's roll, the aircraft's pitch."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -46,14 +56,22 @@ class WireField:
     unit: str = ""
     raw_unit: str = ""
     high_open: bool = False
+    raw_low: int = field(init=False, repr=False, compare=False)
+    """The smallest raw value allowed."""
+    raw_high: int = field(init=False, repr=False, compare=False)
+    """The largest raw value allowed (``high - 1`` when ``high_open``)."""
 
     def __post_init__(self) -> None:
         if self.fmt not in WIRE_RANGES:
             raise ValueError(f"{self.name}: struct code {self.fmt!r} is not one of "
                              f"{''.join(WIRE_RANGES)}")  # fmt: skip
         wire_low, wire_high = WIRE_RANGES[self.fmt]
-        if not wire_low <= self.raw_low <= self.raw_high <= wire_high:
-            raise ValueError(f"{self.name}: range {self.raw_low}..{self.raw_high} is not "
+        low = wire_low if self.low is None else self.low
+        high = (wire_high if self.high is None else self.high) - self.high_open
+        object.__setattr__(self, "raw_low", low)
+        object.__setattr__(self, "raw_high", high)
+        if not wire_low <= low <= high <= wire_high:
+            raise ValueError(f"{self.name}: range {low}..{high} is not "
                              f"inside the wire type's {wire_low}..{wire_high}")  # fmt: skip
 
     @property
@@ -62,21 +80,10 @@ class WireField:
         return struct.calcsize("<" + self.fmt)
 
     @property
-    def raw_low(self) -> int:
-        return WIRE_RANGES[self.fmt][0] if self.low is None else self.low
-
-    @property
-    def raw_high(self) -> int:
-        """The largest raw value allowed (``high - 1`` when ``high_open``)."""
-        high = WIRE_RANGES[self.fmt][1] if self.high is None else self.high
-        return high - 1 if self.high_open else high
-
-    @property
     def limits(self) -> tuple[float, float]:
         """The range in engineering units as the document writes it (``high`` itself
         excluded when ``high_open``)."""
-        high = WIRE_RANGES[self.fmt][1] if self.high is None else self.high
-        return self.raw_low / self.scale, high / self.scale
+        return self.raw_low / self.scale, (self.raw_high + self.high_open) / self.scale
 
     def anomalies(self, raw: int) -> tuple[Anomaly, ...]:
         """Receive side: ``()`` if ``raw`` is in range, else the one :class:`Anomaly`."""
@@ -85,8 +92,15 @@ class WireField:
     def to_raw(self, value: float, name: str | None = None) -> int:
         """Send side: ``value`` in engineering units → the raw integer, rounded and
         range-checked (``FieldRangeError`` names ``name`` or the field, range and value)."""
-        high = WIRE_RANGES[self.fmt][1] if self.high is None else self.high
-        return quantize(name or self.name, value, self.scale, self.raw_low, high, self.unit,
+        if type(value) is float or type(value) is int:  # the usual case, checked at once
+            try:
+                raw = round(value * self.scale)
+            except (OverflowError, ValueError):  # inf, nan: quantize raises the error
+                raw = self.raw_low - 1
+            if self.raw_low <= raw <= self.raw_high:
+                return raw
+        return quantize(name or self.name, value, self.scale, self.raw_low,
+                        self.raw_high + self.high_open, self.unit,
                         high_open=self.high_open)  # fmt: skip
 
     def from_raw(self, raw: int) -> float:
@@ -107,3 +121,9 @@ def offsets(fields: Iterable[WireField], start: int = 0) -> dict[str, int]:
         found[f.name] = at
         at += f.size
     return found
+
+
+CAMERA_ZOOM = WireField("camera_zoom_raw", "H", "camera zoom ratio", scale=10, unit="x",
+                        raw_unit="0.1x")
+"""A zoom ratio as the GCU reports it in its sub frame (the field of both cameras' zooms),
+and so the largest zoom the control rates can be scaled by (:attr:`WireField.limits`)."""

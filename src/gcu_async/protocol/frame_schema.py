@@ -1,30 +1,37 @@
-"""Frame schemas: each frame's fields as one table of :class:`WireField`\\ s, and all that is
-derived from it.
+"""Frame schemas: each frame's fields and what it presents of them, as one table.
 
 A :class:`FrameSchema` is the only place a frame field's byte position, wire type, raw range,
-scale and units are written. From it come the frame's ``struct`` (padding included), each
-field's offset, the send side's ``validate`` (a type-and-range check generated as one Python
-expression at import, with a field-by-field fallback that raises the error naming the field),
-the receive side's ``anomalies`` (likewise generated), the engineering-unit views
-(:meth:`FrameSchema.view`), the plain ``as_dict`` entries (:meth:`FrameSchema.plain_dict`),
-the range tables (:attr:`FrameSchema.ranges`) and the packet layout's slices
-(:mod:`~gcu_async.protocol.packets`).
+scale and units are written (its :class:`WireField`\\ s, in wire order), and the only place
+the frame's class is described (its :class:`View`\\ s: the unit properties, ``build``'s
+keywords, ``as_dict``'s entries and ``str()``'s words). The frame classes are generated from
+it ahead of time by ``tools/gen_frames.py`` into the frame modules, between two marker lines
+(``tests/protocol/test_protocol_frame_code.py`` regenerates them and compares). At run time
+the schema gives the frame's ``struct`` (padding included), each field's offset, the
+field-by-field checks that name the failing field (:meth:`FrameSchema.validate`,
+:meth:`FrameSchema.anomalies`: the generated classes fall back to them) and the packet
+layout's slices (:mod:`~gcu_async.protocol.packets`).
+
+A view reads the frame's raw fields; a view whose reading is special names a hand-written
+function of them (``read``), and one whose build keyword is special a function of the
+keywords (``write``, its parameters the keywords). Everything else follows from the fields.
 """
 
 from __future__ import annotations
 
 import struct
 from collections.abc import Callable, Iterable, Mapping
-from enum import IntFlag
-from typing import Any, TypeVar
+from dataclasses import dataclass
+from enum import IntEnum, IntFlag
+from typing import Any
 
-from gcu_async._checks import check_int
+from gcu_async._checks import check_int, type_error
 from gcu_async.errors import FieldRangeError
-from gcu_async.protocol.anomalies import Anomaly, FieldRange, check_raw, reserved_bits_detail
+from gcu_async.protocol.anomalies import Anomaly, check_raw, reserved_bits_detail
 from gcu_async.protocol.fields import WireField, offsets
-from gcu_async.protocol.units import check_flags, quantize
+from gcu_async.protocol.units import check_flags
 
-_T = TypeVar("_T")
+AUTO = "<auto>"
+"""A view's ``as_dict`` key made by the rule: its name, with the unit (``_deg``, ``_m``, …)."""
 
 
 def flag_bits(flags: type[IntFlag]) -> int:
@@ -35,61 +42,184 @@ def flag_bits(flags: type[IntFlag]) -> int:
     return bits
 
 
+def flag_names(flags: IntFlag) -> list[str]:
+    """The names of the members set in ``flags``, in definition order (``as_dict``)."""
+    return [m.name for m in type(flags) if m in flags and m.name is not None]
+
+
+def flag_text(flags: IntFlag) -> str:
+    """The members set in ``flags`` for ``str()``: ``TRACKING_OK,RANGE_VALID`` or ``none``."""
+    return ",".join(flag_names(flags)) or "none"
+
+
+def number_text(value: float | None, unit: str = "") -> str:
+    """A value for ``str()``: ``%g`` and its unit (``1x``, ``45 deg``), or ``none``."""
+    if value is None:
+        return "none"
+    return f"{value:g}{unit}" if unit in ("", "x") else f"{value:g} {unit}"
+
+
+def group_text(value: tuple[float, ...] | None, unit: str = "") -> str:
+    """A NamedTuple of units for ``str()``: ``roll 0 pitch -30 yaw 45 deg``, or ``none``."""
+    if value is None:
+        return "none"
+    names: tuple[str, ...] = value._fields  # type: ignore[attr-defined]
+    words = " ".join(f"{n} {v:g}" for n, v in zip(names, value, strict=True))
+    return f"{words} {unit}" if unit else words
+
+
+def check_parts(field: str, value: object, n: int) -> tuple[Any, ...]:
+    """``value`` as a plain tuple of ``n`` raw integers (each checked by the caller)."""
+    if type(value) is tuple and len(value) == n:
+        return value
+    raise type_error(field, f"a tuple of {n} integers", value)
+
+
+# -- views: what a frame presents of its raw fields ------------------------------------------
+@dataclass(frozen=True, kw_only=True)
+class View:
+    """One thing a frame presents: ``name`` (its property, its ``build`` keyword and its
+    ``as_dict`` key's stem) read from the raw ``fields``. ``doc`` is the property's
+    docstring (a ``read`` function's own docstring when it has one). ``read`` is a
+    hand-written function of the raw fields (in order) giving the value, for a reading the
+    table cannot say; ``write`` a hand-written function of ``build`` keywords (its parameters,
+    with their types and defaults) giving the raw value(s). ``keyword`` is the ``build``
+    keyword (``None``: the view is not built, another view writes its fields) and ``key``
+    the ``as_dict`` key of the value (``None``: none; the raw fields are listed anyway)."""
+
+    name: str
+    fields: tuple[str, ...]
+    doc: str = ""
+    read: Callable[..., Any] | None = None
+    write: Callable[..., Any] | None = None
+    keyword: str | None = AUTO
+    key: str | None = AUTO
+    optional: bool = False
+    """The value may be ``None`` (not measured): a ``read`` function says when."""
+    needs: tuple[str, ...] = ()
+    """Raw fields ``read`` takes after the view's own (to tell when a value is measured)."""
+
+    @property
+    def build_keyword(self) -> str | None:
+        return self.name if self.keyword == AUTO else self.keyword
+
+
+@dataclass(frozen=True, kw_only=True)
+class Value(View):
+    """One field: in units (``raw / scale``, a ``float``) when scaled, else the raw ``int``
+    itself (no property: the field is the value). ``label`` names it in ``build``'s errors
+    (default: the name with spaces); ``default`` is ``build``'s (``required``: none)."""
+
+    label: str = ""
+    default: Any = 0
+    required: bool = False
+
+
+@dataclass(frozen=True, kw_only=True)
+class Group(View):
+    """Several fields as one NamedTuple ``cls`` of their units (``Attitude``), each
+    ``raw / scale``; ``labels`` name each element in ``build``'s errors. ``optional``: the
+    ``build`` keyword may be ``None`` (sent as zeros)."""
+
+    cls: type[tuple[Any, ...]]
+    labels: tuple[str, ...] = ()
+    default: Any = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class Code(View):
+    """One field read as the ``IntEnum`` ``enum`` (unknown codes: its ``UNKNOWN``);
+    ``build`` takes a member or any code. ``spelling``: a function code → the vendor's name
+    of it, shown in ``as_dict`` beside the member's name (``pod_model_member``)."""
+
+    enum: type[IntEnum]
+    label: str = ""
+    default: Any = 0
+    spelling: Callable[[int], str] | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class Flags(View):
+    """One field read as the ``IntFlag`` ``flags``; ``mask`` holds bits another view
+    (:class:`Bits`) presents, left out of the flags and refused in ``build``'s."""
+
+    flags: type[IntFlag]
+    label: str = ""
+    mask: int = 0
+
+
+@dataclass(frozen=True, kw_only=True)
+class Bits(View):
+    """The bits ``mask`` of one field as an ``int`` (sent with the field's :class:`Flags`)."""
+
+    mask: int
+    label: str = ""
+
+
+@dataclass(frozen=True, kw_only=True)
+class Bit(View):
+    """One flag ``member`` of one field as a ``bool`` (``clear``: true when the bit is clear);
+    ``key=None`` unless ``as_dict`` shows it."""
+
+    member: IntFlag
+    clear: bool = False
+
+
+@dataclass(frozen=True, kw_only=True)
+class Entry(View):
+    """An ``as_dict`` entry only: ``read`` (required) of the raw fields, under ``name``."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class Method(View):
+    """A method ``name(self, *, options)``: ``read`` of the raw fields with its keyword-only
+    options (``HostSubFrame.gnss_time(apply_leap_seconds=…)``)."""
+
+
+# -- the schema ----------------------------------------------------------------------------
 class FrameSchema:
-    """One frame: its ``fields`` in wire order from byte ``start``, ``size`` bytes in all
-    (bytes after the last field are reserved: zeros on send, ignored on receive).
-    ``flags`` names the fields that hold flags of an ``IntFlag`` (reserved bits must be zero:
-    a :class:`FieldRangeError` on send, an :class:`Anomaly` on receive). ``details`` gives
+    """One frame: the class ``cls_name`` (``title`` in its docstring and errors), its
+    ``fields`` in wire order from byte ``start``, ``size`` bytes in all (bytes after the last
+    field are reserved: zeros on send, ignored on receive), and its ``views``. ``flags``
+    names the fields that hold flags of an ``IntFlag`` whose reserved bits must be zero (a
+    :class:`FieldRangeError` on send, an :class:`Anomaly` on receive). ``details`` gives
     fields whose out-of-range values have a known reading a function ``raw -> detail``, the
-    words both sides add to the error or anomaly (e.g. a signed heading,
-    :mod:`~gcu_async.protocol.headings`)."""
+    words both sides add to the error or anomaly (a signed heading,
+    :mod:`~gcu_async.protocol.headings`). ``header`` is a sub frame's header byte, which its
+    ``as_dict`` shows."""
 
-    __slots__ = (
-        "_anomalies",
-        "_validate",
-        "by_name",
-        "details",
-        "fields",
-        "flags",
-        "name",
-        "names",
-        "offsets",
-        "ranges",
-        "size",
-        "start",
-        "struct",
-    )  # fmt: skip
+    __slots__ = ("by_name", "cls_name", "details", "fields", "flags", "header", "names",
+                 "offsets", "size", "start", "struct", "title", "views")  # fmt: skip
 
-    def __init__(self, name: str, start: int, size: int, fields: Iterable[WireField],
+    def __init__(self, cls_name: str, title: str, start: int, size: int,
+                 fields: Iterable[WireField], views: Iterable[View] = (), *,
                  flags: Mapping[str, type[IntFlag]] | None = None,
-                 details: Mapping[str, Callable[[int], str]] | None = None) -> None:  # fmt: skip
-        self.name = name
-        self.start = start
-        self.size = size
+                 details: Mapping[str, Callable[[int], str]] | None = None,
+                 header: int | None = None) -> None:  # fmt: skip
+        self.cls_name, self.title, self.start, self.size = cls_name, title, start, size
+        self.header = header
         self.fields: tuple[WireField, ...] = tuple(fields)
+        self.views: tuple[View, ...] = tuple(views)
         self.flags: dict[str, type[IntFlag]] = dict(flags or {})
+        self.details: dict[str, Callable[[int], str]] = dict(details or {})
         self.by_name = {f.name: f for f in self.fields}
         self.names = tuple(self.by_name)
         if len(self.names) != len(self.fields):
-            raise ValueError(f"{name}: duplicate field names")
-        if set(self.flags) - set(self.names):
-            raise ValueError(f"{name}: flags name no field: {set(self.flags) - set(self.names)}")
-        self.details: dict[str, Callable[[int], str]] = dict(details or {})
-        if set(self.details) - set(self.names) or set(self.details) & set(self.flags):
-            raise ValueError(f"{name}: details name no field, or a flags field: "
-                             f"{sorted(self.details)}")  # fmt: skip
+            raise ValueError(f"{title}: duplicate field names")
+        named = set(self.flags) | set(self.details) | {n for v in self.views for n in v.fields}
+        if named - set(self.names) or set(self.details) & set(self.flags):
+            raise ValueError(f"{title}: flags, details or views name no field (or a "
+                             f"detail a flags field): {sorted(named - set(self.names))}")
         used = sum(f.size for f in self.fields)
         if used > size:
-            raise ValueError(f"{name}: fields take {used} bytes, more than the frame's {size}")
+            raise ValueError(f"{title}: fields take {used} bytes, more than the frame's {size}")
         pad = f"{size - used}x" if size > used else ""
         self.struct = struct.Struct("<" + "".join(f.fmt for f in self.fields) + pad)
         self.offsets = offsets(self.fields, start)
-        self.ranges = tuple(FieldRange(f.name, f.raw_low, f.raw_high, f.raw_unit)
-                            for f in self.fields if f.name not in self.flags)  # fmt: skip
-        self._validate = self._generate("validate", typed=True, ok="return",
-                                        slow=self._validate_slow)  # fmt: skip
-        self._anomalies = self._generate("anomalies", typed=False, ok="return ()",
-                                         slow=self._anomalies_slow)  # fmt: skip
+
+    def __getitem__(self, name: str) -> WireField:
+        """The field ``name`` (``GCU_SUB_SCHEMA["camera1_zoom_raw"].scale``)."""
+        return self.by_name[name]
 
     @property
     def format(self) -> str:
@@ -101,64 +231,15 @@ class FrameSchema:
         """The byte after the frame."""
         return self.start + self.size
 
-    def check_fields(self, cls: type[tuple[Any, ...]]) -> None:
-        """Raise unless the NamedTuple ``cls`` has exactly this schema's fields, in order."""
-        declared = tuple(getattr(cls, "_fields", ()))
-        if declared != self.names:
-            raise TypeError(f"{cls.__name__} fields {declared} are not the {self.name} "
-                            f"schema's {self.names}")  # fmt: skip
+    def check(self, name: str, value: object, label: str | None = None) -> int:
+        """``value`` checked as field ``name``'s raw integer, errors naming ``label``."""
+        f = self.by_name[name]
+        return check_int(label or name, value, f.raw_low, f.raw_high, f.raw_unit)
 
-    def install(self, cls: type[tuple[Any, ...]]) -> None:
-        """Check that the NamedTuple ``cls`` declares this schema's fields, then replace its
-        ``validate`` method and ``anomalies`` property (where it defines them; docstrings
-        kept) with the fast paths generated from the table: one function call each."""
-        self.check_fields(cls)
-        old = cls.__dict__.get("validate")
-        if old is not None:
-            fast = self._generate("validate", typed=True, ok="return", slow=self._validate_slow)
-            fast.__doc__, fast.__module__ = old.__doc__, cls.__module__
-            fast.__qualname__ = f"{cls.__qualname__}.validate"
-            setattr(cls, "validate", fast)  # noqa: B010 - mypy: no assignment to a method
-        prop = cls.__dict__.get("anomalies")
-        if isinstance(prop, property):
-            fast = self._generate("anomalies", typed=False, ok="return ()",
-                                  slow=self._anomalies_slow)  # fmt: skip
-            fast.__module__, fast.__qualname__ = cls.__module__, f"{cls.__qualname__}.anomalies"
-            setattr(cls, "anomalies", property(fast, doc=prop.__doc__))  # noqa: B010
-
-    # -- generated fast paths -------------------------------------------------------------
-    def _generate(self, name: str, *, typed: bool, ok: str,
-                  slow: Callable[[tuple[Any, ...]], Any]) -> Callable[..., Any]:  # fmt: skip
-        """``def name(frame)``: ``ok`` when every field is in range (and, ``typed``, a plain
-        ``int``; a flags field may also be its ``IntFlag``), tested as one expression; else
-        ``slow(frame)``, which names the field."""
-        args = [f"v{i}" for i in range(len(self.fields))]
-        env: dict[str, Any] = {"slow": slow}
-        lines = [f"def {name}(self):", f"    {', '.join(args)}, = self"]
-        conds: list[str] = []
-        if typed:
-            conds.append(" is ".join(["int", *(f"type({a})" for a in args)]))
-        for a, f in zip(args, self.fields, strict=True):
-            flags = self.flags.get(f.name)
-            if flags is not None:
-                env[f"F{a}"] = flags
-                if typed:
-                    lines.append(f"    if type({a}) is F{a}: {a} = int({a})")
-                conds.append(f"{a} >= 0 and not {a} & {~flag_bits(flags)}")
-            else:
-                conds.append(f"{f.raw_low} <= {a} <= {f.raw_high}")
-        lines += [f"    if {' and '.join(conds)}:", f"        {ok}", "    return slow(self)"]
-        exec("\n".join(lines), env)  # the source is built above from the field table
-        function: Callable[..., Any] = env[name]
-        return function
-
-    # -- send side --------------------------------------------------------------------------
+    # -- send side: what a generated ``validate`` falls back to ------------------------------
     def validate(self, frame: tuple[Any, ...]) -> None:
         """Raise ``TypeError`` / :class:`FieldRangeError` for the first field of ``frame``
         (wire order) that is not an ``int`` in its range (flags: with no reserved bit)."""
-        self._validate(frame)
-
-    def _validate_slow(self, frame: tuple[Any, ...]) -> None:
         for f, value in zip(self.fields, frame, strict=True):
             flags = self.flags.get(f.name)
             if flags is not None:
@@ -173,41 +254,10 @@ class FrameSchema:
                 raise FieldRangeError(f.name, value, f.raw_low, f.raw_high, f.raw_unit,
                                       detail=explain(value)) from None  # fmt: skip
 
-    def quantizer(self, name: str, label: str | None = None) -> Callable[[object], int]:
-        """Send side: a function ``value -> raw`` for field ``name`` — what
-        ``WireField.to_raw(value, label)`` does (rounded, range-checked, a
-        :class:`FieldRangeError` naming ``label``), its arguments bound once and an in-range
-        ``float``/``int`` taking a short path (frames are built from units at the packet rate)."""
-        f = self.by_name[name]
-        field, scale, low, high, unit, open_ = (label or name, f.scale, f.raw_low,
-                                                f.raw_high + f.high_open, f.unit, f.high_open)
-        top = f.raw_high
-
-        def to_raw(value: object) -> int:
-            if type(value) is float or type(value) is int:
-                try:
-                    raw = round(value * scale)
-                except (OverflowError, ValueError):  # inf, nan: quantize raises the error
-                    raw = low - 1
-                if low <= raw <= top:
-                    return raw
-            return quantize(field, value, scale, low, high, unit, high_open=open_)  # type: ignore[arg-type]
-
-        return to_raw
-
-    def check(self, name: str, value: object, label: str | None = None) -> int:
-        """``value`` checked as field ``name``'s raw integer, errors naming ``label``."""
-        f = self.by_name[name]
-        return check_int(label or name, value, f.raw_low, f.raw_high, f.raw_unit)
-
-    # -- receive side -----------------------------------------------------------------------
+    # -- receive side: what a generated ``anomalies`` falls back to --------------------------
     def anomalies(self, frame: tuple[Any, ...]) -> tuple[Anomaly, ...]:
         """One :class:`Anomaly` per field of a decoded ``frame`` outside its range (flags:
         with reserved bits set), in wire order; ``()`` for an ordinary frame."""
-        found: tuple[Anomaly, ...] = self._anomalies(frame)
-        return found
-
-    def _anomalies_slow(self, frame: tuple[Any, ...]) -> tuple[Anomaly, ...]:
         found: tuple[Anomaly, ...] = ()
         for f, value in zip(self.fields, frame, strict=True):
             flags = self.flags.get(f.name)
@@ -222,29 +272,14 @@ class FrameSchema:
                                   reserved_bits_detail(value & ~bits)),)  # fmt: skip
         return found
 
-    # -- units ------------------------------------------------------------------------------
-    def view(self, cls: Callable[..., _T], *names: str) -> Callable[[tuple[Any, ...]], _T]:
-        """A function ``frame -> cls(value, ...)``: the named fields in engineering units
-        (``raw / scale``), e.g. ``view(Attitude, "roll_raw", "pitch_raw", "yaw_raw")``."""
-        index = {n: i for i, n in enumerate(self.names)}
-        parts = []
-        for n in names:
-            scale = self.by_name[n].scale
-            parts.append(f"frame[{index[n]}]" if scale == 1 else f"frame[{index[n]}] / {scale!r}")
-        env: dict[str, Any] = {"cls": cls}
-        exec(f"def view(frame):\n    return cls({', '.join(parts)})", env)
-        view: Callable[[tuple[Any, ...]], _T] = env["view"]
-        return view
-
-    def plain_dict(self, frame: tuple[Any, ...], done: Iterable[str]) -> dict[str, Any]:
-        """``as_dict`` entries of the fields not in ``done`` (those a frame presents its own
-        way): ``name`` raw, and for a scaled ``x_raw`` also ``x`` in units."""
-        skip = set(done)
-        out: dict[str, Any] = {}
-        for f, value in zip(self.fields, frame, strict=True):
-            if f.name in skip:
-                continue
-            if f.scale != 1:
-                out[f.name.removesuffix("_raw")] = value / f.scale
-            out[f.name] = value
-        return out
+    # -- build: the parts ``build`` shares between frames -------------------------------------
+    def masked(self, name: str, value: object, label: str, mask: int, holder: str) -> int:
+        """Send side of a :class:`Flags` view with a ``mask``: ``value`` checked as field
+        ``name``'s raw integer with the ``mask`` bits clear (they are ``holder``'s)."""
+        raw = self.check(name, value, label)
+        if raw & mask:
+            f = self.by_name[name]
+            raise FieldRangeError(label, value, f.raw_low, f.raw_high,
+                                  detail=f"bits 0x{mask:X} hold the {holder.replace('_', ' ')}: "
+                                         f"pass {holder}=")  # fmt: skip
+        return raw

@@ -1,18 +1,19 @@
-"""Heading fields: U16, 0.01°, [0, 36000) in V2.0.6 — and how devices in the field fill them.
+"""Heading fields: U16, 0.01°, one full turn from 0 in V2.0.6 — and how devices fill them.
 
-V2.0.6 gives both headings of the protocol, the aircraft yaw (host bytes 16–17) and the
-camera's absolute yaw (GCU bytes 22–23), as a U16 in [0, 36000). Devices in the field write
-a signed S16 ±18000 into them instead: ArduPilot 4.7 its aircraft yaw (docs/protocol-notes.md
-§15), the Z-1Pro (firmware 6.7) its camera yaw ("What real pods do"). So a raw value reads
-one of three ways, by range alone (:class:`Reading`):
+V2.0.6 gives both headings of the protocol, the aircraft yaw and the camera's absolute yaw,
+as a U16 from 0 up to a full turn (:func:`heading`). Devices in the field write a signed S16
+of half a turn either way into them instead: ArduPilot 4.7 its aircraft yaw
+(docs/protocol-notes.md §15), the Z-1Pro (firmware 6.7) its camera yaw ("What real pods
+do"). So a raw value reads one of three ways, by range alone (:class:`Reading`):
 
-- ``0 … 35999``: the document's U16 (a signed value 0 … 179.99° looks the same);
-- ``47536 … 65535``: only a signed S16 explains it: −18000 … −1, −180° … −0.01°;
-- ``36000 … 47535``: neither (U16 past 360°, S16 below −180°): read as an angle past 360°,
-  wrapped.
+- below a full turn: the document's U16 (a signed value's positive half looks the same);
+- from :attr:`HeadingRule.signed_low` (minus half a turn as a U16) to the wire type's top:
+  only a signed S16 explains it, a heading west of north;
+- in between: neither (U16 past a full turn, S16 below minus half a turn): read as an angle
+  past a full turn, wrapped.
 
-:meth:`HeadingRule.degrees` turns any raw value into a heading in [0°, 360°) by that rule;
-the raw value itself is never changed, and the last two readings are flagged.
+:meth:`HeadingRule.degrees` turns any raw value into a heading of the document's range by
+that rule; the raw value itself is never changed, and the last two readings are flagged.
 """
 
 from __future__ import annotations
@@ -23,24 +24,34 @@ from functools import cached_property
 
 from gcu_async.protocol.fields import WIRE_RANGES, WireField
 
+TURN = 36000
+"""A full turn in raw heading steps (0.01°)."""
+
+
+def heading(name: str, doc: str) -> WireField:
+    """A heading field as V2.0.6 gives it: U16, 0.01° steps, from 0 up to a full turn."""
+    return WireField(name, "H", doc, 0, TURN, 100, "deg", "0.01 deg", high_open=True)
+
 
 class Reading(enum.Enum):
     """How a raw heading value is read."""
 
     U16 = "U16"
-    """In V2.0.6's [0, 36000)."""
+    """In V2.0.6's range: below a full turn."""
     SIGNED = "S16"
-    """A signed ±18000 value's negative half (−180° … −0.01°) in the U16 field."""
+    """A signed value's negative half (west of north) in the U16 field."""
     PAST_TURN = "past 360"
-    """Neither: an angle past 360° (wrapped), the reading that needs no sign."""
+    """Neither: an angle past a full turn (wrapped), the reading that needs no sign."""
 
 
-SIGNED_DETAIL = ("read as a signed S16 heading, -180 to -0.01 deg, as devices in the field "
-                 "send it; shown wrapped into [0, 360) deg")  # fmt: skip
+_STEP, _HALF = 1 / 100, TURN // 2 / 100
+_SHOWN = f"shown wrapped into [0, {TURN / 100:g}) deg"
+SIGNED_DETAIL = (f"read as a signed S16 heading, {-_HALF:g} to {-_STEP:g} deg, as devices in "
+                 f"the field send it; {_SHOWN}")  # fmt: skip
 """The anomaly detail of a raw value only the signed reading explains (ASCII: the dissector
 shows the same words)."""
-PAST_TURN_DETAIL = ("neither U16 [0, 36000) nor signed S16 -18000 to -1; read as an angle past "
-                    "360 deg, shown wrapped into [0, 360) deg")  # fmt: skip
+PAST_TURN_DETAIL = (f"neither U16 [0, {TURN}) nor signed S16 {-TURN // 2} to -1; read as an "
+                    f"angle past {TURN / 100:g} deg, {_SHOWN}")  # fmt: skip
 """The anomaly detail of a raw value neither reading explains."""
 
 
@@ -58,17 +69,17 @@ class HeadingRule:
 
     @cached_property
     def turn(self) -> int:
-        """Raw steps in a full turn: the field's range, 36000."""
+        """Raw steps in a full turn: the field's range (:data:`TURN`)."""
         return self.field.raw_high + 1
 
     @cached_property
     def span(self) -> int:
-        """Raw values the wire type carries: 65536."""
+        """Raw values the wire type carries (a U16's)."""
         return WIRE_RANGES[self.field.fmt][1] + 1
 
     @cached_property
     def signed_low(self) -> int:
-        """The first raw value only a signed reading explains: −18000 as a U16, 47536."""
+        """The first raw value only a signed reading explains: minus half a turn as a U16."""
         return self.span - self.turn // 2
 
     def reading(self, raw: int) -> Reading:
@@ -77,12 +88,12 @@ class HeadingRule:
         return Reading.SIGNED if raw >= self.signed_low else Reading.PAST_TURN
 
     def signed(self, raw: int) -> int:
-        """The raw value as the rule reads it, before wrapping: ``raw − 65536`` from
+        """The raw value as the rule reads it, before wrapping: ``raw − span`` from
         :attr:`signed_low` on, else ``raw``."""
         return raw - self.span if raw >= self.signed_low else raw
 
     def degrees(self, raw: int) -> float:
-        """The heading in [0°, 360°) of any raw value 0 … 65535."""
+        """The heading in the document's range, degrees, of any raw value of the wire type."""
         turn = self.turn
         if raw < turn:  # the document's range: most values
             return raw / self.field.scale
@@ -90,8 +101,8 @@ class HeadingRule:
 
     def signed_raw(self, degrees: float) -> int:
         """What a device sending the signed S16 puts in the field for the heading ``degrees``
-        (any finite angle): rounded to the field's step, wrapped into [−180°, 180°), as a U16
-        (−0.01° is 65535)."""
+        (any finite angle): rounded to the field's step, wrapped into half a turn either way,
+        as a U16 (one step west of north is the U16's largest value)."""
         half = self.turn // 2
         return ((round(degrees * self.field.scale) + half) % self.turn - half) % self.span
 
@@ -103,4 +114,4 @@ class HeadingRule:
         return SIGNED_DETAIL if reading is Reading.SIGNED else PAST_TURN_DETAIL
 
 
-__all__ = ["PAST_TURN_DETAIL", "SIGNED_DETAIL", "HeadingRule", "Reading"]
+__all__ = ["PAST_TURN_DETAIL", "SIGNED_DETAIL", "TURN", "HeadingRule", "Reading", "heading"]

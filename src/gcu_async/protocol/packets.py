@@ -15,16 +15,15 @@ from __future__ import annotations
 import struct
 from binascii import crc_hqx
 from collections.abc import Collection
-from typing import Any, NamedTuple, NoReturn
+from typing import Any, Literal, NamedTuple, NoReturn, TypedDict, TypeVar
 
 from gcu_async._checks import check_int, type_error
 from gcu_async.errors import ProtocolErrorReason, RemoteProtocolError
-from gcu_async.protocol.anomalies import VERSION_DETAIL, Anomaly
+from gcu_async.protocol.anomalies import VERSION_DETAIL, Anomaly, AnomalyDict
 from gcu_async.protocol.command_base import Command
 from gcu_async.protocol.command_decode import (
     AnomalousCommand,
     UnknownCommand,
-    command_code,
     decode_command,
 )
 from gcu_async.protocol.commands import NullCommand
@@ -36,15 +35,20 @@ from gcu_async.protocol.gcu_frames import (
     GCU_MAIN_SCHEMA,
     GCU_SUB_SCHEMA,
     GcuMainFrame,
+    GcuMainFrameDict,
     GcuSubFrame,
+    GcuSubFrameDict,
     UnknownSubFrame,
+    UnknownSubFrameDict,
 )
 from gcu_async.protocol.host_frames import (
     HOST_MAIN_SCHEMA,
     HOST_SUB_SCHEMA,
     SUB_FRAME_HEADER,
     HostMainFrame,
+    HostMainFrameDict,
     HostSubFrame,
+    HostSubFrameDict,
 )
 from gcu_async.protocol.layout import (
     CRC_SIZE,
@@ -74,33 +78,37 @@ _PARAMS = OPCODE_OFFSET + 1
 
 class _Body(NamedTuple):
     """Bytes 0–69 in one struct (prefix, main frame, sub frame header + standard sub frame,
-    opcode), so the hot paths pack / unpack a packet with one call; and where each part's
-    values sit in the unpacked tuple, from the frame schemas."""
+    opcode), so a packet is packed and unpacked with one call; and where each part's values
+    sit in the unpacked tuple, from the frame schemas."""
 
     struct: struct.Struct
+    header: int
+    """The packet header as the U16 the struct reads (ints compare without a bytes object)."""
     main: slice
     sub_header: int
     sub: slice
     opcode: int
+    zero_sub: tuple[int, ...]
+    """The standard sub frame's fields all zero: what bytes 38–68 hold under another header."""
 
 
-def _body(main: FrameSchema, sub: FrameSchema) -> _Body:
+def _body(header: bytes, main: FrameSchema, sub: FrameSchema) -> _Body:
     if (main.start, main.end, sub.start, sub.end) != (MAIN_START, SUB_HEADER_OFFSET,
                                                       SUB_START, OPCODE_OFFSET):  # fmt: skip
-        raise ValueError(f"{main.name} / {sub.name} do not fill bytes {MAIN_START}-"
+        raise ValueError(f"{main.title} / {sub.title} do not fill bytes {MAIN_START}-"
                          f"{OPCODE_OFFSET - 1}")  # fmt: skip
-    # the header as one U16, so the hot paths compare ints (no bytes object per packet)
     layout = struct.Struct("<HHB" + main.format + "B" + sub.format + "B")
     if layout.size != _PARAMS:
         raise ValueError(f"packet body is {layout.size} bytes, not {_PARAMS}")
     m = len(PREFIX.unpack(bytes(PREFIX.size)))  # header, length, version
     s = m + len(main.fields) + 1
-    return _Body(layout, slice(m, m + len(main.fields)), s - 1, slice(s, s + len(sub.fields)),
-                 s + len(sub.fields))  # fmt: skip
+    return _Body(layout, int.from_bytes(header, "little"), slice(m, m + len(main.fields)),
+                 s - 1, slice(s, s + len(sub.fields)), s + len(sub.fields),
+                 (0,) * len(sub.fields))  # fmt: skip
 
 
-_GCU_BODY = _body(GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA)
-_HOST_BODY = _body(HOST_MAIN_SCHEMA, HOST_SUB_SCHEMA)
+_GCU = _body(GCU_HEADER, GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA)
+_HOST = _body(HOST_HEADER, HOST_MAIN_SCHEMA, HOST_SUB_SCHEMA)
 
 HostSub = HostSubFrame | UnknownSubFrame | None
 GcuSub = GcuSubFrame | UnknownSubFrame | None
@@ -111,6 +119,55 @@ def version_anomalies(version: int) -> tuple[Anomaly, ...]:
     if version in SUPPORTED_VERSIONS:
         return ()
     return (Anomaly("version", version, 1, 2, "", VERSION_DETAIL),)
+
+
+def _encode(body: _Body, version: int, main: tuple[int, ...], sub: Any, standard: type[Any],
+            opcode: int, tail: bytes) -> bytes:  # fmt: skip
+    """The wire bytes of a packet whose parts are checked: bytes 0–69 in one call, ``tail``
+    (parameters or execution status), the CRC-16/XMODEM (crc.py) high byte first."""
+    if type(sub) is standard:
+        head, fields = SUB_FRAME_HEADER, sub
+    else:  # none: all zero; another header: its data replaces the zeros below
+        head, fields = (0, body.zero_sub) if sub is None else (sub.header, body.zero_sub)
+    data = body.struct.pack(body.header, BASE_LENGTH + len(tail), version, *main, head,
+                            *fields, opcode) + tail  # fmt: skip
+    if isinstance(sub, UnknownSubFrame):
+        data = data[:SUB_START] + bytes(sub.data) + data[OPCODE_OFFSET:]
+    return data + CRC_STRUCT.pack(crc_hqx(data, 0))
+
+
+def _check_sub(sub: object, standard: type[Any], expected: str) -> None:
+    if sub is not None:
+        if type(sub) is not standard and not isinstance(sub, (standard, UnknownSubFrame)):
+            raise type_error("sub", expected, sub)
+        sub.validate()  # type: ignore[attr-defined]
+
+
+class _Anomalies(TypedDict, total=False):
+    anomalies: list[AnomalyDict]
+    """Present when the packet has anomalies (:attr:`GcuPacket.anomalies`), in wire order."""
+
+
+class HostPacketDict(_Anomalies):
+    """What :meth:`HostPacket.as_dict` returns."""
+
+    direction: Literal["host_to_gcu"]
+    version: int
+    main: HostMainFrameDict
+    sub: HostSubFrameDict | UnknownSubFrameDict | None
+    command: dict[str, Any]
+    """:meth:`Command.as_dict`: ``command`` (its name), ``opcode``, ``params``."""
+
+
+class GcuPacketDict(_Anomalies):
+    """What :meth:`GcuPacket.as_dict` returns."""
+
+    direction: Literal["gcu_to_host"]
+    version: int
+    main: GcuMainFrameDict
+    sub: GcuSubFrameDict | UnknownSubFrameDict | None
+    feedback: dict[str, Any]
+    """:meth:`Feedback.as_dict`."""
 
 
 class HostPacket(NamedTuple):
@@ -129,40 +186,25 @@ class HostPacket(NamedTuple):
         if not isinstance(main, HostMainFrame):
             raise type_error("main", "a HostMainFrame", main)
         main.validate()
-        if sub is not None:
-            if not isinstance(sub, (HostSubFrame, UnknownSubFrame)):
-                raise type_error("sub", "a HostSubFrame, an UnknownSubFrame or None", sub)
-            sub.validate()
+        _check_sub(sub, HostSubFrame, "a HostSubFrame, an UnknownSubFrame or None")
         if not isinstance(command, Command):
             raise type_error("command", "a Command", command)
         if type(version) is not int or not 0 <= version <= 255:
             check_int("version", version, 0, 255)
         params = command.encode_params()  # an AnomalousCommand raises here: send is strict
-        if type(sub) is HostSubFrame and type(main) is HostMainFrame:  # bytes 0–69 at once
-            body = _HOST_BODY_PACK(
-                _HOST_HEADER_U16, BASE_LENGTH + len(params), version,
-                *main, SUB_FRAME_HEADER, *sub,
-                command.code if isinstance(command, UnknownCommand) else command.OPCODE,
-            ) + params  # fmt: skip
-            # CRC-16/XMODEM (crc.py), high byte first
-            return body + CRC_STRUCT.pack(crc_hqx(body, 0))
-        buf = bytearray(BASE_LENGTH + len(params))
-        PREFIX.pack_into(buf, 0, HOST_HEADER, len(buf), self.version)
-        HOST_MAIN_SCHEMA.struct.pack_into(buf, MAIN_START, *self.main)
-        _pack_sub(buf, self.sub, HOST_SUB_SCHEMA)
-        buf[OPCODE_OFFSET] = command_code(self.command)
-        buf[_PARAMS : _PARAMS + len(params)] = params
-        return _seal(buf)
+        opcode = command.code if isinstance(command, UnknownCommand) else command.OPCODE
+        return _encode(_HOST, version, main, sub, HostSubFrame, opcode, params)
 
-    def as_dict(self) -> dict[str, Any]:
-        return {
+    def as_dict(self) -> HostPacketDict:
+        """The packet for JSON output (:class:`HostPacketDict`)."""
+        shown: HostPacketDict = {
             "direction": "host_to_gcu",
             "version": self.version,
             "main": self.main.as_dict(),
             "sub": None if self.sub is None else self.sub.as_dict(),
             "command": self.command.as_dict(),
-            **_anomalies_dict(self.anomalies),
         }
+        return _with_anomalies(shown, self.anomalies)
 
     @property
     def anomalies(self) -> tuple[Anomaly, ...]:
@@ -194,46 +236,39 @@ class GcuPacket(NamedTuple):
         re-encodes to its own bytes (the simulator can act as other firmware).
         ``deviations`` names main-frame fields to send outside their V2.0.6 range (a firmware
         that does, e.g. a signed ``yaw_raw``): each is still an ``int`` of its wire type."""
-        if not isinstance(self.main, GcuMainFrame):
-            raise type_error("main", "a GcuMainFrame", self.main)
+        main, sub, feedback, version = self
+        if not isinstance(main, GcuMainFrame):
+            raise type_error("main", "a GcuMainFrame", main)
         if deviations:
-            _check_deviations(self.main, deviations)
+            _check_deviations(main, deviations)
         else:
-            self.main.validate()
-        if self.sub is not None:
-            if not isinstance(self.sub, (GcuSubFrame, UnknownSubFrame)):
-                raise type_error("sub", "a GcuSubFrame, an UnknownSubFrame or None", self.sub)
-            self.sub.validate()
-        check_int("version", self.version, 0, 255)
-        if not isinstance(self.feedback, Feedback):
-            raise type_error("feedback", "a Feedback", self.feedback)
-        check_int("feedback opcode", self.feedback.opcode, 0, 255)
-        status = self.feedback.status
-        extra = self.feedback.extra_status
+            main.validate()
+        _check_sub(sub, GcuSubFrame, "a GcuSubFrame, an UnknownSubFrame or None")
+        check_int("version", version, 0, 255)
+        if not isinstance(feedback, Feedback):
+            raise type_error("feedback", "a Feedback", feedback)
+        check_int("feedback opcode", feedback.opcode, 0, 255)
+        status, extra = feedback.status, feedback.extra_status
         if not isinstance(extra, (bytes, bytearray)):
             raise type_error("feedback extra_status", "bytes", extra)
-        if extra and status is None:
-            raise ValueError("feedback: extra_status needs a status byte before it")
-        n = BASE_LENGTH if status is None else BASE_LENGTH + 1 + len(extra)
-        buf = bytearray(n)
-        PREFIX.pack_into(buf, 0, GCU_HEADER, n, self.version)
-        GCU_MAIN_SCHEMA.struct.pack_into(buf, MAIN_START, *self.main)
-        _pack_sub(buf, self.sub, GCU_SUB_SCHEMA)
-        buf[OPCODE_OFFSET] = self.feedback.opcode
-        if status is not None:
-            buf[_PARAMS] = check_int("feedback status", status, 0, 255)
-            buf[_PARAMS + 1 : _PARAMS + 1 + len(extra)] = extra
-        return _seal(buf)
+        if status is None:
+            if extra:
+                raise ValueError("feedback: extra_status needs a status byte before it")
+            tail = b""
+        else:
+            tail = bytes((check_int("feedback status", status, 0, 255),)) + extra
+        return _encode(_GCU, version, main, sub, GcuSubFrame, feedback.opcode, tail)
 
-    def as_dict(self) -> dict[str, Any]:
-        return {
+    def as_dict(self) -> GcuPacketDict:
+        """The reply for JSON output (:class:`GcuPacketDict`)."""
+        shown: GcuPacketDict = {
             "direction": "gcu_to_host",
             "version": self.version,
             "main": self.main.as_dict(),
             "sub": None if self.sub is None else self.sub.as_dict(),
             "feedback": self.feedback.as_dict(),
-            **_anomalies_dict(self.anomalies),
         }
+        return _with_anomalies(shown, self.anomalies)
 
     @property
     def anomalies(self) -> tuple[Anomaly, ...]:
@@ -244,6 +279,15 @@ class GcuPacket(NamedTuple):
         if isinstance(self.sub, GcuSubFrame):
             found += self.sub.anomalies
         return found + self.feedback.anomalies
+
+
+_P = TypeVar("_P", HostPacketDict, GcuPacketDict)
+
+
+def _with_anomalies(shown: _P, anomalies: tuple[Anomaly, ...]) -> _P:
+    if anomalies:
+        shown["anomalies"] = [a.as_dict() for a in anomalies]
+    return shown
 
 
 def _check_deviations(main: GcuMainFrame, deviations: Collection[str]) -> None:
@@ -257,26 +301,6 @@ def _check_deviations(main: GcuMainFrame, deviations: Collection[str]) -> None:
         low, high = WIRE_RANGES[fields[name].fmt]
         check_int(name, getattr(main, name), low, high, fields[name].raw_unit)
     main._replace(**{name: fields[name].raw_low for name in deviations}).validate()
-
-
-def _anomalies_dict(anomalies: tuple[Anomaly, ...]) -> dict[str, Any]:
-    return {"anomalies": [a.as_dict() for a in anomalies]} if anomalies else {}
-
-
-def _pack_sub(buf: bytearray, sub: Any, schema: FrameSchema) -> None:
-    if sub is None:
-        return
-    if isinstance(sub, UnknownSubFrame):
-        buf[SUB_HEADER_OFFSET] = sub.header
-        buf[SUB_START:OPCODE_OFFSET] = sub.data
-    else:
-        buf[SUB_HEADER_OFFSET] = SUB_FRAME_HEADER
-        schema.struct.pack_into(buf, SUB_START, *sub)
-
-
-def _seal(buf: bytearray) -> bytes:
-    CRC_STRUCT.pack_into(buf, len(buf) - 2, crc16_xmodem(memoryview(buf)[:-2]))
-    return bytes(buf)
 
 
 def _envelope_error(data: bytes, header: bytes) -> NoReturn:
@@ -309,11 +333,9 @@ def _check_envelope(data: bytes, header: bytes) -> None:
 
 
 _new = tuple.__new__
-_GCU_UNPACK = _GCU_BODY.struct.unpack_from
-_GCU_MAIN, _GCU_SUB_HEADER, _GCU_SUB, _GCU_OPCODE = _GCU_BODY[1:]
-_HOST_BODY_PACK = _HOST_BODY.struct.pack
-_GCU_HEADER_U16 = int.from_bytes(GCU_HEADER, "little")
-_HOST_HEADER_U16 = int.from_bytes(HOST_HEADER, "little")
+_GCU_UNPACK = _GCU.struct.unpack_from
+_GCU_HEADER_U16, _GCU_MAIN, _GCU_SUB_HEADER = _GCU.header, _GCU.main, _GCU.sub_header
+_GCU_SUB, _GCU_OPCODE = _GCU.sub, _GCU.opcode
 _NO_STATUS = tuple(Feedback(opcode) for opcode in range(256))
 """The feedback of each opcode with no execution status (S = 72), shared: immutable."""
 
@@ -361,17 +383,17 @@ def decode_host_packet(data: bytes) -> HostPacket:
     (:attr:`HostPacket.anomalies`, :class:`AnomalousCommand`).
     """
     _check_envelope(data, HOST_HEADER)
-    fields = _HOST_BODY.struct.unpack_from(data)
-    main = _new(HostMainFrame, fields[_HOST_BODY.main])
-    sub_header = fields[_HOST_BODY.sub_header]
+    fields = _HOST.struct.unpack_from(data)
+    main = _new(HostMainFrame, fields[_HOST.main])
+    sub_header = fields[_HOST.sub_header]
     sub: HostSub
     if sub_header == SUB_FRAME_HEADER:
-        sub = _new(HostSubFrame, fields[_HOST_BODY.sub])
+        sub = _new(HostSubFrame, fields[_HOST.sub])
     elif data[SUB_HEADER_OFFSET:OPCODE_OFFSET] == _ZERO_SUB:
         sub = None
     else:
         sub = UnknownSubFrame(sub_header, bytes(data[SUB_START:OPCODE_OFFSET]))
-    command = decode_command(fields[_HOST_BODY.opcode], bytes(data[_PARAMS:-CRC_SIZE]))
+    command = decode_command(fields[_HOST.opcode], bytes(data[_PARAMS:-CRC_SIZE]))
     return _new(HostPacket, (main, sub, command, fields[2]))
 
 

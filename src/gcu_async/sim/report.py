@@ -26,14 +26,14 @@ def _clamped(field: WireField, value: float) -> int:
 
 
 def _wrapped(field: WireField, degrees: float) -> int:
-    """Degrees → the raw angle of a full-turn field, wrapped into its range (the signed
-    fields' [-180°, 180°), the yaw's [0°, 360°))."""
+    """Degrees → the raw angle of a full-turn field, wrapped into its range (half a turn
+    either way for the signed fields, one turn from 0 for the yaw)."""
     turn = field.raw_high + 1 - field.raw_low
     return (round(degrees * field.scale) - field.raw_low) % turn + field.raw_low
 
 
 def pod_status(state: SimState) -> int:
-    """Main frame bytes 6–7."""
+    """The main frame's pod status flags."""
     flags = PodStatus(0)
     g, cam, rf = state.gimbal, state.camera, state.rangefinder
     if g.mode == Mode.TRACK and g.track is not None:

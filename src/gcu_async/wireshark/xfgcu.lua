@@ -301,6 +301,7 @@ def("uint8", "gcu.main.mode_raw", "Mode", base.HEX)
 def("string", "gcu.main.mode", "Mode name")
 def("uint16", "gcu.main.pod_status_raw", "Pod status", base.HEX)
 def("int16", "gcu.main.miss_distance", "Miss distance")
+def("int16", "gcu.main.miss_distance_raw", "Raw")
 for _, axis in ipairs({"x", "y", "z"}) do
   def("double", "gcu.main.relative_angles_deg." .. axis, "Relative angle " .. axis:upper() .. " (deg)")
   def("double", "gcu.main.angular_rates_deg_s." .. axis, "Angular rate " .. axis:upper() .. " (deg/s)")
@@ -539,7 +540,7 @@ local function anomaly(ctx, field, value, low, high, unit, detail)
   ctx.err(msg)
 end
 
--- a frame field outside the raw range V2.0.6 gives it (gcu_async's FieldRange tables)
+-- a frame field outside the raw range V2.0.6 gives it (gcu_async's frame schemas)
 local function range_anomaly(ctx, field, value, low, high, unit)
   if value < low or value > high then anomaly(ctx, field, value, low, high, unit) end
 end
@@ -752,9 +753,16 @@ local function gcu_main(ctx, tree)
   local sitem = t:add(F["gcu.main.pod_status_raw"], r(6, 2), status, string.format(
     "Pod status: 0x%04x%s", status, #names > 0 and " (" .. table.concat(names, ", ") .. ")" or ""))
   add_bits(sitem, POD_STATUS, r(6, 2), true)
+  local tracking = status % 2 == 1 -- B0, tracking: only then are the miss distances valid
   for k, axis in ipairs({"x (right +)", "y (down +)"}) do
     local miss = le_int(r(6 + 2 * k, 2))
-    add_int(t, "gcu.main.miss_distance", r(6 + 2 * k, 2), miss, "Miss distance " .. axis)
+    if tracking then
+      add_int(t, "gcu.main.miss_distance", r(6 + 2 * k, 2), miss, "Miss distance " .. axis)
+        :add(F["gcu.main.miss_distance_raw"], r(6 + 2 * k, 2), miss, "Raw: " .. int_text(miss))
+    else
+      add_int(t, "gcu.main.miss_distance_raw", r(6 + 2 * k, 2), miss,
+        "Miss distance " .. axis .. ": not tracking, raw")
+    end
     range_anomaly(ctx, "miss_" .. axis:sub(1, 1), miss, -1000, 1000, "")
   end
   for k, axis in ipairs({"x", "y", "z"}) do
@@ -822,12 +830,23 @@ local function gcu_sub(ctx, tree)
   else
     add_int(t, "gcu.sub.target_distance_raw", r(43, 4), dist, "Target distance: no measurement, raw")
   end
-  add_scaled(t, "gcu.sub.target_position.latitude", "gcu.sub.target_position_raw", r(51, 4),
-    le_int(r(51, 4)), 1e7, "Target latitude", " deg")
-  add_scaled(t, "gcu.sub.target_position.longitude", "gcu.sub.target_position_raw", r(47, 4),
-    le_int(r(47, 4)), 1e7, "Target longitude", " deg")
-  add_scaled(t, "gcu.sub.target_position.altitude", "gcu.sub.target_position_raw", r(55, 4),
-    le_int(r(55, 4)), 1000, "Target altitude", " m")
+  -- the target's position: valid with its distance (no measurement, no position)
+  local lat, lon, alt = le_int(r(51, 4)), le_int(r(47, 4)), le_int(r(55, 4))
+  if dist > 0 then
+    add_scaled(t, "gcu.sub.target_position.latitude", "gcu.sub.target_position_raw", r(51, 4),
+      lat, 1e7, "Target latitude", " deg")
+    add_scaled(t, "gcu.sub.target_position.longitude", "gcu.sub.target_position_raw", r(47, 4),
+      lon, 1e7, "Target longitude", " deg")
+    add_scaled(t, "gcu.sub.target_position.altitude", "gcu.sub.target_position_raw", r(55, 4),
+      alt, 1000, "Target altitude", " m")
+  else
+    for _, p in ipairs({{"latitude", 51, lat}, {"longitude", 47, lon}, {"altitude", 55, alt}}) do
+      add_int(t, "gcu.sub.target_position_raw", r(p[2], 4), p[3],
+        "Target " .. p[1] .. ": no measurement, raw")
+    end
+  end
+  range_anomaly(ctx, "target_longitude_raw", lon, -1800000000, 1800000000, "1e-7 deg")
+  range_anomaly(ctx, "target_latitude_raw", lat, -900000000, 900000000, "1e-7 deg")
   add_scaled(t, "gcu.sub.camera1_zoom", "gcu.sub.camera1_zoom_raw", r(59, 2), le_uint(r(59, 2)),
     10, "Camera 1 zoom", " x")
   add_scaled(t, "gcu.sub.camera2_zoom", "gcu.sub.camera2_zoom_raw", r(61, 2), le_uint(r(61, 2)),

@@ -8,6 +8,7 @@ import time
 from gcu_async.cli.demo.engine import Step, StepEngine, StepFailed, angle_between, zoom_of
 from gcu_async.cli.liveview import relative_attitude
 from gcu_async.client.telemetry import TelemetrySample
+from gcu_async.client.waiting import ZOOM_TOLERANCE
 from gcu_async.protocol.catalogue import RATE_LIMIT
 from gcu_async.protocol.enums import Mode, Opcode
 from gcu_async.protocol.units import wrap_degrees_180, wrap_degrees_360
@@ -98,7 +99,7 @@ class Demo(StepEngine):
 
         def settled(s: TelemetrySample) -> bool:
             zoom, now = zoom_of(s), time.monotonic()
-            if abs(zoom - ratio) <= 0.06:  # the sub frame reports 0.1x steps
+            if abs(zoom - ratio) <= ZOOM_TOLERANCE:  # within the sub frame's step
                 return True
             if zoom != changed[1]:
                 changed[:] = [now, zoom]

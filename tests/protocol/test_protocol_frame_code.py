@@ -1,0 +1,124 @@
+"""The frame classes are the code their tables give, and ``as_dict`` has its TypedDict's shape.
+
+The frame classes (``GcuMainFrame`` … ``HostSubFrame``) are generated from the frame tables
+by ``tools/gen_frames.py`` into the frame modules, between two marker lines; the committed
+code must be what the tables give now (edit a table, run the tool). Each frame's ``as_dict``
+returns its ``TypedDict``: the dictionary has exactly the keys the TypedDict declares, so a
+type checker's view of it is the run-time one.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import sys
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import pytest
+from hypothesis import given
+
+from _protocol_strategies import gcu_packets, host_packets
+from gcu_async.protocol import gcu_frames, host_frames, packets
+from gcu_async.protocol.frame_schema import FrameSchema, Value
+
+TOOL = Path(__file__).resolve().parents[2] / "tools" / "gen_frames.py"
+
+
+def _tool() -> ModuleType:
+    spec = importlib.util.spec_from_file_location("gen_frames", TOOL)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules.setdefault("gen_frames", module)
+    spec.loader.exec_module(module)
+    return module
+
+
+GEN = _tool()
+
+
+@pytest.mark.parametrize("module", GEN.MODULES, ids=lambda m: m.__name__)
+def test_the_generated_frames_are_what_the_tables_give(module: ModuleType) -> None:
+    assert GEN.current(module) == GEN.render(module), (
+        f"{module.__name__}: the generated frame classes are not what its tables give: run "
+        "tools/gen_frames.py")
+
+
+def test_a_table_change_changes_the_code(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The comparison above is not vacuous: a field added to a table (the worked example of
+    docs/architecture.md, "Adding a frame field") changes the generated class, its
+    ``build`` keyword, ``as_dict`` and TypedDict."""
+    schema = gcu_frames.GCU_SUB_SCHEMA
+    fields = (*schema.fields, gcu_frames.WireField("humidity_raw", "B", "pod humidity", 0, 100,
+                                                   unit="%", raw_unit="%"))  # fmt: skip
+    views = (*schema.views, Value(name="humidity_raw", fields=("humidity_raw",)))
+    bigger = FrameSchema(schema.cls_name, schema.title, schema.start, schema.size, fields,
+                         views, header=schema.header)  # fmt: skip
+    monkeypatch.setattr(gcu_frames, "GCU_SUB_SCHEMA", bigger)
+    code = GEN.render(gcu_frames)
+    assert code != GEN.current(gcu_frames)
+    assert '    humidity_raw: int = 0\n    """Byte 67, U8, [0, 100]: pod humidity."""' in code
+    assert "        humidity_raw: int = 0,\n" in code  # the build keyword
+    assert '"humidity_raw": self.humidity_raw,' in code and "    humidity_raw: int\n" in code
+
+
+def test_a_field_no_view_writes_is_refused() -> None:
+    schema = FrameSchema("T", "test frame", 5, 4, (gcu_frames.WireField("a", "h"),
+                                                   gcu_frames.WireField("b", "h")),
+                         (Value(name="a", fields=("a",)),))  # fmt: skip
+    module = ModuleType("frames")
+    module.T_SCHEMA = schema  # type: ignore[attr-defined]
+    with pytest.raises(ValueError, match=r"no view writes \['b'\]"):
+        GEN.render(module)
+
+
+def _keys(typed: Any) -> tuple[set[str], set[str]]:
+    return set(typed.__required_keys__), set(typed.__optional_keys__)
+
+
+TYPED = {gcu_frames.GcuMainFrame: gcu_frames.GcuMainFrameDict,
+         gcu_frames.GcuSubFrame: gcu_frames.GcuSubFrameDict,
+         host_frames.HostMainFrame: host_frames.HostMainFrameDict,
+         host_frames.HostSubFrame: host_frames.HostSubFrameDict,
+         gcu_frames.UnknownSubFrame: gcu_frames.UnknownSubFrameDict}  # fmt: skip
+
+
+def _check_shape(value: dict[str, Any], typed: Any) -> None:
+    """``value`` has exactly ``typed``'s required keys and none but its optional ones."""
+    required, optional = _keys(typed)
+    assert required <= set(value) <= required | optional, (typed.__name__, set(value))
+
+
+def _check_packet(packet: Any, typed: Any) -> None:
+    shown = packet.as_dict()
+    _check_shape(shown, typed)
+    assert ("anomalies" in shown) == bool(packet.anomalies)
+    _check_shape(shown["main"], TYPED[type(packet.main)])
+    if packet.sub is None:
+        assert shown["sub"] is None
+    else:
+        _check_shape(shown["sub"], TYPED[type(packet.sub)])
+    json.dumps(shown)  # JSON-ready
+
+
+@given(packet=host_packets)
+def test_a_host_packet_dict_has_its_typed_dict_keys(packet: packets.HostPacket) -> None:
+    _check_packet(packet, packets.HostPacketDict)
+
+
+@given(packet=gcu_packets)
+def test_a_gcu_packet_dict_has_its_typed_dict_keys(packet: packets.GcuPacket) -> None:
+    _check_packet(packet, packets.GcuPacketDict)
+
+
+@pytest.mark.parametrize(("frame", "typed"), [
+    (gcu_frames.GcuMainFrame(), gcu_frames.GcuMainFrameDict),
+    (gcu_frames.GcuSubFrame(target_distance_raw=5), gcu_frames.GcuSubFrameDict),
+    (host_frames.HostMainFrame(), host_frames.HostMainFrameDict),
+    (host_frames.HostSubFrame(), host_frames.HostSubFrameDict),
+    (gcu_frames.UnknownSubFrame(7, bytes(31)), gcu_frames.UnknownSubFrameDict),
+], ids=lambda x: type(x).__name__)  # fmt: skip
+def test_each_frame_dict_has_exactly_its_typed_dict_keys(frame: Any, typed: Any) -> None:
+    shown = frame.as_dict()
+    assert set(shown) == _keys(typed)[0] and not _keys(typed)[1]
