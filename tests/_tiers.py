@@ -155,6 +155,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_self_contained.py": "subprocess",
     "test_schema_literals_once.py": FAST,
     "test_session_contract.py": (FAST, HEAVY),  # 100,000 commands in 8 shards
+    "test_session_config.py": FAST,
     "test_session_decode_memo.py": FAST,
     "test_session_deviation_log.py": FAST,
     "test_session_gate.py": FAST,

@@ -38,7 +38,7 @@ def test_every_client_keyword_goes_to_the_client() -> None:
     }  # fmt: skip
     gcu = connect("udp://127.0.0.1:4000", local_port=0, **values)
     for name, value in values.items():
-        holder = gcu if hasattr(gcu, name) else gcu.session  # some live in the session
+        holder = gcu if hasattr(gcu, name) else gcu.session.config  # some: the session's
         assert getattr(holder, name) == value, name
     assert set(values) == CLIENT_OPTIONS - {"clock", "capture"}  # every option but two here
     ticks = iter(range(10**6))

@@ -675,9 +675,9 @@ class MavlinkBridge:
         if call.mode is not None:
             self._pending_mode = call.mode
         session = self.client.session
-        saved = session.queue_timeout
-        session.queue_timeout = queue_timeout
-        asyncio.get_running_loop().call_soon(setattr, session, "queue_timeout", saved)
+        saved = session.config
+        session.config = replace(saved, queue_timeout=queue_timeout)
+        asyncio.get_running_loop().call_soon(setattr, session, "config", saved)
         try:
             result = method(**call.kwargs)
             if inspect.isawaitable(result):

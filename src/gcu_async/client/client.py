@@ -59,7 +59,7 @@ from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
 from gcu_async.protocol.host_frames import ControlValues
 from gcu_async.protocol.packets import DEFAULT_VERSION
 from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp
-from gcu_async.session import ControlKind, LinkHealth, Session, TelemetrySample
+from gcu_async.session import ControlKind, LinkHealth, Session, SessionConfig, TelemetrySample
 from gcu_async.transport.backoff import Backoff
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 from gcu_async.transport.tap import with_capture
@@ -181,11 +181,12 @@ class GcuClient(OpenClose):
         transport = with_capture(transport, capture)
         if reorder_guard is None:
             reorder_guard = 0.0 if transport.ordered else DEFAULT_REORDER_GUARD
-        session = Session(  # it checks its options (the one place they are checked)
+        config = SessionConfig(  # it checks its options (the one place they are checked)
             rate_hz=rate_hz, reorder_guard=reorder_guard, command_timeout=command_timeout,
             queue_timeout=queue_timeout, silence_timeout=silence_timeout,
             aircraft_timeout=aircraft_timeout, version=version, name=transport.url,
         )  # fmt: skip
+        session = Session(config)
         if not callable(clock):
             raise type_error("clock", "a callable returning seconds", clock)
         reading = clock()
@@ -207,7 +208,7 @@ class GcuClient(OpenClose):
         check_support = check_bool("check_support", check_support)
         max_zoom = (None if max_zoom is None
                     else check_real("max_zoom", max_zoom, 1.0, ZOOM_RATIO_MAX, "x"))
-        rate = session.rate_hz
+        rate = config.rate_hz
         if not RATE_ADVISED[0] <= rate <= RATE_ADVISED[1]:
             warnings.warn(f"rate_hz={rate:g}: the protocol advises 30-50 Hz host packets",
                           stacklevel=_caller_stacklevel())  # fmt: skip
@@ -264,23 +265,23 @@ class GcuClient(OpenClose):
     # -- configuration (read-only views of the session's) ----------------------------------
     @property
     def rate_hz(self) -> float:
-        return self.session.rate_hz
+        return self.session.config.rate_hz
 
     @property
     def reorder_guard(self) -> float:
-        return self.session.reorder_guard
+        return self.session.config.reorder_guard
 
     @property
     def command_timeout(self) -> float:
-        return self.session.command_timeout
+        return self.session.config.command_timeout
 
     @property
     def queue_timeout(self) -> float:
-        return self.session.queue_timeout
+        return self.session.config.queue_timeout
 
     @property
     def version(self) -> int:
-        return self.session.version
+        return self.session.config.version
 
     @property
     def state(self) -> ClientState:
@@ -398,7 +399,7 @@ class GcuClient(OpenClose):
 
     @property
     def aircraft_timeout(self) -> float:
-        return self.session.aircraft_timeout
+        return self.session.config.aircraft_timeout
 
     @property
     def ins_valid(self) -> bool:

@@ -1,6 +1,7 @@
 """The command session, sans-I/O: scheduling, null separation, feedback matching, the
 heartbeat's content, link health and the lifecycle (docs/client.md, "The session")."""
 
+from gcu_async.session.config import SessionConfig
 from gcu_async.session.control import ControlKind
 from gcu_async.session.events import (
     Event,
@@ -18,6 +19,6 @@ from gcu_async.session.tickets import Ticket, TicketState
 
 __all__ = [
     "ControlKind", "Event", "LinkDown", "LinkHealth", "LinkUp", "ResetLink", "Restarted",
-    "Session", "SessionState", "SessionStats", "StateChange", "TelemetrySample", "Ticket",
-    "TicketDone", "TicketState",
+    "Session", "SessionConfig", "SessionState", "SessionStats", "StateChange",
+    "TelemetrySample", "Ticket", "TicketDone", "TicketState",
 ]  # fmt: skip

@@ -26,25 +26,16 @@ import math
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, fields, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from gcu_async._checks import (
-    check_bool,
-    check_instance,
-    check_int,
-    check_positive,
-    check_real,
-    type_error,
-)
+from gcu_async._checks import check_bool, check_instance, check_int, check_positive, type_error
 from gcu_async.errors import (
     CommandError,
     CommandFailed,
     CommandLinkLost,
     CommandTimeout,
-    FieldRangeError,
     GcuError,
     Outcome,
-    RemoteProtocolError,
 )
 from gcu_async.protocol.aircraft import AircraftState
 from gcu_async.protocol.anomalies import Anomaly
@@ -65,15 +56,8 @@ from gcu_async.protocol.host_frames import (
     HostMainFrame,
     HostSubFrame,
 )
-from gcu_async.protocol.packets import (
-    BASE_LENGTH,
-    DEFAULT_VERSION,
-    GCU_HEADER,
-    SUPPORTED_VERSIONS,
-    GcuPacket,
-    HostPacket,
-    decode_gcu_packet,
-)
+from gcu_async.protocol.packets import SUPPORTED_VERSIONS, GcuPacket, HostPacket, decode_gcu_packet
+from gcu_async.session.config import SessionConfig, SessionOptions
 from gcu_async.session.control import KIND, REPORTED, ControlKind, ControlState
 from gcu_async.session.events import (
     Event,
@@ -84,7 +68,7 @@ from gcu_async.session.events import (
     TelemetrySample,
     TicketDone,
 )
-from gcu_async.session.feed import TIMEOUT_MAX, AircraftFeed
+from gcu_async.session.feed import AircraftFeed
 from gcu_async.session.health import HealthTracker, LinkHealth
 from gcu_async.session.pacing import Pacer
 from gcu_async.session.recording import RecordingBelief
@@ -92,14 +76,14 @@ from gcu_async.session.restart import ZOOM_SCALE, RestartWatch, StateChange
 from gcu_async.session.runs import RunLedger
 from gcu_async.session.tickets import Ticket, TicketState
 
+if TYPE_CHECKING:
+    from typing_extensions import Unpack
+
 log = logging.getLogger("gcu_async.session")
 
 NULL = NullCommand()
 _NULL_OPCODE = int(Opcode.NULL)
 _RECORDING = int(CameraFlags.RECORDING)
-RATE_MIN_HZ = 2.0
-"""Slowest heartbeat accepted (the protocol advises 30–50 Hz and must never stop)."""
-RATE_MAX_HZ = 200.0
 FLAGGED_MAX = 64
 """Kinds of anomaly logged once each per session (a GCU sending junk cannot flood the log)."""
 MIN_WAKE = 1e-4
@@ -147,67 +131,21 @@ class SessionStats:
 class Session:
     """One host's session with one GCU. See the module docstring and docs/client.md.
 
-    Args:
-        rate_hz: heartbeat rate, [2, 200] packets per second (the protocol advises 30–50).
-        reorder_guard: seconds between the last packet of one opcode and the first of the
-            next; must exceed how much more the link may delay one packet than another
-            (0 on links that never reorder: TCP, serial).
-        command_timeout: default seconds a command may spend on the wire (from its first
-            packet to its feedback).
-        queue_timeout: default seconds a command may wait before its first packet.
-        silence_timeout: seconds without a reply after which the link counts as lost; more
-            than the heartbeat period.
-        control_silence: seconds without a reply after which control values go out invalid.
-        reply_window: longest round trip (GCU included) assumed possible; only used to tell
-            which packets a reply may answer when no later reply settles it.
-        record_settle: seconds a camera may take to report a record toggle in its flags.
-        aircraft_timeout: seconds an aircraft part (attitude, acceleration, velocity,
-            position) stays current after it was given, (0, 10]; then the packets stop
-            claiming it (:mod:`~gcu_async.session.feed`).
-        version: protocol version byte to send (2; some devices expect 1).
-        name: how errors name the link (e.g. its URL).
-    """
+    ``Session(config)`` takes a :class:`SessionConfig`; ``Session(**options)`` makes one from
+    its fields (``Session(rate_hz=30, reorder_guard=0.015)``), which checks them all."""
 
-    def __init__(
-        self,
-        *,
-        rate_hz: float = 50.0,
-        reorder_guard: float = 0.0,
-        command_timeout: float = 2.0,
-        queue_timeout: float = 30.0,
-        silence_timeout: float = 1.0,
-        control_silence: float = 0.2,
-        reply_window: float = 1.0,
-        record_settle: float = 1.0,
-        aircraft_timeout: float = 1.0,
-        version: int = DEFAULT_VERSION,
-        name: str = "gcu",
-    ) -> None:
-        rate_hz = check_real("rate_hz", rate_hz, RATE_MIN_HZ, RATE_MAX_HZ, "Hz")
-        self.rate_hz = rate_hz
-        self.reorder_guard = check_positive("reorder_guard", reorder_guard, allow_zero=True)
-        self.command_timeout = check_positive("command_timeout", command_timeout)
-        self.queue_timeout = check_positive("queue_timeout", queue_timeout)
-        period = 1.0 / rate_hz
-        beyond = "must exceed the heartbeat period 1 / rate_hz: no link without packets"
-        self.silence_timeout = check_real("silence_timeout", silence_timeout, period, math.inf,
-                                          "s", detail=beyond)  # fmt: skip
-        if self.silence_timeout == period:
-            raise FieldRangeError("silence_timeout", silence_timeout, period, math.inf, "s",
-                                  detail=beyond)  # fmt: skip
-        self.control_silence = check_positive("control_silence", control_silence)
-        self.reply_window = check_positive("reply_window", reply_window)
-        self.version = check_int("version", version, 1, 2)
-        self.name = check_instance("name", name, str)
-        self.aircraft_timeout = check_real("aircraft_timeout", aircraft_timeout, 0.0,
-                                           TIMEOUT_MAX, "s")  # fmt: skip
-        if self.aircraft_timeout == 0.0:
-            raise FieldRangeError("aircraft_timeout", aircraft_timeout, 0.0, TIMEOUT_MAX, "s",
-                                  detail="must be greater than 0")  # fmt: skip
-        self._pacer = Pacer(rate_hz, self.reorder_guard)
-        self._ledger = RunLedger(self.reorder_guard, self.reply_window)
+    def __init__(self, config: SessionConfig | None = None, /,
+                 **options: Unpack[SessionOptions]) -> None:  # fmt: skip
+        if config is None:
+            config = SessionConfig(**options)
+        elif options:
+            raise TypeError("Session: give a SessionConfig or its fields as options, not both")
+        self.config = check_instance("config", config, SessionConfig)
+        """The options (read-only: a new session takes new ones)."""
+        self._pacer = Pacer(config.rate_hz, config.reorder_guard)
+        self._ledger = RunLedger(config.reorder_guard, config.reply_window)
         self._control = ControlState()
-        self._recording = RecordingBelief(check_positive("record_settle", record_settle))
+        self._recording = RecordingBelief(config.record_settle)
         self._deframer = Deframer.for_gcu_packets()
         self._health = HealthTracker()
         self._restart = RestartWatch()
@@ -228,7 +166,7 @@ class Session:
         self._feedback: Feedback | None = None
         self.trace: Callable[[bytes], None] | None = None
         """Called with every whole packet received (before it is decoded), e.g. to log it."""
-        self._feed = AircraftFeed(self.aircraft_timeout, self.name)
+        self._feed = AircraftFeed(config.aircraft_timeout, config.name)
         self._last_encoded: tuple[object, object, object, bytes] = (None, None, None, b"")
         self._last_datagram = b""
         self._last_packet: GcuPacket | None = None
@@ -250,7 +188,7 @@ class Session:
         if self._state is not SessionState.CLOSED:
             raise RuntimeError(f"session is already {self._state.value}")
         self._pacer.reset()
-        self._ledger = RunLedger(self.reorder_guard, self.reply_window)
+        self._ledger = RunLedger(self.config.reorder_guard, self.config.reply_window)
         self._control.reset()
         self._recording.reset()
         self._restart.reset()
@@ -263,7 +201,7 @@ class Session:
         more is sent. Idempotent."""
         if self._state is SessionState.CLOSED:
             return
-        self._end_all(now, f"{self.name}: {reason}")
+        self._end_all(now, f"{self.config.name}: {reason}")
         self._state = SessionState.CLOSED
 
     # -- inputs ----------------------------------------------------------------------------
@@ -279,38 +217,19 @@ class Session:
         if self._state is SessionState.CLOSED:
             return
         deframer = self._deframer
-        if datagram and not deframer.buffered:
-            packet: GcuPacket | None = None
-            if data == self._last_datagram:  # one memcmp: an idle GCU repeats its reply
-                packet = self._last_packet
-            elif (len(data) >= BASE_LENGTH and data[2] | data[3] << 8 == len(data)
-                    and data[:2] == GCU_HEADER):  # fmt: skip
-                try:  # the usual datagram: exactly one packet (the decoder checks the CRC)
-                    packet = decode_gcu_packet(data)
-                except RemoteProtocolError:
-                    pass  # the deframer below sorts it out and counts what it discards
-                else:
-                    if type(data) is bytes:  # immutable: safe to compare with later
-                        self._last_datagram, self._last_packet = data, packet
-            if packet is not None:
-                if self.trace is not None:
-                    self.trace(data)
-                if packet.version not in SUPPORTED_VERSIONS:
-                    self._other_version(packet.version)
-                sub = packet.sub if type(packet.sub) is GcuSubFrame else None
-                self._on_reply(packet.main, sub, packet.feedback, now, arrived_after)
-                return
+        if datagram and data == self._last_datagram and not deframer.buffered:
+            packet = self._last_packet  # one memcmp: an idle GCU repeats its reply
+            assert packet is not None
+            self._on_reply(data, packet, now, arrived_after)
+            return
         packets = deframer.feed(data)
         if datagram and deframer.buffered:
             packets += deframer.flush()  # a datagram's leftovers never join the next one
         for raw in packets:
-            if self.trace is not None:
-                self.trace(raw)
             packet = decode_gcu_packet(raw)  # framed: header, length and CRC are right
-            if packet.version not in SUPPORTED_VERSIONS:
-                self._other_version(packet.version)
-            sub = packet.sub if isinstance(packet.sub, GcuSubFrame) else None
-            self._on_reply(packet.main, sub, packet.feedback, now, arrived_after)
+            if datagram and raw is data and type(data) is bytes:  # whole, immutable: kept
+                self._last_datagram, self._last_packet = data, packet
+            self._on_reply(raw, packet, now, arrived_after)
 
     def connection_lost(self, now: float, reason: str) -> None:
         """The transport lost its connection (stream transports): no reply to anything sent
@@ -348,8 +267,9 @@ class Session:
         if isinstance(command, NullCommand):
             raise ValueError("command: the null command is the session's own separator")
         opcode = command_code(command)
-        timeout = self.command_timeout if timeout is None else check_positive("timeout", timeout)
-        queue_timeout = (self.queue_timeout if queue_timeout is None
+        config = self.config
+        timeout = config.command_timeout if timeout is None else check_positive("timeout", timeout)
+        queue_timeout = (config.queue_timeout if queue_timeout is None
                          else check_positive("queue_timeout", queue_timeout))  # fmt: skip
         if control is not None:
             self._check_values(control, KIND.get(opcode), opcode)
@@ -360,7 +280,7 @@ class Session:
         if self._state is not SessionState.UP:
             state = "closed" if self._state is SessionState.CLOSED else "down"
             raise CommandLinkLost(
-                f"{opcode_name(opcode)}: {self.name}: link is {state}; not sent",
+                f"{opcode_name(opcode)}: {self.config.name}: link is {state}; not sent",
                 outcome=Outcome.NOT_SENT, opcode=opcode, command=command,
             )  # fmt: skip
         ticket = Ticket(command, opcode, now, timeout, now + queue_timeout,
@@ -444,15 +364,11 @@ class Session:
         pacer = self._pacer
         if pacer.late:
             pacer.settle(now)
-        slot_due = now >= pacer.next_slot
-        if not slot_due and not self._kick:
-            return None  # the gate's slot bound, without building the decision
-        when, command, opcode, start = self._gate(now)
+        when, start = self._gate(now)
         if now < when:
-            if not slot_due and (start is None or now < pacer.early_open_at()):
-                self._kick = False  # early only to start a command, once per window
             return None
         self._kick = False
+        early = now < pacer.next_slot
         ticket = self._in_flight
         if start is not None:
             self._queue.popleft()
@@ -462,15 +378,17 @@ class Session:
                 belief = self._recording.value(now)
                 start.expect_recording = None if belief is None else not belief
             self._in_flight = ticket = start
+        command, opcode = (NULL, _NULL_OPCODE) if ticket is None else (ticket.command,
+                                                                        ticket.opcode)
         run = self._ledger.sent(opcode, now)
         if ticket is not None:
             ticket.run = run
             ticket.packets += 1
         elif self._queue:
             self.stats.separator_packets += 1
-        if not slot_due:
+        if early:
             self.stats.early_packets += 1
-        pacer.record(now, opcode, early=not slot_due)
+        pacer.record(now, opcode, early=early)
         self._health.packets_sent += 1
         if self._feed.check(now):
             self.stats.aircraft_stale += 1
@@ -479,7 +397,8 @@ class Session:
         return self._encode(main, sub, command)
 
     def next_wakeup(self, now: float) -> float:
-        """When :meth:`poll` must be called next (``inf`` when closed).
+        """When :meth:`poll` must be called next (``inf`` when closed): when the gate lets
+        the next packet go, or a timer is due, whichever comes first.
 
         ``now`` itself when a packet may go now, or when the last packet went out late
         (:attr:`~gcu_async.session.pacing.Pacer.late`): the driver then polls
@@ -490,51 +409,53 @@ class Session:
         when = self._gate(now)[0]
         if when <= now or self._pacer.late:
             return now  # poll(now) sends (after its timers), or settles the late packet
-        timer = self._timers_due_at()
+        timer = self._timers_due_at(now)
         if timer <= now:
             return now  # poll(now) fires it
         if timer < when:
             when = timer
-        if self._queue and self._queue[0].recording_target is not None:
-            settle = self._recording.settles_at()  # the head waits for the belief to settle
-            if now < settle < when:
-                when = settle
         return when if when > now + MIN_WAKE else now + MIN_WAKE
 
-    def _gate(self, now: float) -> tuple[float, Command, int, Ticket | None]:
+    def _gate(self, now: float) -> tuple[float, Ticket | None]:
         """The one gate of sending, read by :meth:`poll` (a packet goes iff ``now`` has
-        reached it) and :meth:`next_wakeup` (it wakes the driver then): (the earliest time
-        the next packet may go, its command and opcode, the queued ticket it would start).
+        reached it) and :meth:`next_wakeup` (it wakes the driver then): the earliest time
+        the next packet may go, and the queued ticket it would start (``None``: the command
+        in flight or a null packet).
 
         A packet goes on its heartbeat slot, or early (before it) to start a command that
         was just queued (``_kick``) once the early window is open; never before the rate
-        bound and the edge guard allow (:mod:`~gcu_async.session.pacing`)."""
+        bound and the edge guard allow (:mod:`~gcu_async.session.pacing`). A kick that
+        cannot start its command early now (nothing may start, or the early window is not
+        open) is spent: the command goes on a slot."""
         pacer = self._pacer
-        command: Command = NULL
         opcode, start, t = _NULL_OPCODE, None, self._in_flight
         if t is not None:  # it repeats until its feedback
-            command, opcode = t.command, t.opcode
+            opcode = t.opcode
         elif self._queue:  # the head starts once a reply proved it may, and its state is known
             head = self._queue[0]
             if self._ledger.may_start(head.opcode) and (
                 head.recording_target is None or self._recording.value(now) is not None
             ):
-                command, opcode, start = head.command, head.opcode, head
+                opcode, start = head.opcode, head
         gate = pacer.open_at(opcode)
         when = pacer.next_slot
         if gate > when:
             when = gate
-        if self._kick and start is not None:
+        if self._kick and now < pacer.next_slot:
             early = pacer.early_open_at()
-            if gate > early:
-                early = gate
-            if early < when:
-                when = early
-        return when, command, opcode, start
+            if start is None or now < early:
+                self._kick = False  # early only to start a command, once per window
+            else:
+                if gate > early:
+                    early = gate
+                if early < when:
+                    when = early
+        return when, start
 
-    def _timers_due_at(self) -> float:
+    def _timers_due_at(self, now: float) -> float:
         """When the earliest timer :meth:`_timers` fires is due: the link's silence, the
-        command in flight's timeout, a queued command's deadline (``inf``: none)."""
+        command in flight's timeout, a queued command's deadline, the recording belief of a
+        state-checked head settling (``inf``: none)."""
         when = self._silent_at if self._state is SessionState.UP else math.inf
         t = self._in_flight
         if t is not None and t.first_sent is not None and t.first_sent + t.timeout < when:
@@ -544,6 +465,10 @@ class Session:
             heapq.heappop(deadlines)
         if deadlines and deadlines[0][0] < when:
             when = deadlines[0][0]
+        if self._queue and self._queue[0].recording_target is not None:
+            settle = self._recording.settles_at()  # the head waits for the belief to settle
+            if now < settle < when:
+                when = settle
         return when
 
     # -- observations ----------------------------------------------------------------------
@@ -624,7 +549,7 @@ class Session:
         if self._health.other_versions == 1:
             log.warning("%s: reply of protocol version %d (V2.0.6 defines 1 and 2): decoded "
                         "with the V2.0.6 layout; further ones are only counted "
-                        "(link_health().other_versions)", self.name, version)  # fmt: skip
+                        "(link_health().other_versions)", self.config.name, version)  # fmt: skip
 
     def _flag(self, anomalies: tuple[Anomaly, ...]) -> None:
         """Log each kind of value outside V2.0.6 (field and reading) the first time a reply
@@ -637,15 +562,22 @@ class Session:
             self._flagged.add(key)
             log.warning("%s: the GCU sends a value outside V2.0.6, %s; said once, each reply "
                         "keeps it in its anomalies (docs/protocol-notes.md, \"What real pods "
-                        "do\")", self.name, anomaly)  # fmt: skip
+                        "do\")", self.config.name, anomaly)  # fmt: skip
 
-    def _on_reply(self, main: GcuMainFrame, sub: GcuSubFrame | None, feedback: Feedback,
-                  now: float, earliest: float | None) -> None:  # fmt: skip
+    def _on_reply(self, raw: bytes, packet: GcuPacket, now: float,
+                  earliest: float | None) -> None:  # fmt: skip
+        """One reply (``raw``: its bytes) that arrived in ``[earliest, now]``."""
+        if self.trace is not None:
+            self.trace(raw)
+        if packet.version not in SUPPORTED_VERSIONS:
+            self._other_version(packet.version)
+        main, feedback = packet.main, packet.feedback
+        sub = packet.sub if type(packet.sub) is GcuSubFrame else None
         self._health.on_reply(now)
         if main is not self._status and (main.anomalies or feedback.anomalies):
             self._flag(main.anomalies + feedback.anomalies)  # a new frame: an idle GCU repeats
         # the first instant the silence since this reply exceeds silence_timeout
-        self._silent_at = math.nextafter(now + self.silence_timeout, math.inf)
+        self._silent_at = math.nextafter(now + self.config.silence_timeout, math.inf)
         self._status = main
         self._feedback = feedback
         if sub is not None:
@@ -695,7 +627,7 @@ class Session:
     # -- internals: timers and the queue ---------------------------------------------------
     def _timers(self, now: float) -> None:
         if self._state is SessionState.UP and now >= self._silent_at:
-            self._link_down(now, f"no reply for {self.silence_timeout:g} s", reset=True)
+            self._link_down(now, f"no reply for {self.config.silence_timeout:g} s", reset=True)
         if not self._deadlines and self._in_flight is None:
             return
         t = self._in_flight
@@ -754,7 +686,7 @@ class Session:
             self._health.lost_count += 1
         was = self._state
         self._state = SessionState.DOWN
-        self._end_all(now, f"{self.name}: {reason}")
+        self._end_all(now, f"{self.config.name}: {reason}")
         if up:
             self._restart.lost(self._status, self._info, self._health.last_reply)
         if was is not SessionState.DOWN:
@@ -813,7 +745,7 @@ class Session:
             return None
         status = self._status
         reported = status.mode_raw if status is not None else None
-        silent = self._health.silent_for(now) > self.control_silence
+        silent = self._health.silent_for(now) > self.config.control_silence
         return control.valid(reported, silent)
 
     def _encode(self, main: HostMainFrame, sub: HostSubFrame | None, command: Command) -> bytes:
@@ -822,7 +754,7 @@ class Session:
         last = self._last_encoded
         if last[0] is main and last[1] is sub and last[2] is command:
             return last[3]
-        data = HostPacket(main, sub, command, self.version).encode()
+        data = HostPacket(main, sub, command, self.config.version).encode()
         self._last_encoded = (main, sub, command, data)
         return data
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass, field
 
-from gcu_async.errors import GcuError, Outcome
+from gcu_async.errors import GcuError
 from gcu_async.protocol.commands import Command
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.session.runs import Run
@@ -32,9 +32,6 @@ class TicketState(enum.Enum):
 
 FINAL = frozenset({TicketState.SUCCEEDED, TicketState.SKIPPED, TicketState.FAILED,
                    TicketState.NOT_SENT, TicketState.UNKNOWN})  # fmt: skip
-
-OUTCOME_OF = {TicketState.FAILED: Outcome.FAILED, TicketState.NOT_SENT: Outcome.NOT_SENT,
-              TicketState.UNKNOWN: Outcome.UNKNOWN}  # fmt: skip
 
 
 @dataclass(eq=False)
