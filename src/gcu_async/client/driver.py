@@ -20,6 +20,7 @@ from typing import Any
 
 from gcu_async._checks import check_instance
 from gcu_async._lograte import LogLimiter
+from gcu_async.client.causes import explain
 from gcu_async.client.restore import restore, restored
 from gcu_async.client.telemetry import Callbacks, Telemetry
 from gcu_async.client.wirelog import WIRE_LOG, log_packet
@@ -28,14 +29,13 @@ from gcu_async.errors import (
     CommandFailed,
     CommandLinkLost,
     GcuError,
-    LikelyCause,
     LinkLost,
     Outcome,
     UnsupportedCommandError,
 )
 from gcu_async.protocol.builder import Context, Submission
 from gcu_async.protocol.catalogue import NEEDS_INS
-from gcu_async.protocol.commands import Command, ZoomTo, command_code
+from gcu_async.protocol.commands import Command, command_code
 from gcu_async.protocol.enums import PodModel, opcode_name
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame
@@ -441,7 +441,7 @@ class Driver:
             log.info("%s", event.detail)
             self.links.emit(event)
         elif kind is LinkEventKind.ERROR:
-            log.warning("%s (the link stays open; link health decides whether it is up)",
+            log.warning("%s (the client keeps sending; the link is up once the GCU answers)",
                         event.detail)  # fmt: skip
             self.links.emit(event)
         elif kind is LinkEventKind.GAVE_UP:
@@ -513,27 +513,7 @@ class Driver:
         else:
             assert ticket.error is not None
             if isinstance(ticket.error, CommandFailed):
-                self._explain(ticket.error, ticket.command, ins_invalid)
+                explain(ticket.error, ticket.command, self.pod_model, ins_invalid=ins_invalid,
+                        max_zoom=self.max_zoom,
+                        aircraft_timeout=self.session.config.aircraft_timeout)  # fmt: skip
             future.set_exception(ticket.error)
-
-    def _explain(self, error: CommandFailed, command: Command, ins_invalid: bool) -> None:
-        """Add what the client knows that explains a failure (docs/client.md, "Why a
-        command failed"): the pod model's Appendix 8 row, INS sent invalid, the zoom limit."""
-        opcode = command_code(command)
-        name = opcode_name(opcode)
-        model = self.pod_model
-        if model is not None and model in POD_NAMES and not supports(model, opcode):
-            error.explain(LikelyCause.NOT_SUPPORTED,
-                          f"protocol Appendix 8: the {pod_name(model)} does not support "
-                          f"{name}")  # fmt: skip
-        elif ins_invalid:
-            error.explain(LikelyCause.INS_INVALID,
-                          f"{name} needs valid INS data and the host packets carried INS "
-                          "invalid: give the aircraft's attitude, acceleration and velocity "
-                          "with update_aircraft(), at most aircraft_timeout "
-                          f"({self.session.config.aircraft_timeout:g} s) apart")  # fmt: skip
-        elif (isinstance(command, ZoomTo) and command.ratio is not None
-              and self.max_zoom is not None and command.ratio > self.max_zoom):  # fmt: skip
-            error.explain(LikelyCause.ZOOM_LIMIT,
-                          f"{command.ratio:g}x is beyond camera 1's maximum zoom "
-                          f"{self.max_zoom:g}x")  # fmt: skip

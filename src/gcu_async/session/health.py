@@ -3,7 +3,28 @@
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
+from typing import TypedDict, cast
+
+
+class LinkHealthDict(TypedDict):
+    """:meth:`LinkHealth.as_dict`: the fields by name (JSON-ready)."""
+
+    up: bool
+    reply_rate: float
+    last_reply_age: float | None
+    packets_sent: int
+    packets_received: int
+    send_errors: int
+    crc_errors: int
+    length_errors: int
+    bytes_discarded: int
+    other_versions: int
+    unmatched_feedback: int
+    ambiguous_feedback: int
+    lost_count: int
+    restored_count: int
+    restarted_count: int
 
 
 @dataclass(frozen=True)
@@ -35,6 +56,11 @@ class LinkHealth:
     restarted_count: int = 0
     """Times the GCU came back from a loss with its state reset (docs/client.md, "GCU
     restarts")."""
+
+    def as_dict(self) -> LinkHealthDict:
+        """Every field by name: numbers, a bool and ``None`` (JSON-ready, e.g. for a web
+        page)."""
+        return cast(LinkHealthDict, {f.name: getattr(self, f.name) for f in fields(self)})
 
 
 class HealthTracker:

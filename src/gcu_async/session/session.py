@@ -23,6 +23,7 @@ import enum
 import heapq
 import logging
 import math
+import sys
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, fields, replace
@@ -76,7 +77,9 @@ from gcu_async.session.restart import ZOOM_SCALE, RestartWatch, StateChange
 from gcu_async.session.runs import RunLedger
 from gcu_async.session.tickets import Ticket, TicketState
 
-if TYPE_CHECKING:
+if sys.version_info >= (3, 11):
+    from typing import Unpack
+elif TYPE_CHECKING:
     from typing_extensions import Unpack
 
 log = logging.getLogger("gcu_async.session")
