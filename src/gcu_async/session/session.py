@@ -494,10 +494,6 @@ class Session:
         return TelemetrySample(status, self._info, feedback, at)
 
     @property
-    def in_flight(self) -> Ticket | None:
-        return self._in_flight
-
-    @property
     def pending(self) -> int:
         """Commands queued or in flight."""
         return len(self._queue) + (self._in_flight is not None)

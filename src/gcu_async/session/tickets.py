@@ -65,8 +65,3 @@ class Ticket:
     @property
     def done(self) -> bool:
         return self.state in FINAL
-
-    @property
-    def wire_deadline(self) -> float | None:
-        """When the command times out on the wire (None until it is sent)."""
-        return None if self.first_sent is None else self.first_sent + self.timeout

@@ -271,9 +271,6 @@ class DrainingDatagramTransport(asyncio.DatagramTransport):
     def abort(self) -> None:
         self.close()
 
-    def get_protocol(self) -> asyncio.BaseProtocol:
-        return self._protocol
-
     def _call_connection_lost(self) -> None:
         try:
             self._protocol.connection_lost(None)
