@@ -14,7 +14,8 @@ from gcu_async.session.events import (
 )
 from gcu_async.session.health import LinkHealth
 from gcu_async.session.restart import StateChange
-from gcu_async.session.session import Session, SessionState, SessionStats
+from gcu_async.session.session import Session
+from gcu_async.session.state import SessionState, SessionStats
 from gcu_async.session.tickets import Ticket, TicketState
 
 __all__ = [

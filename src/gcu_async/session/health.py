@@ -6,6 +6,9 @@ from collections import deque
 from dataclasses import dataclass, fields
 from typing import TypedDict, cast
 
+from gcu_async.protocol.deframer import DeframerStats
+from gcu_async.session.runs import RunStats
+
 
 class LinkHealthDict(TypedDict):
     """:meth:`LinkHealth.as_dict`: the fields by name (JSON-ready)."""
@@ -94,3 +97,19 @@ class HealthTracker:
         while recent and now - recent[0] > 1.0:
             recent.popleft()
         return float(len(recent))
+
+    def snapshot(self, now: float, up: bool, deframer: DeframerStats,
+                 runs: RunStats) -> LinkHealth:  # fmt: skip
+        """The :class:`LinkHealth` at ``now``: these counts, the deframer's and the run
+        ledger's."""
+        last = self.last_reply
+        return LinkHealth(
+            up=up, reply_rate=self.reply_rate(now),
+            last_reply_age=None if last is None else now - last,
+            packets_sent=self.packets_sent, packets_received=self.packets_received,
+            send_errors=self.send_errors, crc_errors=deframer.crc_errors,
+            length_errors=deframer.length_errors, bytes_discarded=deframer.bytes_discarded,
+            other_versions=self.other_versions, unmatched_feedback=runs.unmatched,
+            ambiguous_feedback=runs.ambiguous, lost_count=self.lost_count,
+            restored_count=self.restored_count, restarted_count=self.restarted_count,
+        )  # fmt: skip

@@ -19,47 +19,31 @@ go), :mod:`~gcu_async.session.runs` (what a reply proves, when an opcode may sta
 
 from __future__ import annotations
 
-import enum
 import heapq
-import logging
 import math
 import sys
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, fields, replace
 from typing import TYPE_CHECKING, Any
 
-from gcu_async._checks import check_bool, check_instance, check_int, check_positive, type_error
+from gcu_async._checks import check_instance
 from gcu_async.errors import (
     CommandError,
-    CommandFailed,
     CommandLinkLost,
-    CommandTimeout,
     GcuError,
     Outcome,
 )
 from gcu_async.protocol.aircraft import AircraftState
-from gcu_async.protocol.anomalies import Anomaly
-from gcu_async.protocol.commands import AnomalousCommand, Command, NullCommand, command_code
+from gcu_async.protocol.commands import Command, NullCommand
 from gcu_async.protocol.deframer import Deframer
-from gcu_async.protocol.enums import (
-    CameraFlags,
-    ExecutionStatus,
-    Opcode,
-    opcode_name,
-)
+from gcu_async.protocol.enums import CameraFlags, Opcode, opcode_name
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
-from gcu_async.protocol.host_frames import (
-    CONTROL_ANGLE_RAW,
-    CONTROL_RATE_RAW,
-    ControlValues,
-    HostMainFrame,
-    HostSubFrame,
-)
+from gcu_async.protocol.host_frames import ControlValues, HostMainFrame, HostSubFrame
 from gcu_async.protocol.packets import SUPPORTED_VERSIONS, GcuPacket, HostPacket, decode_gcu_packet
 from gcu_async.session.config import SessionConfig, SessionOptions
-from gcu_async.session.control import KIND, REPORTED, ControlKind, ControlState
+from gcu_async.session.control import KIND, ControlKind, ControlState, check_values
+from gcu_async.session.deviations import DeviationLog
 from gcu_async.session.events import (
     Event,
     LinkDown,
@@ -69,12 +53,13 @@ from gcu_async.session.events import (
     TelemetrySample,
     TicketDone,
 )
-from gcu_async.session.feed import AircraftFeed
+from gcu_async.session.feed import AIRCRAFT_FIELDS, AircraftFeed
 from gcu_async.session.health import HealthTracker, LinkHealth
 from gcu_async.session.pacing import Pacer
 from gcu_async.session.recording import RecordingBelief
-from gcu_async.session.restart import ZOOM_SCALE, RestartWatch, StateChange
+from gcu_async.session.restart import RestartWatch, StateChange
 from gcu_async.session.runs import RunLedger
+from gcu_async.session.state import SessionState, SessionStats
 from gcu_async.session.tickets import Ticket, TicketState
 
 if sys.version_info >= (3, 11):
@@ -82,53 +67,12 @@ if sys.version_info >= (3, 11):
 elif TYPE_CHECKING:
     from typing_extensions import Unpack
 
-log = logging.getLogger("gcu_async.session")
-
 NULL = NullCommand()
 _NULL_OPCODE = int(Opcode.NULL)
 _RECORDING = int(CameraFlags.RECORDING)
-FLAGGED_MAX = 64
-"""Kinds of anomaly logged once each per session (a GCU sending junk cannot flood the log)."""
 MIN_WAKE = 1e-4
 """Seconds; the smallest step :meth:`Session.next_wakeup` asks for while no packet may go
 (a floor against float round-off, never a busy loop)."""
-
-
-class SessionState(enum.Enum):
-    """The session's lifecycle: one state, not a set of flags."""
-
-    CLOSED = "closed"
-    """Not open (never opened, or closed: it may be opened again)."""
-    OPENING = "opening"
-    """Open; the heartbeat runs; no reply yet."""
-    UP = "up"
-    """Replies arrive; commands are accepted."""
-    DOWN = "down"
-    """The link was lost; the heartbeat goes on; commands fail at once until replies return."""
-
-
-@dataclass
-class SessionStats:
-    """Counters of one session (since it was created)."""
-
-    submitted: int = 0
-    succeeded: int = 0
-    skipped: int = 0
-    failed: int = 0
-    not_sent: int = 0
-    unknown: int = 0
-    cancelled: int = 0
-    late_feedback: int = 0
-    """Replies to an earlier run of the same opcode as the command in flight (expected:
-    the GCU answers every repeat of the previous command)."""
-    separator_packets: int = 0
-    """Null packets sent because the next command had to wait for proof of separation."""
-    early_packets: int = 0
-    """Commands sent before their heartbeat slot (the phase moved instead)."""
-    aircraft_stale: int = 0
-    """Episodes in which packets withheld aircraft data because it was older than
-    ``aircraft_timeout`` (one per run of such packets; docs/client.md, "Aircraft data:
-    what the packets claim")."""
 
 
 class Session:
@@ -177,8 +121,7 @@ class Session:
         function of the bytes: a repeated datagram reuses it)."""
         self._silent_at = math.inf
         """When the link counts as lost if no reply comes first (set by every reply)."""
-        self._flagged: set[tuple[str, str]] = set()
-        """The kinds of anomaly (field, detail) already logged (:meth:`_flag`)."""
+        self._deviations = DeviationLog(config.name)
 
     # -- lifecycle -------------------------------------------------------------------------
     @property
@@ -264,30 +207,18 @@ class Session:
         Raises :class:`CommandLinkLost` (``NOT_SENT``) unless the link is up, TypeError /
         ValueError for bad arguments.
         """
-        check_instance("command", command, Command, "a Command")
-        if isinstance(command, AnomalousCommand):  # decoded, never sent: send is strict
-            raise command.error()
-        if isinstance(command, NullCommand):
-            raise ValueError("command: the null command is the session's own separator")
-        opcode = command_code(command)
         config = self.config
-        timeout = config.command_timeout if timeout is None else check_positive("timeout", timeout)
-        queue_timeout = (config.queue_timeout if queue_timeout is None
-                         else check_positive("queue_timeout", queue_timeout))  # fmt: skip
+        ticket = Ticket.new(command, now, config.command_timeout if timeout is None else timeout,
+                            config.queue_timeout if queue_timeout is None else queue_timeout,
+                            recording_target)  # fmt: skip
+        opcode = ticket.opcode
         if control is not None:
-            self._check_values(control, KIND.get(opcode), opcode)
-        if recording_target is not None:
-            check_bool("recording_target", recording_target)
-            if opcode != Opcode.RECORD:
-                raise ValueError(f"recording_target: only for RECORD, not {opcode_name(opcode)}")
+            check_values(control, KIND.get(opcode), opcode)
         if self._state is not SessionState.UP:
             state = "closed" if self._state is SessionState.CLOSED else "down"
-            raise CommandLinkLost(
-                f"{opcode_name(opcode)}: {self.config.name}: link is {state}; not sent",
-                outcome=Outcome.NOT_SENT, opcode=opcode, command=command,
-            )  # fmt: skip
-        ticket = Ticket(command, opcode, now, timeout, now + queue_timeout,
-                        recording_target=recording_target)  # fmt: skip
+            raise CommandLinkLost(f"{opcode_name(opcode)}: {config.name}: link is {state}; not "
+                                  "sent", outcome=Outcome.NOT_SENT, opcode=opcode,
+                                  command=command)  # fmt: skip
         self.stats.submitted += 1
         self._queue.append(ticket)
         self._seq += 1
@@ -311,22 +242,14 @@ class Session:
         it gives counts as measured at ``now`` (docs/client.md, "Aircraft data: what the
         packets claim")."""
         check_instance("state", state, AircraftState)
-        self._feed.set(state, now, _AIRCRAFT_FIELDS)
+        self._feed.set(state, now, AIRCRAFT_FIELDS)
 
     def update_aircraft(self, changes: Mapping[str, Any], now: float) -> AircraftState:
         """Change the named fields of the aircraft state (the others keep their value and
         the time they were given); the parts named count as measured at ``now``. Raises
         ``TypeError``/``ValueError`` (nothing changes) for an unknown field or a bad value;
         returns the new state."""
-        if not isinstance(changes, Mapping):
-            raise type_error("changes", "a mapping of AircraftState fields", changes)
-        unknown = sorted(str(k) for k in changes if k not in _AIRCRAFT_FIELDS)
-        if unknown:
-            raise TypeError(f"changes: {', '.join(unknown)}: not AircraftState fields "
-                            f"({', '.join(_AIRCRAFT_FIELDS)})")  # fmt: skip
-        state = replace(self._feed.state, **changes)  # validates
-        self._feed.set(state, now, changes)
-        return state
+        return self._feed.update(changes, now)
 
     @property
     def aircraft(self) -> AircraftState:
@@ -347,7 +270,7 @@ class Session:
         no mode takes values."""
         if values is not None:
             opcode, _ = self._control.target()
-            self._check_values(values, KIND.get(opcode) if opcode is not None else None, opcode)
+            check_values(values, KIND.get(opcode) if opcode is not None else None, opcode)
         return self._control.set_values(values, kind)
 
     # -- outputs ---------------------------------------------------------------------------
@@ -375,11 +298,7 @@ class Session:
         ticket = self._in_flight
         if start is not None:
             self._queue.popleft()
-            start.state = TicketState.SENT
-            start.first_sent = now
-            if start.opcode == Opcode.RECORD:
-                belief = self._recording.value(now)
-                start.expect_recording = None if belief is None else not belief
+            start.start(now, self._recording.value(now))
             self._in_flight = ticket = start
         command, opcode = (NULL, _NULL_OPCODE) if ticket is None else (ticket.command,
                                                                         ticket.opcode)
@@ -517,64 +436,27 @@ class Session:
         return self._recording.value(now)
 
     def link_health(self, now: float) -> LinkHealth:
-        h, d, r = self._health, self._deframer.stats, self._ledger.stats
-        return LinkHealth(
-            up=self._state is SessionState.UP,
-            reply_rate=h.reply_rate(now),
-            last_reply_age=None if h.last_reply is None else now - h.last_reply,
-            packets_sent=h.packets_sent,
-            packets_received=h.packets_received,
-            send_errors=h.send_errors,
-            crc_errors=d.crc_errors,
-            length_errors=d.length_errors,
-            bytes_discarded=d.bytes_discarded,
-            other_versions=h.other_versions,
-            unmatched_feedback=r.unmatched,
-            ambiguous_feedback=r.ambiguous,
-            lost_count=h.lost_count,
-            restored_count=h.restored_count,
-            restarted_count=h.restarted_count,
-        )
+        return self._health.snapshot(now, self._state is SessionState.UP,
+                                     self._deframer.stats, self._ledger.stats)  # fmt: skip
 
     def send_failed(self) -> None:
         """The driver could not hand the last packet to the transport (counted)."""
         self._health.send_errors += 1
 
     # -- internals: replies ----------------------------------------------------------------
-    def _other_version(self, version: int) -> None:
-        """A reply of a version V2.0.6 does not define: decoded with its layout, counted;
-        the first one of the session is logged as a warning."""
-        self._health.other_versions += 1
-        if self._health.other_versions == 1:
-            log.warning("%s: reply of protocol version %d (V2.0.6 defines 1 and 2): decoded "
-                        "with the V2.0.6 layout; further ones are only counted "
-                        "(link_health().other_versions)", self.config.name, version)  # fmt: skip
-
-    def _flag(self, anomalies: tuple[Anomaly, ...]) -> None:
-        """Log each kind of value outside V2.0.6 (field and reading) the first time a reply
-        carries it: a firmware deviation is said once, not per packet; every reply keeps its
-        own in its ``anomalies``."""
-        for anomaly in anomalies:
-            key = (anomaly.field, anomaly.detail)
-            if key in self._flagged or len(self._flagged) >= FLAGGED_MAX:
-                continue
-            self._flagged.add(key)
-            log.warning("%s: the GCU sends a value outside V2.0.6, %s; said once, each reply "
-                        "keeps it in its anomalies (docs/protocol-notes.md, \"What real pods "
-                        "do\")", self.config.name, anomaly)  # fmt: skip
-
     def _on_reply(self, raw: bytes, packet: GcuPacket, now: float,
                   earliest: float | None) -> None:  # fmt: skip
         """One reply (``raw``: its bytes) that arrived in ``[earliest, now]``."""
         if self.trace is not None:
             self.trace(raw)
-        if packet.version not in SUPPORTED_VERSIONS:
-            self._other_version(packet.version)
+        if packet.version not in SUPPORTED_VERSIONS:  # decoded with the V2.0.6 layout
+            self._health.other_versions += 1
+            self._deviations.other_version(packet.version, self._health.other_versions)
         main, feedback = packet.main, packet.feedback
         sub = packet.sub if type(packet.sub) is GcuSubFrame else None
         self._health.on_reply(now)
         if main is not self._status and (main.anomalies or feedback.anomalies):
-            self._flag(main.anomalies + feedback.anomalies)  # a new frame: an idle GCU repeats
+            self._deviations.flag(main.anomalies + feedback.anomalies)  # an idle GCU repeats
         # the first instant the silence since this reply exceeds silence_timeout
         self._silent_at = math.nextafter(now + self.config.silence_timeout, math.inf)
         self._status = main
@@ -603,19 +485,9 @@ class Session:
             if run is not ticket.run:
                 self.stats.late_feedback += 1
             else:
-                result = feedback.result
-                if result is ExecutionStatus.IN_PROGRESS:
-                    ticket.progress.append(feedback)
-                elif result is ExecutionStatus.SUCCESS:
-                    ticket.feedback = feedback
-                    self._finish(ticket, TicketState.SUCCEEDED, now)
-                else:
-                    ticket.feedback = feedback
-                    error = CommandFailed(
-                        feedback.opcode, feedback.status, feedback.failed_cameras,
-                        command=ticket.command, name=feedback.command,
-                    )  # fmt: skip
-                    self._finish(ticket, TicketState.FAILED, now, error)
+                ended = ticket.answered(feedback)
+                if ended is not None:
+                    self._finish(ticket, ended[0], now, ended[1])
         elif run is not None and ticket is None and run.opcode != Opcode.NULL:
             self.stats.late_feedback += 1
         if self.telemetry:
@@ -631,25 +503,14 @@ class Session:
             return
         t = self._in_flight
         if t is not None and t.first_sent is not None and now >= t.first_sent + t.timeout:
-            progress = " (last status: in progress)" if t.progress else ""
-            message = (
-                f"{opcode_name(t.opcode)}: no feedback within {t.timeout:g} s of its first "
-                f"packet{progress}; outcome unknown (it may have executed)"
-            )
-            self._finish(t, TicketState.UNKNOWN, now, CommandTimeout(
-                message, outcome=Outcome.UNKNOWN, opcode=t.opcode, command=t.command))  # fmt: skip
+            self._finish(t, TicketState.UNKNOWN, now, t.timeout_error(now))
         deadlines = self._deadlines
         while deadlines and (deadlines[0][0] <= now
                              or deadlines[0][2].state is not TicketState.QUEUED):  # fmt: skip
             _, _, ticket = heapq.heappop(deadlines)
             if ticket.state is TicketState.QUEUED:
-                queued = now - ticket.submitted_at
-                message = (f"{opcode_name(ticket.opcode)}: not sent: still queued after "
-                           f"{queued:.3g} s (queue_timeout)")  # fmt: skip
                 self._queue.remove(ticket)
-                self._finish(ticket, TicketState.NOT_SENT, now, CommandTimeout(
-                    message, outcome=Outcome.NOT_SENT, opcode=ticket.opcode,
-                    command=ticket.command))  # fmt: skip
+                self._finish(ticket, TicketState.NOT_SENT, now, ticket.timeout_error(now))
         self._advance_queue(now)
 
     def _advance_queue(self, now: float) -> None:
@@ -663,21 +524,9 @@ class Session:
             self._finish(head, TicketState.SKIPPED, now)
 
     def _restarted(self, changes: tuple[StateChange, ...]) -> None:
-        """The GCU restarted: the event, with what a driver needs to restore the host's
-        mode (the mode command it confirmed last, if the GCU was in that mode before the
-        loss and the mode changed) and camera 1's zoom (if it changed)."""
+        """The GCU restarted: the event, with what a driver needs to restore."""
         self._health.restarted_count += 1
-        before, control = self._restart.compared, self._control
-        assert before is not None
-        aspects = {change.aspect for change in changes}
-        mode = None
-        if ("mode" in aspects and control.command is not None and control.confirmed in KIND
-                and REPORTED[control.confirmed] == before.mode_raw):  # fmt: skip
-            mode = control.command
-        zoom = None
-        if "zoom" in aspects and before.zoom_raw is not None:
-            zoom = before.zoom_raw / ZOOM_SCALE
-        self._events.append(Restarted(changes, mode, control.values if mode else None, zoom))
+        self._events.append(Restarted(changes, *self._restart.to_restore(changes, self._control)))
 
     def _link_down(self, now: float, reason: str, *, reset: bool) -> None:
         up = self._state is SessionState.UP
@@ -699,16 +548,12 @@ class Session:
 
     def _end(self, ticket: Ticket, now: float, reason: str, cls: type[CommandError]) -> None:
         """End a pending ticket from outside: ``UNKNOWN`` if it was sent, else ``NOT_SENT``."""
-        sent = ticket.state is TicketState.SENT
-        state = TicketState.UNKNOWN if sent else TicketState.NOT_SENT
-        outcome = Outcome.UNKNOWN if sent else Outcome.NOT_SENT
-        what = ("outcome unknown (it may have executed)" if sent
-                else "not sent (it did not execute)")  # fmt: skip
-        message = f"{opcode_name(ticket.opcode)}: {reason}; {what}"
-        error = cls(message, outcome=outcome, opcode=ticket.opcode, command=ticket.command)
-        if not sent:
+        error = ticket.end_error(reason, cls)
+        if ticket.state is TicketState.SENT:
+            self._finish(ticket, TicketState.UNKNOWN, now, error)
+        else:
             self._queue.remove(ticket)
-        self._finish(ticket, state, now, error)
+            self._finish(ticket, TicketState.NOT_SENT, now, error)
 
     def _finish(self, ticket: Ticket, state: TicketState, now: float,
                 error: GcuError | None = None) -> None:  # fmt: skip
@@ -724,17 +569,7 @@ class Session:
                 self._recording.toggled(ticket.expect_recording, now)
             elif state is TicketState.UNKNOWN:
                 self._recording.uncertain(now)
-        s = self.stats
-        if state is TicketState.SUCCEEDED:
-            s.succeeded += 1
-        elif state is TicketState.SKIPPED:
-            s.skipped += 1
-        elif state is TicketState.FAILED:
-            s.failed += 1
-        elif state is TicketState.NOT_SENT:
-            s.not_sent += 1
-        else:
-            s.unknown += 1
+        self.stats.ended(state)
         self._events.append(TicketDone(ticket))
 
     # -- internals: packets ----------------------------------------------------------------
@@ -757,19 +592,4 @@ class Session:
         self._last_encoded = (main, sub, command, data)
         return data
 
-    @staticmethod
-    def _check_values(values: ControlValues, kind: ControlKind | None,
-                      opcode: int | None) -> None:  # fmt: skip
-        """Control values must fit the wire and, when the mode is known, its kind: angles
-        ±18000 (0.01°), rates ±1500 (0.1 °/s ÷ zoom)."""
-        ControlValues.check(values)
-        limit = CONTROL_RATE_RAW if kind is ControlKind.RATES else CONTROL_ANGLE_RAW
-        for field, raw in zip(("roll_raw", "pitch_raw", "yaw_raw"), values, strict=True):
-            check_int(f"control.{field}", raw, -limit, limit)
-        if kind is ControlKind.NONE and opcode is not None:
-            raise ValueError(f"control: {opcode_name(opcode)} takes no control values")
-
-
-_AIRCRAFT_FIELDS = tuple(f.name for f in fields(AircraftState))
-
-__all__ = ["Session", "SessionState", "SessionStats"]
+__all__ = ["Session"]

@@ -25,7 +25,7 @@ from __future__ import annotations
 from typing import Any
 
 from gcu_async.capture.synth import source_address
-from gcu_async.capture.writer import PacketCapture
+from gcu_async.capture.writer import PacketCapture, as_capture
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 from gcu_async.transport.serial import SerialTransport
 from gcu_async.transport.tcp import TcpTransport
@@ -182,8 +182,6 @@ def with_capture(transport: Transport, capture: object) -> Transport:
     """``transport`` itself when ``capture`` is ``None``, else a :class:`CapturingTransport`
     writing to ``capture`` (a :class:`~gcu_async.capture.PacketCapture` or a file path;
     anything else is a ``TypeError`` naming ``capture``)."""
-    from gcu_async.capture.writer import as_capture
-
     sink = as_capture(capture)
     return transport if sink is None else CapturingTransport(transport, sink)
 
