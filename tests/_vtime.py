@@ -300,7 +300,7 @@ class Rig:
     def check(self, identity: Callable[[Command], object] | None = None) -> None:
         """Assert the contract over everything that happened so far."""
         assert not self.violations, self.violations[:5]
-        limit = math.floor(self.session.rate_hz) + 1
+        limit = math.floor(self.session.config.rate_hz) + 1
         assert self.max_in_window() <= limit, (self.max_in_window(), limit)
         key = identity or (lambda c: c)
         executed: dict[object, list[ExecutionRecord]] = {}
@@ -324,7 +324,7 @@ class Rig:
         opcode, executions lie between the commands reported executed (succeeded or failed)
         and those plus the ones whose outcome is unknown."""
         assert not self.violations, self.violations[:5]
-        assert self.max_in_window() <= math.floor(self.session.rate_hz) + 1
+        assert self.max_in_window() <= math.floor(self.session.config.rate_hz) + 1
         executed = Counter(int(e.command.OPCODE) for e in self.executions)
         by_state: dict[int, Counter[TicketState]] = {}
         for t in self.tickets:

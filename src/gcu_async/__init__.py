@@ -9,7 +9,7 @@ Everything else is imported from its subpackage: the protocol core from
 :mod:`gcu_async.sim`, and so on.
 """
 
-from gcu_async.client import GcuClient, LinkHealth, TelemetrySample
+from gcu_async.client import ClientState, GcuClient, LinkHealth, TelemetrySample
 from gcu_async.client.connect import connect
 from gcu_async.errors import (
     ClientStateError,
@@ -43,6 +43,7 @@ __all__ = [  # the client, its reports, the exceptions, the values it takes and 
     "AircraftState",
     "Attitude",
     "CameraMask",
+    "ClientState",
     "ClientStateError",
     "CommandError",
     "CommandFailed",

@@ -237,7 +237,7 @@ def test_the_contract_states_the_bounds_the_code_uses() -> None:
     text = " ".join((Path(__file__).parents[2] / "docs" / "mavlink-bridge.md").read_text(
         encoding="utf-8").split())
     from gcu_async.bridge import links, stream_link, udp_link
-    from gcu_async.session import Session
+    from gcu_async.session import SessionConfig
 
     a = admission
     for phrase in (
@@ -249,7 +249,7 @@ def test_the_contract_states_the_bounds_the_code_uses() -> None:
         f"{stream_link.MAX_TCP_CLIENTS} on `tcpin`",
         f"HEARTBEAT within the last {links.STATION_SECONDS:g} s and is one of the link's "
         "destinations",
-        f"the last reply is at most {Session().control_silence:g} s old",
+        f"the last reply is at most {SessionConfig().control_silence:g} s old",
         f"{a.MAX_REMEMBERED:,} (sender, component, command) keys × {a.PER_KEY} per share",
         f"taken at most {1 / a.CONTROL_INTERVAL:g} times a second",
         f"for {a.RECENT_SECONDS:g} s after its answer",

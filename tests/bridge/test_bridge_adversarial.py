@@ -275,7 +275,7 @@ async def run_step(rig: Rig, schedule: Schedule, figures: dict[str, list[int]],
     for r in runs:  # nothing later than the bound (counted from before the first send)
         assert r.time - step.started <= bound, r
     assert all(len(waiting) <= admission.MAX_WAITING_PER_SHARE
-               for waiting in rig.bridge._queue.shares.values())  # fmt: skip
+               for waiting in rig.bridge.executor.queue.shares.values())  # fmt: skip
     for share in rig.bridge.shares():
         assert len(share.memory.keys) <= admission.MAX_REMEMBERED + 1
 
@@ -334,7 +334,7 @@ async def test_floods_from_thousands_of_senders(kind: str, rate: int, pairs: int
         growth = rss_mib() - rss
         assert growth < RSS_GROWTH_MIB
         assert all(len(waiting) <= admission.MAX_WAITING_PER_SHARE
-                   for waiting in rig.bridge._queue.shares.values())  # fmt: skip
+                   for waiting in rig.bridge.executor.queue.shares.values())  # fmt: skip
         print(f"\n{kind} flood: {out.strip()} sent, {rig.bridge.stats['messages']} received, "
               f"rate/s {figures['rate']}, mode changes {len(modes)}, RSS +{growth:.1f} MiB, "
               f"stats {rig.bridge.stats}")

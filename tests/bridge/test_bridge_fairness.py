@@ -197,7 +197,7 @@ async def test_heartbeating_senders_that_come_later_cannot_push_a_station_out() 
     async with bridge_rig(extra_links=("udpin:127.0.0.1:0",)) as rig:
         port = udpin_port(rig)
         link = rig.bridge.links[-1]
-        queue = rig.bridge._queue
+        queue = rig.bridge.executor.queue
         async with station_on(port) as station, flooding(rig, port, "--sockets", "40",
                                                          "--heartbeats", rate=2000,
                                                          pairs=20_000):  # fmt: skip

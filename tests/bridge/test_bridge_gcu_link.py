@@ -13,6 +13,7 @@ import pytest
 from gcu_async.bridge import MavlinkBridge, gcu_link
 from gcu_async.client.client import ClientState
 from gcu_async.protocol.enums import Mode
+from gcu_async.session import SessionConfig
 from gcu_async.transport.base import LinkEvent, LinkEventKind
 
 
@@ -24,7 +25,7 @@ class Health:
 
 @dataclass
 class Session:
-    control_silence: float = 0.2
+    config: SessionConfig = field(default_factory=SessionConfig)
 
 
 @dataclass
@@ -78,8 +79,8 @@ async def test_a_transport_that_gave_up_is_closed_and_opened_again_once() -> Non
 
 async def test_after_a_restart_the_bridge_forgets_the_mode_it_set() -> None:
     bridge = bridge_for(FakeClient())
-    bridge._bridge_mode = Mode.EULER_CONTROL
-    bridge._tracking_mode, bridge._tracking_box = 2, (0.4, 0.4, 0.6, 0.6)
+    bridge.executor.bridge_mode = Mode.EULER_CONTROL
+    bridge.executor.tracking_mode, bridge.executor.tracking_box = 2, (0.4, 0.4, 0.6, 0.6)
     bridge._on_gcu_event(LinkEvent(LinkEventKind.RESTARTED))
-    assert bridge._bridge_mode is None
-    assert (bridge._tracking_mode, bridge._tracking_box) == (0, None)
+    assert bridge.executor.bridge_mode is None
+    assert (bridge.executor.tracking_mode, bridge.executor.tracking_box) == (0, None)

@@ -437,6 +437,7 @@ async def test_a_hung_name_lookup_costs_one_thread_and_never_delays_close(
     import threading
 
     from gcu_async.bridge import links
+    from gcu_async.bridge.bridge import make_link
 
     release = threading.Event()
     calls: list[str] = []
@@ -449,7 +450,7 @@ async def test_a_hung_name_lookup_costs_one_thread_and_never_delays_close(
     monkeypatch.setattr(links.socket, "getaddrinfo", hung_lookup)
     monkeypatch.setattr(links, "OPEN_TIMEOUT", 0.2)
     monkeypatch.setattr(links, "RETRY_SECONDS", 0.05)
-    link = links.make_link("tcp:gimbal-gcs.example:5760")
+    link = make_link("tcp:gimbal-gcs.example:5760")
     before = thread_count()
     try:
         await link.open(lambda link, peer, msg: None)

@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from gcu_async.bridge.bridge import make_link
 from gcu_async.bridge.endpoint import BAUD_RANGE, DEFAULT_BAUD, Endpoint, parse_endpoint
-from gcu_async.bridge.links import make_link
 from gcu_async.bridge.stream_link import SerialLink, TcpInLink, TcpLink
 from gcu_async.bridge.udp_link import UdpInLink, UdpOutLink
 

@@ -624,13 +624,13 @@ def _client_options(owner: str, build: Callable[[dict[str, Any]], GcuClient],
     opt("rate_hz", "real", low=2.0, high=200.0, valid=(2.0, 30.0, 50.0, 200.0),
         read=lambda rig, c: c.rate_hz)
     opt("silence_timeout", "real", low=0.02, low_open=True, valid=(0.0200001, 1.0, 1e300),
-        read=lambda rig, c: c.session.silence_timeout)
+        read=lambda rig, c: c.session.config.silence_timeout)
     opt("aircraft_timeout", "real", low=0.0, low_open=True, high=10.0,
         valid=(5e-324, 0.02, 1.0, 10.0), read=lambda rig, c: c.aircraft_timeout)
     for name in ("command_timeout", "queue_timeout", "connect_timeout"):
         opt(name, "real", valid=(5e-324, 1.0, 1e300),
             read=lambda rig, c, n=name: getattr(c, n) if n == "connect_timeout"
-            else getattr(c.session, n), **positive)  # fmt: skip
+            else getattr(c.session.config, n), **positive)  # fmt: skip
     opt("open_timeout", "real", optional=True, valid=(None, 5e-324, 1.0, 1e300, INF),
         read=lambda rig, c: c.open_timeout, **positive)  # inf: until closed
     opt("wait", "bool", valid=(True, False), read=lambda rig, c: c.wait)

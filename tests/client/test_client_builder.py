@@ -525,11 +525,11 @@ def test_the_session_is_the_one_place_rate_and_version_are_checked(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """Widen the session's rate range: the client follows (it keeps no copy of its own)."""
-    import gcu_async.session.session as session_module
+    import gcu_async.session.config as config_module
 
     with pytest.raises(ValueError, match=r"^rate_hz: 250"):
         GcuClient(MemoryTransport(), rate_hz=250.0)
-    monkeypatch.setattr(session_module, "RATE_MAX_HZ", 300.0)
+    monkeypatch.setattr(config_module, "RATE_MAX_HZ", 300.0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # outside the advised 30-50 Hz
         assert GcuClient(MemoryTransport(), rate_hz=250.0).rate_hz == 250.0

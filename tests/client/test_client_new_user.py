@@ -12,6 +12,7 @@ from typing import Any
 import pytest
 
 from gcu_async import CommandFailed, FieldRangeError, GcuClient, WaitTimeout, connect
+from gcu_async.client.causes import explain
 from gcu_async.client.waiting import _attitude_targets
 from gcu_async.errors import ClientStateError, CommandLinkLost, LikelyCause, Outcome
 from gcu_async.protocol.catalogue import BY_METHOD, NEEDS_INS
@@ -68,9 +69,9 @@ async def test_appendix_8_names_the_pod_model(gcu_client: GcuClient) -> None:
 
 
 def test_a_zoom_beyond_the_limit_names_it() -> None:
-    gcu = GcuClient(MemoryTransport(), max_zoom=30.0)
     error = CommandFailed(0x25, 0x01, 0x01, name="ZOOM_TO")
-    gcu._driver._explain(error, ZoomTo(ratio=31.0), ins_invalid=False)
+    explain(error, ZoomTo(ratio=31.0), None, ins_invalid=False, max_zoom=30.0,
+            aircraft_timeout=1.0)  # fmt: skip
     assert error.likely_cause is LikelyCause.ZOOM_LIMIT
     assert "31x is beyond camera 1's maximum zoom 30x" in str(error)
 

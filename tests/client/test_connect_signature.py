@@ -4,12 +4,14 @@ hands each one to the client; the rest go to the transport."""
 from __future__ import annotations
 
 import inspect
-from typing import Any
+from typing import Any, get_type_hints
 
 import pytest
 
 from gcu_async import GcuClient, connect
-from gcu_async.client.connect import CLIENT_OPTIONS
+from gcu_async.client.connect import CLIENT_OPTIONS, ClientOptions, ConnectOptions
+from gcu_async.transport.options import TransportOptions
+from gcu_async.transport.registry import KINDS
 
 KW = inspect.Parameter.KEYWORD_ONLY
 
@@ -38,7 +40,7 @@ def test_every_client_keyword_goes_to_the_client() -> None:
     }  # fmt: skip
     gcu = connect("udp://127.0.0.1:4000", local_port=0, **values)
     for name, value in values.items():
-        holder = gcu if hasattr(gcu, name) else gcu.session  # some live in the session
+        holder = gcu if hasattr(gcu, name) else gcu.session.config  # some: the session's
         assert getattr(holder, name) == value, name
     assert set(values) == CLIENT_OPTIONS - {"clock", "capture"}  # every option but two here
     ticks = iter(range(10**6))
@@ -63,8 +65,44 @@ def test_a_bad_client_keyword_is_the_clients_error(option: str, value: Any, mess
 
 
 def test_other_keywords_go_to_the_transport() -> None:
-    with pytest.raises(ValueError, match="'rate' is not a udp option"):
-        connect("udp://127.0.0.1:4000", rate=40.0)
+    gcu = connect("udp://127.0.0.1:4000", local_port=0, discovery=True, max_attempts=3)
+    assert gcu.transport.discovery and gcu.transport.backoff.max_attempts == 3
+    with pytest.raises(ValueError, match="'baudrate' is not an option of the client or of a udp"):
+        connect("udp://127.0.0.1:4000", baudrate=115200)  # type: ignore[call-arg]  # serial's
+
+
+def test_an_unknown_option_names_both_kinds_and_the_closest() -> None:
+    """A misspelt option: the error lists the client's (and its session's) options and the
+    URL's transport's together, and suggests the closest name (it used to list only the
+    transport's, hiding ``command_timeout``, and suggest nothing)."""
+    with pytest.raises(ValueError, match="comand_timeout") as caught:
+        connect("udp://127.0.0.1:4000", comand_timeout=3.0)  # type: ignore[call-arg]
+    message = str(caught.value)
+    assert message.startswith("option: 'comand_timeout' is not an option of the client or of "
+                              "a udp transport; did you mean 'command_timeout'? (client and "
+                              "session: aircraft_timeout, capture, check_support, clock, "
+                              "command_timeout, ")  # fmt: skip
+    client, transport = message.split("(client and session: ")[1].split("; udp transport: ")
+    assert set(client.split(", ")) == CLIENT_OPTIONS
+    assert set(transport.rstrip(")").split(", ")) == set(KINDS["udp"].options)
+    with pytest.raises(ValueError, match=r"did you mean 'baudrate'\?"):
+        connect("serial:///dev/ttyUSB0", baudrat=115200)  # type: ignore[call-arg]
+    with pytest.raises(ValueError, match=r"; \(client and session: "):  # nothing close
+        connect("tcp://127.0.0.1", xyzzy=1)  # type: ignore[call-arg]
+    with pytest.raises(ValueError, match=r"^udp://127.0.0.1:99999: port: "):  # the URL first
+        connect("udp://127.0.0.1:99999", comand_timeout=3.0)  # type: ignore[call-arg]
+
+
+def test_the_typed_options_are_the_client_keywords_and_the_transport_options() -> None:
+    """``ConnectOptions`` (what type checkers see) holds ``GcuClient``'s keyword arguments
+    with their annotations, and every transport's options."""
+    client = get_type_hints(ClientOptions)
+    assert list(client) == [p.name for p in _keywords(GcuClient)]
+    hints = get_type_hints(GcuClient.__init__)
+    assert client == {name: hints[name] for name in client}
+    transport = set(get_type_hints(TransportOptions))
+    assert transport == {n for k in KINDS.values() for n in k.options} - CLIENT_OPTIONS
+    assert set(get_type_hints(ConnectOptions)) == set(client) | transport
 
 
 def test_connect_passes_reorder_guard_and_its_default_follows_the_transport() -> None:

@@ -21,7 +21,8 @@ PAGE = ROOT / "docs" / "reference" / "top-level.md"
 
 PINNED = [
     # the client and what it reports
-    "GcuClient", "connect", "TelemetrySample", "LinkHealth", "LinkEvent", "LinkEventKind",
+    "GcuClient", "connect", "ClientState", "TelemetrySample", "LinkHealth", "LinkEvent",
+    "LinkEventKind",
     # the exceptions
     "GcuError", "CommandError", "CommandFailed", "CommandLinkLost", "CommandTimeout",
     "FieldRangeError", "LinkLost", "LocalProtocolError", "Outcome", "LikelyCause",

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 import _z1pro
 from _protocol_strategies import frames
 from _sim_helpers import Rig
-from gcu_async.conformance import FEEDBACK_GRACE_S, MODE_SETTLE_S, GcuConformance
+from gcu_async.conformance import EXAMPLES, FEEDBACK_GRACE_S, MODE_SETTLE_S, GcuConformance
 from gcu_async.protocol import (
     AngleControl,
     Feedback,
@@ -27,7 +27,6 @@ from gcu_async.protocol import (
     PointingLock,
     TakePhoto,
 )
-from gcu_async.protocol.conformance import EXAMPLES
 from gcu_async.protocol.host_frames import ControlValues
 
 HZ = 50.0

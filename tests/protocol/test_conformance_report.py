@@ -1,4 +1,4 @@
-"""The host conformance report (gcu_async.protocol.conformance): each check on hosts built
+"""The host conformance report (gcu_async.conformance.host): each check on hosts built
 to break exactly one rule, a conforming host that breaks none, and this library's own client
 over a real TCP socket against the simulator: no deviation."""
 
@@ -15,6 +15,7 @@ from hypothesis import strategies as st
 from _protocol_strategies import seal
 from _scale import scaled
 from gcu_async import connect
+from gcu_async.conformance import GAP_S, HostConformance, yaw_reading
 from gcu_async.protocol import (
     AngleControl,
     CameraMask,
@@ -27,7 +28,6 @@ from gcu_async.protocol import (
     TakePhoto,
     ZoomIn,
 )
-from gcu_async.protocol.conformance import GAP_S, HostConformance, yaw_reading
 from gcu_async.protocol.packets import HOST_HEADER
 from gcu_async.sim import GcuSimulator
 

@@ -165,9 +165,9 @@ def test_aircraft_timeout_is_checked(value: Any, error: type[Exception]) -> None
 
 
 def test_aircraft_timeout_range_ends() -> None:
-    assert Session(aircraft_timeout=10).aircraft_timeout == 10.0
-    assert Session(aircraft_timeout=1e-9).aircraft_timeout == 1e-9
-    assert Session().aircraft_timeout == 1.0  # the default: at most 1 s
+    assert Session(aircraft_timeout=10).config.aircraft_timeout == 10.0
+    assert Session(aircraft_timeout=1e-9).config.aircraft_timeout == 1e-9
+    assert Session().config.aircraft_timeout == 1.0  # the default: at most 1 s
 
 
 # -- 3. the position and the sub frame -----------------------------------------------------

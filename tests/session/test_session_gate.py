@@ -47,7 +47,7 @@ def check_wakeup(session: Session, now: float, probes: list[float], shared: list
         return
     floored = wake == now + MIN_WAKE  # the due time lies within MIN_WAKE: it may be earlier
     gate = session._gate(now)[0]
-    timers = session._timers_due_at()
+    timers = session._timers_due_at(now)
     times = [now] if floored else [now + (wake - now) * f for f in probes]
     if not floored:
         times.append(math.nextafter(wake, -math.inf))  # the last instant before it
@@ -62,14 +62,17 @@ def check_wakeup(session: Session, now: float, probes: list[float], shared: list
     late = c._pacer.late
     data = c.poll(wake)
     events = c.events()
+    head = session._queue[0] if session._queue else None
+    settles = head is not None and head.recording_target is not None and (
+        now < session._recording.settles_at() <= wake)  # fmt: skip
     if late:  # the driver's next turn: it settles the late packet (and may send)
         assert not c._pacer.late
-    elif timers <= wake:  # a timer fell due: its event
+    elif timers <= wake and not settles:  # a timer fell due: its event
         assert any(isinstance(e, (TicketDone, LinkDown)) for e in events), (wake, events)
     elif gate <= wake:  # the gate opened: the packet goes
         assert data is not None, f"next_wakeup said a packet at {wake}; poll sent none"
     else:  # the recording belief settled: the head command is re-read
-        assert session._queue and session._queue[0].recording_target is not None
+        assert settles, (wake, timers, gate)
 
 
 def errors(rig: Rig) -> list[Any]:

@@ -26,8 +26,8 @@ from _sitl_ardupilot import (
     save_conversation,
     wrap180,
 )
+from gcu_async.conformance import HostConformance
 from gcu_async.protocol import AnomalousCommand, Opcode, command_code
-from gcu_async.protocol.conformance import HostConformance
 
 ENV = "GCU_ARDUPILOT_SITL"
 ARDUPILOT_DEVIATIONS = (

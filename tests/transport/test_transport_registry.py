@@ -1,6 +1,6 @@
 """The transport registry drives every scheme-dependent place (the client's URLs, the
-simulator's listen URLs and ``serve``, the pytest plugin), and the arrival-bound capability
-is an optional protocol (transport/arrival.py), not a member of every transport."""
+simulator's listen URLs and ``serve``, the pytest plugin), and the arrival hook
+(``Transport.caught_up``) is optional: a transport that cannot tell keeps the default."""
 
 from __future__ import annotations
 
@@ -8,15 +8,18 @@ import asyncio
 import importlib
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from gcu_async import pytest_plugin
+from gcu_async.client.driver import Driver, loop_keeps
+from gcu_async.client.telemetry import Callbacks, Telemetry
+from gcu_async.session import Session
 from gcu_async.sim import GcuSimulator, ListenSpec, parse_listen_url
 from gcu_async.sim.memory import MemoryServer
 from gcu_async.sim.server import ServerParts, SimServer
 from gcu_async.transport import MemoryTransport, Transport, UdpTransport, open_transport
-from gcu_async.transport.arrival import ArrivalBound, ReadsOnDemand, arrival_bound
 from gcu_async.transport.options import as_int
 from gcu_async.transport.registry import KINDS, TransportKind, UrlParts, kind_of
 from gcu_async.transport.tap import CapturingTransport
@@ -114,33 +117,37 @@ def test_the_plugin_offers_every_record_with_a_loopback_endpoint() -> None:
     assert offered == {"udp", "tcp", "serial"}
 
 
-# --- the arrival-bound capability: optional, asked for -----------------------------------
-def test_only_transports_that_read_on_demand_have_the_capability(tmp_path: Path) -> None:
+# --- the arrival hook: optional, forwarded by the capture wrapper ---------------------------
+def test_only_transports_that_read_on_demand_override_the_hook(tmp_path: Path) -> None:
     from gcu_async.capture.writer import PacketCapture
 
     a, _ = MemoryTransport.pair()
-    assert not isinstance(a, ReadsOnDemand)
-    assert not any(hasattr(a, name) for name in ("drains", "empty_at_poll", "read_pending"))
+    assert type(a).caught_up is Transport.caught_up and not a.caught_up()
+    assert UdpTransport.caught_up is not Transport.caught_up
     udp = UdpTransport("127.0.0.1", 9, local_port=0)
-    assert isinstance(udp, ReadsOnDemand)
+    assert not udp.caught_up()  # not open: nothing it can tell
     capture = PacketCapture(tmp_path / "c.pcapng")
-    assert isinstance(CapturingTransport(udp, capture), ReadsOnDemand)
-    assert not isinstance(CapturingTransport(a, capture), ReadsOnDemand)
+    assert not CapturingTransport(a, capture).caught_up()
+    link = _Link(empty=True)
+    wrapped = CapturingTransport(link, capture)
+    assert wrapped.caught_up() and link.reads == 1  # the wrapped transport's answer
+    link.was_empty = False
+    assert not wrapped.caught_up(5.0) and link.dues == [5.0]
 
 
 class _Link(Transport):
-    """An unordered transport with scripted answers to the capability's questions."""
+    """An unordered transport with scripted answers to the arrival hook."""
 
     ordered = False
 
-    def __init__(self, drains: bool, empty: bool) -> None:
+    def __init__(self, empty: bool) -> None:
         super().__init__()
-        self.drains, self.was_empty, self.empty, self.reads = drains, True, empty, 0
+        self.was_empty, self.empty, self.reads, self.dues = True, empty, 0, []
 
-    def empty_at_poll(self, due: float) -> bool:
-        return self.was_empty
-
-    def read_pending(self) -> bool:
+    def caught_up(self, due: float | None = None) -> bool:
+        if due is not None:
+            self.dues.append(due)
+            return self.was_empty
         self.reads += 1
         return self.empty
 
@@ -157,52 +164,67 @@ class _Link(Transport):
         return None
 
 
-def test_arrival_bound_picks_the_loop_then_reading_then_none() -> None:
+def _driver(link: Transport, clock: Any) -> Driver:
+    return Driver(Session(), link, clock, Telemetry(lambda consumed: None), Callbacks("link"),
+                  check_support=False, max_zoom=None)  # fmt: skip
+
+
+def test_the_driver_bounds_arrival_by_the_loop_then_by_reading_then_not() -> None:
+    clock: list[float] = [10.0]
+
+    def fake() -> float:
+        return clock[0]
+
     loop = asyncio.new_event_loop()
     try:
-        clock: list[float] = [10.0]
+        assert loop_keeps(time.monotonic, loop) and not loop_keeps(fake, loop)
 
-        def fake() -> float:
-            return clock[0]
+        class Skewed(type(loop)):  # type: ignore[misc]
+            def time(self) -> float:
+                return 0.0
 
-        a, _ = MemoryTransport.pair()
-        assert arrival_bound(a, time.monotonic, loop) is None  # ordered: nothing to bound
-        link = _Link(drains=True, empty=True)
-        bound = arrival_bound(link, time.monotonic, loop)
-        assert isinstance(bound, ArrivalBound) and bound.from_loop and link.reads == 0
-        bound.timer_ran(50.0)
-        assert bound.value < 50.0 and bound.value >= 50.0 - 0.01
-        link.was_empty = False
-        bound.timer_ran(60.0)  # not known empty at the poll: no new bound
-        assert bound.value < 50.0
-        bound.before_send()  # the loop's bound: no reads
-        assert link.reads == 0
-        # another clock than the loop's: read the link empty before each send
-        bound = arrival_bound(link, fake, loop)
-        assert isinstance(bound, ArrivalBound) and not bound.from_loop
-        assert (bound.value, link.reads) == (10.0, 1)
-        clock[0] = 11.0
-        bound.before_send()
-        assert (bound.value, link.reads) == (11.0, 2)
-        link.empty = False
-        clock[0] = 12.0
-        bound.before_send()  # could not read it empty: the bound stays
-        assert bound.value == 11.0
-        bound.timer_ran(99.0)
-        assert bound.value == 11.0
-        assert arrival_bound(link, fake, loop) is None  # cannot read it empty now
+        skewed = Skewed()
+        assert not loop_keeps(time.monotonic, skewed)
+        skewed.close()
     finally:
         loop.close()
+    a, _ = MemoryTransport.pair()
+    assert _driver(a, time.monotonic)._arrival_start() is None  # ordered: nothing to bound
+    # the loop keeps the driver's clock: the heartbeat timer bounds arrival, no reads
+    link = _Link(empty=True)
+    driver = _driver(link, time.monotonic)
+    driver._arrived_after = driver._arrival_start()
+    driver._loop_clock = True
+    assert driver._arrived_after is not None and link.reads == 1
+    driver._timer_when = 50.0
+    driver._on_timer()
+    assert 50.0 - 0.01 <= driver._arrived_after < 50.0 and link.dues == [50.0]
+    link.was_empty = False
+    driver._timer_when = 60.0
+    driver._on_timer()  # not known empty at the poll: no new bound
+    assert driver._arrived_after < 50.0
+    driver._pump()  # the loop's bound: no reads before sending
+    assert link.reads == 1
+    # another clock than the loop's: read the link empty before each send
+    link = _Link(empty=True)
+    driver = _driver(link, fake)
+    driver._arrived_after = driver._arrival_start()
+    assert (driver._arrived_after, link.reads) == (10.0, 1)
+    clock[0] = 11.0
+    driver._pump()
+    assert (driver._arrived_after, link.reads) == (11.0, 2)
+    link.empty = False
+    clock[0] = 12.0
+    driver._pump()  # could not read it empty: the bound stays
+    assert driver._arrived_after == 11.0
+    driver._timer_when = 99.0
+    driver._on_timer()
+    assert driver._arrived_after == 11.0 and link.dues == []
+    assert _driver(link, fake)._arrival_start() is None  # cannot read it empty now
 
 
-def test_an_unordered_transport_without_the_capability_gets_no_bound() -> None:
+def test_an_unordered_transport_without_the_hook_gets_no_bound() -> None:
     class Plain(MemoryTransport):
         ordered = False
 
-    loop = asyncio.new_event_loop()
-    try:
-        a = Plain()
-        assert not isinstance(a, ReadsOnDemand)
-        assert arrival_bound(a, time.monotonic, loop) is None
-    finally:
-        loop.close()
+    assert _driver(Plain(), time.monotonic)._arrival_start() is None

@@ -251,11 +251,11 @@ async def test_busy_loop_does_not_fall_behind(sender: socket.socket) -> None:
 
 async def quiet_now(t: UdpTransport) -> None:
     """A timer's iteration in which the reader did not run: the socket was empty at its poll
-    (``empty_at_poll`` proves it without reading), so the next event reads one datagram."""
+    (``caught_up`` proves it without reading), so the next event reads one datagram."""
     loop = asyncio.get_running_loop()
     answers: list[bool] = []
     due = loop.time()
-    loop.call_at(due, lambda: answers.append(t.empty_at_poll(due)))
+    loop.call_at(due, lambda: answers.append(t.caught_up(due)))
     await asyncio.sleep(0.01)
     assert answers == [True]
 
@@ -280,7 +280,7 @@ async def test_a_timer_knows_the_socket_was_empty_without_reading_it(
     sender: socket.socket, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """A reply read alone in an earlier iteration: a later timer's iteration would have run
-    the reader again had it left anything, so ``empty_at_poll`` answers without a read."""
+    the reader again had it left anything, so ``caught_up`` answers without a read."""
     reads: list[int] = []
     original = datagram_module.DrainingDatagramTransport.read_all
 
@@ -306,7 +306,7 @@ async def test_a_timer_in_the_readers_iteration_reads_what_it_left(
     sender: socket.socket,
 ) -> None:
     """The reader read one of three datagrams in the timer's own iteration: the timer's
-    ``empty_at_poll`` reads the other two before it answers, and the socket is empty."""
+    ``caught_up`` reads the other two before it answers, and the socket is empty."""
     async with transport_for(sender) as t:
         rec = Recorder(t)
         assert t.local_address is not None
@@ -316,7 +316,7 @@ async def test_a_timer_in_the_readers_iteration_reads_what_it_left(
 
         def timer(due: float) -> None:
             before = len(rec.chunks)
-            answer = t.empty_at_poll(due)
+            answer = t.caught_up(due)
             with pytest.raises(BlockingIOError):
                 sock.recv(1, socket.MSG_PEEK | socket.MSG_DONTWAIT)
             seen.append((before, answer, len(rec.chunks)))

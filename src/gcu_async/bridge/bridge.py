@@ -11,11 +11,10 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import inspect
 import logging
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from types import TracebackType
 from typing import Any
@@ -26,21 +25,22 @@ from gcu_async.bridge.autopilot import AutopilotFeed
 from gcu_async.bridge.camera import CameraConfig
 from gcu_async.bridge.commands import (
     ACCEPTED,
-    CANCELLED,
     DENIED,
     FAILED,
     IN_PROGRESS,
-    NO_STATUS,
     TEMPORARILY_REJECTED,
     CommandIn,
     GcuCall,
     Plan,
     command_name,
-    result_for,
     result_name,
 )
-from gcu_async.bridge.links import MavlinkLink, Peer, make_link
+from gcu_async.bridge.endpoint import Endpoint, parse_endpoint
+from gcu_async.bridge.executor import CommandExecutor
+from gcu_async.bridge.links import MavlinkLink, Peer
 from gcu_async.bridge.lograte import LogLimiter
+from gcu_async.bridge.stream_link import SerialLink, TcpInLink, TcpLink
+from gcu_async.bridge.udp_link import UdpInLink, UdpOutLink
 from gcu_async.bridge.view import Control, GcuView
 from gcu_async.client.client import ClientState, GcuClient
 from gcu_async.errors import GcuError
@@ -59,6 +59,16 @@ the user may want to know why; UNSUPPORTED and CANCELLED are routine (INFO)."""
 
 Origin = tuple[MavlinkLink, Peer]
 """Where a command came from, and so where its answers go."""
+LINKS: dict[str, Callable[[Endpoint], MavlinkLink]] = {
+    "udpout": UdpOutLink, "udpin": UdpInLink, "tcp": TcpLink, "tcpin": TcpInLink,
+    "serial": SerialLink}  # fmt: skip
+"""Each connection kind's link (:mod:`~gcu_async.bridge.endpoint`)."""
+
+
+def make_link(connection: str) -> MavlinkLink:
+    """The link for one connection string (ValueError, one line, for a malformed one)."""
+    endpoint = parse_endpoint(connection)
+    return LINKS[endpoint.kind](endpoint)
 
 
 class MavlinkBridge:
@@ -96,7 +106,6 @@ class MavlinkBridge:
         self.client = client
         self.system_id = system_id
         self.camera = camera if camera is not None else CameraConfig()
-        self.in_progress_after = in_progress_after
         self.links = [make_link(url) for url in connections]
         self.autopilot = AutopilotFeed(system_id, autopilot_component)
         self._packers = {c: mavlink.MAVLink(None, srcSystem=system_id, srcComponent=c)
@@ -107,18 +116,13 @@ class MavlinkBridge:
             for c in dispatch.COMPONENTS}  # fmt: skip
         """Component → its :class:`~gcu_async.bridge.streams.StreamSchedule`."""
         self._control = Control()
-        self._bridge_mode: Mode | None = None
-        self._pending_mode: Mode | None = None
-        self._tracking_mode = 0
-        self._tracking_box: tuple[float, float, float, float] | None = None
         self._camera_mode = 0
-        self._images = 0
         self._recording: bool | None = None
         self._recording_since: int | None = None
         self._was_tracking = False
-        self._queue = admission.Queue()
-        self._wake = asyncio.Event()
         self._logs = LogLimiter(log)
+        self.executor = CommandExecutor(self, self._logs, in_progress_after)
+        """Runs the commands on the client, one at a time (:mod:`~gcu_async.bridge.executor`)."""
         self._latest_control: tuple[admission.Share, Origin, Any] | None = None
         self._control_timer: asyncio.TimerHandle | None = None
         self._control_at = -math.inf
@@ -162,7 +166,7 @@ class MavlinkBridge:
             raise
         self._unsubscribe = self.client.on_link_change(self._on_gcu_event)
         self._main = asyncio.ensure_future(self._run())
-        self._spawn(self._executor())
+        self._spawn(self.executor.run())
 
     async def close(self) -> None:
         """Stop streaming, cancel running commands, close the links (at once, whatever
@@ -180,9 +184,7 @@ class MavlinkBridge:
         if self._unsubscribe is not None:
             self._unsubscribe()
             self._unsubscribe = None
-        for entry in list(self._queue):  # never sent: say so before the links close
-            self._queue.remove(entry)
-            self._finish(entry, TEMPORARILY_REJECTED)
+        self.executor.reject_waiting()  # never sent: say so before the links close
         for link in self.links:
             await link.close()
         await self.client.close()
@@ -246,14 +248,12 @@ class MavlinkBridge:
         if gcu_link.gave_up(event):
             self._start_reopen()
         elif gcu_link.restarted(event):
-            self._bridge_mode = None
-            self._tracking_mode = 0
-            self._tracking_box = None
+            self.executor.forget_mode()
 
     # -- the view ---------------------------------------------------------------------------
     def view(self) -> GcuView:
         """What the bridge knows now."""
-        client, session = self.client, self.client.session
+        client, session, executor = self.client, self.client.session, self.executor
         now = time.monotonic()
         up = client.state is ClientState.OPEN and client.link.up
         recording = client.recording
@@ -267,9 +267,9 @@ class MavlinkBridge:
             position_current=self.autopilot.position_current(now, client.aircraft_timeout),
             home_altitude=self.autopilot.home_altitude, utc_usec=self.autopilot.utc_usec(now),
             recording=recording, recording_since_ms=self._recording_since,
-            images_captured=self._images, control=self._control,
-            bridge_mode=self._bridge_mode, pending_mode=self._pending_mode,
-            tracking_mode=self._tracking_mode, tracking_box=self._tracking_box,
+            images_captured=executor.images, control=self._control,
+            bridge_mode=executor.bridge_mode, pending_mode=executor.pending_mode,
+            tracking_mode=executor.tracking_mode, tracking_box=executor.tracking_box,
             camera_mode=self._camera_mode,
         )  # fmt: skip
 
@@ -469,7 +469,7 @@ class MavlinkBridge:
         pointing slot (the latest of its share replacing the one waiting), within
         :data:`~gcu_async.bridge.admission.COMMAND_WAIT` like a command."""
         immediate = call.method in admission.IMMEDIATE_CALLS
-        waiting = any(e.slot == admission.POINTING for e in self._queue)
+        waiting = any(e.slot == admission.POINTING for e in self.executor.queue)
         if immediate and not waiting and gcu_link.ready(self.client):
             try:
                 getattr(self.client, call.method)(**call.kwargs)
@@ -479,7 +479,7 @@ class MavlinkBridge:
             return
         entry = admission.Entry(None, gimbal.COMPONENT, share, now, admission.POINTING,
                                 call=call, reply=origin)  # fmt: skip
-        self._admit(entry)
+        self.executor.admit(entry)
 
     def _command(self, cmd: CommandIn, component: int, share: admission.Share,
                  origin: Origin, now: float) -> None:  # fmt: skip
@@ -508,7 +508,7 @@ class MavlinkBridge:
         if plan.call is None:
             self._answer_plan(entry, plan)
             return
-        self._admit(entry)
+        self.executor.admit(entry)
 
     def _answer_plan(self, entry: admission.Entry, plan: Plan) -> None:
         """Answer a command whose plan needs no GCU call (a refusal or a reply)."""
@@ -517,48 +517,9 @@ class MavlinkBridge:
             self._log_answer(entry, plan.result, plan.reason)
         if plan.result == ACCEPTED:
             self._take(plan, entry.component)
-        self._finish(entry, plan.result)
+        self.executor.finish(entry, plan.result)
         for reply in plan.replies:
             self.reply(entry.component, reply, entry.reply)
-
-    def _admit(self, entry: admission.Entry) -> None:
-        """Queue ``entry``: it replaces what waits in its share's slot (answered CANCELLED),
-        or is refused (TEMPORARILY_REJECTED) when its share's room is full."""
-        for old in self._queue.superseded_by(entry):
-            self._queue.remove(old)
-            self.stats["superseded"] += 1
-            if old.cmd is not None:
-                self._log_answer(old, CANCELLED, "a newer command of its kind replaced it")
-            self._finish(old, CANCELLED)
-        refusal = self._queue.refusal(entry)
-        if refusal is not None:
-            self.stats["rejected"] += 1
-            if isinstance(entry.share, admission.Share):
-                entry.share.refused += 1
-            if entry.cmd is not None:
-                self._log_answer(entry, TEMPORARILY_REJECTED, refusal)
-            self._finish(entry, TEMPORARILY_REJECTED)
-            return
-        self._queue.push(entry)
-        if entry.cmd is not None:
-            entry.timer = asyncio.get_running_loop().call_later(
-                self.in_progress_after, self._in_progress, entry)
-        self._wake.set()
-
-    def _in_progress(self, entry: admission.Entry) -> None:
-        if entry.result is None and entry.cmd is not None:
-            self._ack(entry.component, entry.cmd, entry.reply, IN_PROGRESS, progress=255)
-
-    def _finish(self, entry: admission.Entry, result: int, param2: int = 0) -> None:
-        """The final answer of ``entry`` (once; a retransmission gets it again)."""
-        entry.state = "done"
-        entry.result, entry.param2 = result, param2
-        entry.done_at = time.monotonic()
-        if entry.timer is not None:
-            entry.timer.cancel()
-            entry.timer = None
-        if entry.cmd is not None:
-            self._ack(entry.component, entry.cmd, entry.reply, result, param2)
 
     def _take(self, plan: Plan, component: int) -> None:
         if plan.interval is not None:
@@ -567,134 +528,6 @@ class MavlinkBridge:
             self._control = plan.control
         if plan.camera_mode is not None:
             self._camera_mode = plan.camera_mode
-
-    # -- running commands, one at a time ----------------------------------------------------
-    async def _executor(self) -> None:
-        """Run the waiting entries one at a time, the shares taking turns, each once the
-        GCU is ready (:func:`~gcu_async.bridge.gcu_link.ready`); what waits past its
-        :data:`~gcu_async.bridge.admission.COMMAND_WAIT` is answered TEMPORARILY_REJECTED."""
-        while True:
-            if not self._queue.size:
-                self._wake.clear()
-                await self._wake.wait()
-                continue
-            self._expire(time.monotonic())
-            if not self._queue.size:
-                continue
-            if not gcu_link.ready(self.client):
-                # readiness changes with a reply or the client's timers: look again each
-                # host packet period, and at the next deadline at the latest
-                wait = min(1.0 / self.client.rate_hz,
-                           self._queue.next_deadline() - time.monotonic())  # fmt: skip
-                await asyncio.sleep(max(0.0, wait))
-                continue
-            entry = self._queue.pop()
-            assert entry is not None
-            try:
-                await self._run_entry(entry)
-            except asyncio.CancelledError:
-                raise
-            except Exception:
-                self.stats["handler_errors"] += 1
-                self._logs.log(logging.ERROR, "handler failure", "bridge: command failed "
-                               "unexpectedly", exc_info=True)  # fmt: skip
-                if entry.result is None:
-                    self._finish(entry, FAILED, NO_STATUS)
-
-    def _expire(self, now: float) -> None:
-        """Answer the entries that waited their :data:`~gcu_async.bridge.admission.COMMAND_WAIT`
-        TEMPORARILY_REJECTED: never sent, never will be."""
-        expired = self._queue.expired(now)
-        if not expired:
-            return
-        reason = (f"not sent within {admission.COMMAND_WAIT:g} s: "
-                  + ("other commands went first" if gcu_link.ready(self.client) else
-                     "the GCU does not answer" if gcu_link.opened(self.client) else
-                     "the GCU link is not open yet"))  # fmt: skip
-        for entry in expired:
-            self._queue.remove(entry)
-            self.stats["expired"] += 1
-            if entry.cmd is not None:
-                self._log_answer(entry, TEMPORARILY_REJECTED, reason)
-            self._finish(entry, TEMPORARILY_REJECTED)
-
-    async def _run_entry(self, entry: admission.Entry) -> None:
-        remaining = entry.deadline - time.monotonic()
-        if remaining <= 0:  # (its deadline passed since the executor looked)
-            self.stats["expired"] += 1
-            if entry.cmd is not None:
-                self._log_answer(entry, TEMPORARILY_REJECTED, f"not sent within "
-                                 f"{admission.COMMAND_WAIT:g} s")  # fmt: skip
-            self._finish(entry, TEMPORARILY_REJECTED)
-            return
-        if entry.cmd is None:
-            call = entry.call
-            assert call is not None
-        else:  # planned again: the state may have changed while it waited
-            plan = dispatch.plan(entry.cmd, entry.component, self.view(), self.camera)
-            if plan.call is None:
-                self._answer_plan(entry, plan)
-                return
-            call = plan.call
-        entry.state = "running"
-        entry.ran = True
-        error: BaseException | None = None
-        try:
-            await self._execute(call, queue_timeout=remaining)
-        except asyncio.CancelledError:
-            raise
-        except Exception as exc:
-            error = exc
-        if entry.cmd is None:
-            entry.state = "done"
-            if error is not None:
-                self._logs.log(logging.INFO, "control message failure",
-                               "bridge: %s failed: %s", call.method, error)  # fmt: skip
-            return
-        try:
-            result, param2 = result_for(error)
-        except Exception:
-            self._logs.log(logging.ERROR, "handler failure", "bridge: %s failed "
-                           "unexpectedly", command_name(entry.cmd.command),
-                           exc_info=True)  # fmt: skip
-            result, param2 = FAILED, NO_STATUS
-        if error is not None:
-            self._log_answer(entry, result, str(error))
-        self._finish(entry, result, param2)
-        if result == ACCEPTED and call.then == "image_captured":
-            self.send(camera.COMPONENT, camera.image_captured(self.view(), self._images))
-            self._images += 1
-
-    async def _execute(self, call: GcuCall, *, queue_timeout: float) -> None:
-        """Run ``call`` on the client; a command not sent within ``queue_timeout`` seconds
-        ends NOT_SENT (the client's own queue deadline: exact, the session drops it before
-        any packet could carry it). The bridge is the client's only user (B2), so setting
-        the session's default for this one submission and restoring it right after is
-        safe."""
-        method = getattr(self.client, call.method)
-        if call.mode is not None:
-            self._pending_mode = call.mode
-        session = self.client.session
-        saved = session.queue_timeout
-        session.queue_timeout = queue_timeout
-        asyncio.get_running_loop().call_soon(setattr, session, "queue_timeout", saved)
-        try:
-            result = method(**call.kwargs)
-            if inspect.isawaitable(result):
-                await result  # submitted in this first step, before the restore runs
-        except BaseException:
-            if call.mode is not None:
-                self._bridge_mode = None
-            raise
-        else:
-            if call.mode is not None:
-                self._bridge_mode = call.mode
-            if call.method == "track":
-                self._tracking_mode = call.tracking_mode
-                self._tracking_box = call.kwargs["box"]
-        finally:
-            if self._pending_mode is call.mode:
-                self._pending_mode = None
 
     def _spawn(self, coro: Any) -> None:
         task = asyncio.ensure_future(coro)

@@ -23,7 +23,7 @@ def ready(client: GcuClient) -> bool:
         return False
     health = client.link
     age = health.last_reply_age
-    return health.up and age is not None and age <= client.session.control_silence
+    return health.up and age is not None and age <= client.session.config.control_silence
 
 
 def opened(client: GcuClient) -> bool:

@@ -36,7 +36,7 @@ from collections.abc import Callable
 from typing import Any, TypeVar
 
 from gcu_async.bridge._mavlink import mavlink, new_parser
-from gcu_async.bridge.endpoint import Endpoint, parse_endpoint
+from gcu_async.bridge.endpoint import Endpoint
 
 log = logging.getLogger("gcu_async.bridge")
 T = TypeVar("T")
@@ -388,14 +388,3 @@ class MavlinkLink:
             raise OSError(f"no address for {host!r}")
         return tuple(infos[0][4])
 
-
-def make_link(connection: str) -> MavlinkLink:
-    """The link for one connection string (ValueError, one line, for a malformed one)."""
-    from gcu_async.bridge.stream_link import SerialLink, TcpInLink, TcpLink
-    from gcu_async.bridge.udp_link import UdpInLink, UdpOutLink
-
-    endpoint = parse_endpoint(connection)
-    kinds: dict[str, Callable[[Endpoint], MavlinkLink]] = {
-        "udpout": UdpOutLink, "udpin": UdpInLink, "tcp": TcpLink, "tcpin": TcpInLink,
-        "serial": SerialLink}  # fmt: skip
-    return kinds[endpoint.kind](endpoint)

@@ -33,9 +33,8 @@ from gcu_async.cli._exit import (
     silence_stdout,
 )
 from gcu_async.cli._report import GCU_REPORT_HELP, add_report_option, write_report
-from gcu_async.conformance import GcuConformance
+from gcu_async.conformance import GcuConformance, HostConformance
 from gcu_async.protocol.command_decode import command_code
-from gcu_async.protocol.conformance import HostConformance
 from gcu_async.protocol.packets import GcuPacket
 
 _HEX_TOKEN = re.compile(r"0x|[\s,;:]+", re.IGNORECASE)

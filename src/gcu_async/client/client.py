@@ -13,13 +13,10 @@ session (docs/client.md, "The session contract").
 
 from __future__ import annotations
 
-import asyncio
 import contextlib
 import enum
-import logging
 import math
 import os
-import random
 import sys
 import time
 import warnings
@@ -35,10 +32,10 @@ from gcu_async._checks import (
     type_error,
 )
 from gcu_async._lifecycle import OpenClose
-from gcu_async._lograte import LogLimiter
 from gcu_async.capture.writer import PacketCapture
 from gcu_async.client.command_methods import GcuCommands
 from gcu_async.client.driver import ENDED, ClientState, Driver
+from gcu_async.client.opening import Opener
 from gcu_async.client.telemetry import Callbacks, Telemetry
 from gcu_async.client.waiting import (
     ANGLE_TOLERANCE,
@@ -48,7 +45,6 @@ from gcu_async.client.waiting import (
     Waiting,
 )
 from gcu_async.conformance import GcuConformance, GcuReport
-from gcu_async.errors import ClientStateError, LinkLost
 from gcu_async.protocol.aircraft import AircraftState, aircraft_update
 from gcu_async.protocol.builder import Submission, angles, rates
 from gcu_async.protocol.command_base import Command
@@ -59,14 +55,12 @@ from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
 from gcu_async.protocol.host_frames import ControlValues
 from gcu_async.protocol.packets import DEFAULT_VERSION
 from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp
-from gcu_async.session import ControlKind, LinkHealth, Session, TelemetrySample
-from gcu_async.transport.backoff import Backoff
-from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
+from gcu_async.session import ControlKind, LinkHealth, Session, SessionConfig, TelemetrySample
+from gcu_async.transport.base import LinkEvent, Transport
 from gcu_async.transport.tap import with_capture
 
 __all__ = ["KEEP", "ClientState", "GcuClient", "Keep"]
 
-log = logging.getLogger("gcu_async.client")
 
 DEFAULT_REORDER_GUARD = 0.015
 """Seconds; the reordering guard on links that may reorder (UDP)."""
@@ -88,12 +82,6 @@ KEEP: Final = Keep.KEEP
 
 LinkCallback = Callable[[LinkEvent], None]
 TelemetryCallback = Callable[[TelemetrySample], None]
-
-
-OPEN_BACKOFF = Backoff(base=0.25, factor=2.0, cap=5.0)
-"""Delays between the attempts of :meth:`GcuClient.open` (``open_timeout``, ``wait=False``)."""
-OPEN_ATTEMPT_LOG_WINDOW = 60.0
-"""Seconds between two log lines of failed open attempts (a GCU away for hours)."""
 
 
 class GcuClient(GcuCommands, OpenClose):
@@ -178,11 +166,12 @@ class GcuClient(GcuCommands, OpenClose):
         transport = with_capture(transport, capture)
         if reorder_guard is None:
             reorder_guard = 0.0 if transport.ordered else DEFAULT_REORDER_GUARD
-        session = Session(  # it checks its options (the one place they are checked)
+        config = SessionConfig(  # it checks its options (the one place they are checked)
             rate_hz=rate_hz, reorder_guard=reorder_guard, command_timeout=command_timeout,
             queue_timeout=queue_timeout, silence_timeout=silence_timeout,
             aircraft_timeout=aircraft_timeout, version=version, name=transport.url,
         )  # fmt: skip
+        session = Session(config)
         if not callable(clock):
             raise type_error("clock", "a callable returning seconds", clock)
         reading = clock()
@@ -199,18 +188,14 @@ class GcuClient(GcuCommands, OpenClose):
         self.wait = check_bool("wait", wait)
         """Whether :meth:`open` waits for the GCU's first reply (the ``wait`` option)."""
         restore = check_bool("restore", restore)
-        self._opener: asyncio.Task[None] | None = None
-        self._rng = random.Random()
         check_support = check_bool("check_support", check_support)
         max_zoom = (None if max_zoom is None
                     else check_real("max_zoom", max_zoom, 1.0, ZOOM_RATIO_MAX, "x"))
-        rate = session.rate_hz
+        rate = config.rate_hz
         if not RATE_ADVISED[0] <= rate <= RATE_ADVISED[1]:
             warnings.warn(f"rate_hz={rate:g}: the protocol advises 30-50 Hz host packets",
                           stacklevel=_caller_stacklevel())  # fmt: skip
         self._clock = clock
-        self._logs = LogLimiter(log, burst=1, window=OPEN_ATTEMPT_LOG_WINDOW, clock=clock,
-                                name=transport.url)  # fmt: skip
         self._telemetry = Telemetry(self._consumed)
         self._links: Callbacks[LinkEvent] = Callbacks("link")
         report = GcuConformance() if check_bool("conformance", conformance) else None
@@ -218,6 +203,7 @@ class GcuClient(GcuCommands, OpenClose):
                               check_support=check_support, max_zoom=max_zoom,
                               restore=restore, conformance=report)  # fmt: skip
         session.telemetry = report is not None  # the report is fed from telemetry samples
+        self._opener = Opener(self._driver, self._links, clock)
         self._waiting = Waiting(self._driver, self._telemetry, self._links)
 
     def _consumed(self, consumed: bool) -> None:
@@ -261,23 +247,23 @@ class GcuClient(GcuCommands, OpenClose):
     # -- configuration (read-only views of the session's) ----------------------------------
     @property
     def rate_hz(self) -> float:
-        return self.session.rate_hz
+        return self.session.config.rate_hz
 
     @property
     def reorder_guard(self) -> float:
-        return self.session.reorder_guard
+        return self.session.config.reorder_guard
 
     @property
     def command_timeout(self) -> float:
-        return self.session.command_timeout
+        return self.session.config.command_timeout
 
     @property
     def queue_timeout(self) -> float:
-        return self.session.queue_timeout
+        return self.session.config.queue_timeout
 
     @property
     def version(self) -> int:
-        return self.session.version
+        return self.session.config.version
 
     @property
     def state(self) -> ClientState:
@@ -304,88 +290,13 @@ class GcuClient(GcuCommands, OpenClose):
         backoff until that many seconds have passed; :meth:`close` stops them
         (``LinkLost``). With ``wait=False`` it returns at once and the attempts run in the
         background (docs/client.md, "Lifecycle")."""
-        driver = self._driver
-        if driver.state not in (ClientState.CLOSED, ClientState.FAILED):
-            raise ClientStateError(
-                f"GcuClient is {driver.state.value}: a client is reusable but not reentrant "
-                "(close it before opening it again; `async with` does both)",
-                state=driver.state.value,
-            )
-        driver.begin()
-        if not self.wait:
-            log.info("opening %s (in the background)", self.transport.url)
-            self._opener = asyncio.get_running_loop().create_task(
-                self._open_in_background(), name=f"gcu_async open {self.transport.url}")
-            return
-        log.info("opening %s", self.transport.url)
-        try:
-            await self._attempts()
-        except BaseException:
-            await driver.shutdown("open failed")
-            raise
-
-    async def _attempts(self) -> None:
-        """Open attempts until one succeeds (``OPEN``); :class:`LinkLost` when the client
-        closes meanwhile, when ``open_timeout`` runs out, or, without it and with ``wait``,
-        when the one attempt fails."""
-        driver = self._driver
-        limit = self.open_timeout
-        if limit is None and not self.wait:
-            limit = math.inf
-        loop = asyncio.get_running_loop()
-        deadline = None if limit is None else loop.time() + limit
-        closed = driver.closed_event
-        assert closed is not None
-        attempts = 0
-        while True:
-            try:
-                await driver.open_once(self.connect_timeout)
-                return
-            except LinkLost as exc:
-                attempts += 1
-                if driver.state is not ClientState.OPENING or closed.is_set():
-                    raise LinkLost(f"{self.transport.url}: closed while opening") from exc
-                if deadline is None:
-                    raise
-                delay = min(OPEN_BACKOFF.delay(attempts - 1, self._rng), deadline - loop.time())
-                if delay <= 0:  # the last try was at the end
-                    raise LinkLost(
-                        f"{self.transport.url}: no GCU within open_timeout {limit:g} s "
-                        f"({attempts} attempts; last: {exc})"
-                    ) from exc
-                self._logs.log(logging.INFO, "failed open attempt",
-                               "%s: attempt %d failed (%s); next in %.2f s",
-                               self.transport.url, attempts, exc, delay)  # fmt: skip
-                self._links.emit(LinkEvent(
-                    LinkEventKind.RETRYING,
-                    f"attempt {attempts} failed: {exc}; next in {delay:.2f} s"))  # fmt: skip
-                with contextlib.suppress(asyncio.TimeoutError):
-                    await asyncio.wait_for(closed.wait(), delay)
-                if closed.is_set():
-                    raise LinkLost(f"{self.transport.url}: closed while opening") from exc
-
-    async def _open_in_background(self) -> None:
-        """``wait=False``: the attempts, until one succeeds or ``open_timeout`` runs out
-        (``GAVE_UP``, ``FAILED``); :meth:`close` cancels them."""
-        driver = self._driver
-        try:
-            await self._attempts()
-        except LinkLost as exc:
-            if driver.state is ClientState.OPENING:  # open_timeout ran out
-                self._links.emit(LinkEvent(LinkEventKind.GAVE_UP, str(exc)))
-                await driver.fail(str(exc))
-        except Exception as exc:  # a bug, not a missing GCU: say so, do not spin
-            log.exception("%s: opening in the background failed", self.transport.url)
-            await driver.fail(f"opening failed: {exc!r}")
+        await self._opener.open(self.connect_timeout, self.open_timeout, self.wait)
 
     async def close(self) -> None:
         """End pending commands (:class:`CommandLinkLost`), stop the heartbeat and the
         background attempts, end the telemetry iterators and the waits, close the
         transport. Idempotent; a failed client becomes closed."""
-        opener, self._opener = self._opener, None
-        if opener is not None and not opener.done():
-            opener.cancel()
-            await asyncio.wait({opener})
+        await self._opener.stop()
         await self._driver.shutdown("client closed")
 
     @property
@@ -395,7 +306,7 @@ class GcuClient(GcuCommands, OpenClose):
 
     @property
     def aircraft_timeout(self) -> float:
-        return self.session.aircraft_timeout
+        return self.session.config.aircraft_timeout
 
     @property
     def ins_valid(self) -> bool:

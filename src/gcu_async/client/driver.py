@@ -14,11 +14,13 @@ import asyncio
 import enum
 import logging
 import math
+import time
 from collections.abc import Callable, Coroutine, Sequence
 from typing import Any
 
 from gcu_async._checks import check_instance
 from gcu_async._lograte import LogLimiter
+from gcu_async.client.causes import explain
 from gcu_async.client.restore import restore, restored
 from gcu_async.client.telemetry import Callbacks, Telemetry
 from gcu_async.client.wirelog import WIRE_LOG, log_packet
@@ -27,7 +29,6 @@ from gcu_async.errors import (
     CommandFailed,
     CommandLinkLost,
     GcuError,
-    LikelyCause,
     LinkLost,
     Outcome,
     UnsupportedCommandError,
@@ -36,7 +37,6 @@ from gcu_async.protocol.builder import Context, Submission
 from gcu_async.protocol.catalogue import NEEDS_INS
 from gcu_async.protocol.command_base import Command
 from gcu_async.protocol.command_decode import command_code
-from gcu_async.protocol.commands import ZoomTo
 from gcu_async.protocol.enums import PodModel, opcode_name
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame
@@ -53,8 +53,7 @@ from gcu_async.session import (
     TicketDone,
     TicketState,
 )
-from gcu_async.transport.arrival import ArrivalBound, arrival_bound, loop_keeps
-from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
+from gcu_async.transport.base import CLOCK_RESOLUTION, LinkEvent, LinkEventKind, Transport
 
 log = logging.getLogger("gcu_async.client")
 
@@ -82,6 +81,12 @@ ENDED = frozenset({ClientState.CLOSED, ClientState.CLOSING, ClientState.FAILED})
 SEND_FAILED_WINDOW = 10.0
 """Seconds between two log lines of a send that keeps failing (the link is down: every
 heartbeat's send fails, 50 a second)."""
+
+
+def loop_keeps(clock: Callable[[], float], loop: asyncio.AbstractEventLoop) -> bool:
+    """True when ``loop``'s time is ``clock`` itself (:func:`time.monotonic` on asyncio's own
+    loops): a time on the clock is then a time on the loop."""
+    return clock is time.monotonic and type(loop).time is asyncio.BaseEventLoop.time
 
 
 class Driver:
@@ -125,13 +130,15 @@ class Driver:
         self.closed_event: asyncio.Event | None = None
         """Set once the client closes or fails (None before it was first opened)."""
         self._datagram = transport.datagram
-        self._bound: ArrivalBound | None = None
-        """Replies delivered from now on arrived after ``_bound.value`` (links that reorder);
-        None: the link never reorders, or cannot tell (:func:`arrival_bound`)."""
+        self._arrived_after: float | None = None
+        """Replies delivered from now on arrived after this (links that reorder: the
+        session's ``arrived_after``); None: the link never reorders, or cannot tell."""
         self._timer_when = 0.0
         """Event-loop time the pending timer is due."""
         self._loop_clock = False
-        """The event loop's time is ``clock`` (:func:`loop_keeps`)."""
+        """The event loop's time is ``clock`` (``time.monotonic`` on asyncio's own loops):
+        the heartbeat timer bounds reply arrival for free (:meth:`_on_timer`); otherwise
+        the link is read before each send (:meth:`_pump`)."""
 
     @property
     def pod_model(self) -> PodModel | None:
@@ -192,8 +199,8 @@ class Driver:
             await self.transport.close()
             raise LinkLost(f"{self.transport.url}: closed while opening")
         self.session.open(self._clock())
-        self._bound = arrival_bound(self.transport, self._clock, loop)
         self._loop_clock = loop_keeps(self._clock, loop)
+        self._arrived_after = self._arrival_start()
         self._pump()
         try:
             failure = await asyncio.wait_for(asyncio.shield(first), connect_timeout)
@@ -338,10 +345,26 @@ class Driver:
             raise UnsupportedCommandError(opcode_name(command_code(command)), pod_name(model))
 
     # -- the pump: the only place packets are sent -----------------------------------------
+    def _arrival_start(self) -> float | None:
+        """The first bound of reply arrival (docs/client.md, "The session contract", A4):
+        ``None`` on a link that never reorders, or one that cannot be read on demand (the
+        transport's :meth:`~gcu_async.transport.Transport.caught_up`: the session then
+        assumes a responsive loop, logged); else now."""
+        if self.transport.ordered:
+            return None
+        now = self._clock()
+        if self.transport.caught_up():
+            return now
+        log.info("%s cannot be read on demand: reply timing assumes a responsive event loop "
+                 "(docs/client.md, \"The session contract\")", self.transport.url)  # fmt: skip
+        return None
+
     def _on_timer(self) -> None:
-        bound = self._bound
-        if bound is not None:
-            bound.timer_ran(self._timer_when)
+        # a reply not delivered yet arrived after this iteration's poll of the OS (the
+        # transport reads what the poll may have left first): no later than the timer's due
+        if (self._arrived_after is not None and self._loop_clock
+                and self.transport.caught_up(self._timer_when)):  # fmt: skip
+            self._arrived_after = self._timer_when - CLOCK_RESOLUTION
         self._timer, self._timer_at = None, math.inf
         self._pump()
 
@@ -351,9 +374,10 @@ class Driver:
             self._timer, self._timer_at = None, math.inf
         session = self.session
         try:
-            bound = self._bound
-            if bound is not None and not bound.from_loop:  # replies before sends
-                bound.before_send()
+            if self._arrived_after is not None and not self._loop_clock:  # replies first
+                now = self._clock()
+                if self.transport.caught_up():
+                    self._arrived_after = now
             wire = WIRE_LOG.isEnabledFor(logging.DEBUG)  # the level may change at run time
             session.trace = self._trace if wire else None
             now = self._clock()
@@ -399,9 +423,9 @@ class Driver:
         log_packet(self.transport.url, False, packet)
 
     def _on_data(self, data: bytes) -> None:
-        bound, session = self._bound, self.session
+        session = self.session
         session.receive(data, self._clock(), datagram=self._datagram,
-                        arrived_after=None if bound is None else bound.value)  # fmt: skip
+                        arrived_after=self._arrived_after)  # fmt: skip
         events = session.events()
         if events:
             self._handle(events)
@@ -418,7 +442,7 @@ class Driver:
             log.info("%s", event.detail)
             self.links.emit(event)
         elif kind is LinkEventKind.ERROR:
-            log.warning("%s (the link stays open; link health decides whether it is up)",
+            log.warning("%s (the client keeps sending; the link is up once the GCU answers)",
                         event.detail)  # fmt: skip
             self.links.emit(event)
         elif kind is LinkEventKind.GAVE_UP:
@@ -490,27 +514,7 @@ class Driver:
         else:
             assert ticket.error is not None
             if isinstance(ticket.error, CommandFailed):
-                self._explain(ticket.error, ticket.command, ins_invalid)
+                explain(ticket.error, ticket.command, self.pod_model, ins_invalid=ins_invalid,
+                        max_zoom=self.max_zoom,
+                        aircraft_timeout=self.session.config.aircraft_timeout)  # fmt: skip
             future.set_exception(ticket.error)
-
-    def _explain(self, error: CommandFailed, command: Command, ins_invalid: bool) -> None:
-        """Add what the client knows that explains a failure (docs/client.md, "Why a
-        command failed"): the pod model's Appendix 8 row, INS sent invalid, the zoom limit."""
-        opcode = command_code(command)
-        name = opcode_name(opcode)
-        model = self.pod_model
-        if model is not None and model in POD_NAMES and not supports(model, opcode):
-            error.explain(LikelyCause.NOT_SUPPORTED,
-                          f"protocol Appendix 8: the {pod_name(model)} does not support "
-                          f"{name}")  # fmt: skip
-        elif ins_invalid:
-            error.explain(LikelyCause.INS_INVALID,
-                          f"{name} needs valid INS data and the host packets carried INS "
-                          "invalid: give the aircraft's attitude, acceleration and velocity "
-                          "with update_aircraft(), at most aircraft_timeout "
-                          f"({self.session.aircraft_timeout:g} s) apart")  # fmt: skip
-        elif (isinstance(command, ZoomTo) and command.ratio is not None
-              and self.max_zoom is not None and command.ratio > self.max_zoom):  # fmt: skip
-            error.explain(LikelyCause.ZOOM_LIMIT,
-                          f"{command.ratio:g}x is beyond camera 1's maximum zoom "
-                          f"{self.max_zoom:g}x")  # fmt: skip

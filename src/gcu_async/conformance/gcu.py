@@ -1,6 +1,6 @@
 """GCU conformance: what a GCU's replies do outside V2.0.6, with counts and examples.
 
-Sans-I/O, the mirror of the host's report (:class:`~gcu_async.protocol.conformance.
+Sans-I/O, the mirror of the host's report (:class:`~gcu_async.conformance.host.
 HostConformance`). Feed :class:`GcuConformance` each reply the host received and, when you
 have them, the opcodes of the host packets it sent, each with its time (seconds on any
 clock, or ``None`` when unknown); read :meth:`GcuConformance.report`. It finds:
@@ -26,16 +26,22 @@ Memory is bounded: counters, a few examples per deviation, the latest values.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
-from gcu_async._checks import check_int
+from gcu_async.conformance.findings import (
+    EXAMPLES,
+    Deviation,
+    Example,
+    Findings,
+    deviation_lines,
+    ordered,
+    when,
+)
 from gcu_async.conformance.runs import FEEDBACK_GRACE_S, CommandRuns
 from gcu_async.errors import RemoteProtocolError
 from gcu_async.protocol.anomalies import Anomaly
 from gcu_async.protocol.commands import COMMAND_TYPES, MODE_COMMANDS
-from gcu_async.protocol.conformance import EXAMPLES, Deviation, Example, deviation_lines
 from gcu_async.protocol.enums import Mode, Opcode, opcode_name
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import CAMERA_YAW, GcuMainFrame, GcuSubFrame, UnknownSubFrame
@@ -136,11 +142,12 @@ class GcuReport:
 class GcuConformance:
     """Collects GCU replies (and the host's opcodes) and reports how the GCU deviates from
     V2.0.6 (see the module). Per reply it does a few comparisons; text is only made for the
-    first :data:`~gcu_async.protocol.conformance.EXAMPLES` examples of each deviation."""
+    first :data:`~gcu_async.conformance.findings.EXAMPLES` examples of each deviation."""
 
     def __init__(self, *, examples: int = EXAMPLES) -> None:
-        self._examples = check_int("examples", examples, 0, 100)
-        self._devs: dict[str, Deviation] = {}
+        self._findings = Findings(examples)
+        self._examples = self._findings.examples
+        self._flag = self._findings.flag
         self.replies = 0
         self.undecodable = 0
         self._t0: float | None = None
@@ -249,33 +256,20 @@ class GcuConformance:
             self._t0 = time
         return time - self._t0 if self._timed else None
 
-    def _dev(self, key: str, title: str) -> Deviation:
-        d = self._devs.get(key)
-        if d is None:
-            d = self._devs[key] = Deviation(key, title)
-        return d
-
-    def _flag(self, key: str, title: str, t: float | None, raw: bytes, decoded: str) -> None:
-        d = self._dev(key, title)
-        d.count += 1
-        if len(d.examples) < self._examples and all(e.decoded != decoded for e in d.examples):
-            d.examples.append(Example(_when(t), raw.hex(" "), decoded))
-
     def _yaw(self, main: GcuMainFrame, yaw: int, t: float | None, raw: bytes) -> None:
         if yaw >= _SIGNED_LOW:
-            d = self._dev("main.yaw_raw.signed", "camera yaw sent as a signed S16 (±180°) in "
-                          "the U16 [0, 36000) field")  # fmt: skip
+            d = self._findings.dev("main.yaw_raw.signed", "camera yaw sent as a signed S16 "
+                                   "(±180°) in the U16 [0, 36000) field")  # fmt: skip
             reading = f"S16 {CAMERA_YAW.signed(yaw)}"
         else:
-            d = self._dev("main.yaw_raw.past_turn", "camera yaw 36000…47535: neither U16 nor "
-                          "signed S16")  # fmt: skip
+            d = self._findings.dev("main.yaw_raw.past_turn", "camera yaw 36000…47535: neither "
+                                   "U16 nor signed S16")  # fmt: skip
             reading = "past 360°"
         d.count += 1
-        if len(d.examples) < self._examples:
-            text = (f"yaw_raw = {yaw}: {reading}, heading {CAMERA_YAW.degrees(yaw):.2f}°, "
-                    f"relative yaw {main.relative_angles.z:.2f}°")  # fmt: skip
-            if all(e.decoded != text for e in d.examples):
-                d.examples.append(Example(_when(t), raw.hex(" "), text))
+        if len(d.examples) < self._examples:  # the text only for an example
+            self._findings.example(d, t, raw, f"yaw_raw = {yaw}: {reading}, heading "
+                                   f"{CAMERA_YAW.degrees(yaw):.2f}°, relative yaw "
+                                   f"{main.relative_angles.z:.2f}°")  # fmt: skip
 
     def _main_anomaly(self, a: Anomaly, t: float | None, raw: bytes) -> None:
         detail = f" ({a.detail})" if a.detail else ""
@@ -350,8 +344,7 @@ class GcuConformance:
     # -- output -------------------------------------------------------------------------------
     def report(self) -> GcuReport:
         """Everything found so far (nothing is reset)."""
-        devs = {k: Deviation(d.key, d.title, d.count, self.replies, list(d.examples),
-                             d.diagnosis) for k, d in self._devs.items()}  # fmt: skip
+        devs = self._findings.copy(self.replies)
         notes: list[str] = []
         self._yaw_report(devs)
         self._stuck_report(devs)
@@ -367,11 +360,10 @@ class GcuConformance:
         if "feedback.no_status" in devs:
             devs["feedback.no_status"].diagnosis = ("V2.0.6 answers a command with its "
                                                     "execution status in byte 70")  # fmt: skip
-        order = sorted(devs.values(), key=lambda d: (-d.count, d.key))
         duration = self._last_t if self._timed and self._last_t is not None else None
         latency = self._runs.latency.as_dict()
         return GcuReport(self.replies, self._runs.host_packets, self.undecodable, duration,
-                         self._identity_dict(), tuple(order), tuple(notes), latency)  # fmt: skip
+                         self._identity_dict(), ordered(devs), tuple(notes), latency)  # fmt: skip
 
     def _identity_dict(self) -> dict[str, Any]:
         sub = self._sub_frame
@@ -413,8 +405,8 @@ class GcuConformance:
             moved = (high - low) / 100
             if self._nonzero[field] or moved < STUCK_MOVE_DEG:
                 continue
-            when = _when(0.0 if self._timed else None)
-            example = [Example(when, self._first_raw.hex(" "), f"{field} = 0 from the first "
+            at = when(0.0 if self._timed else None)
+            example = [Example(at, self._first_raw.hex(" "), f"{field} = 0 from the first "
                                f"reply on, {rel} {low}…{high}")]  # fmt: skip
             devs[f"main.{field}.zero"] = Deviation(
                 f"main.{field}.zero", f"camera absolute {name} 0 in every reply while the "
@@ -432,14 +424,14 @@ class GcuConformance:
         if missing:
             devs["feedback.missing"] = Deviation(
                 "feedback.missing", "commands no reply answered with their feedback", missing,
-                0, [Example(_when(t), "", text) for t, text in runs.missing_examples],
+                0, [Example(when(t), "", text) for t, text in runs.missing_examples],
                 f"no reply carried the command's opcode within {FEEDBACK_GRACE_S:g} s of the "
                 "host moving on (V2.0.6: the GCU answers every command with its feedback)")
         if runs.unsolicited:
             devs["feedback.unsolicited"] = Deviation(
                 "feedback.unsolicited", "feedback for an opcode the host never sent",
                 runs.unsolicited, self.replies,
-                [Example(_when(t), "", text) for t, text in runs.unsolicited_examples])
+                [Example(when(t), "", text) for t, text in runs.unsolicited_examples])
         notes.append(runs.latency.text() if self._timed else "no times given: feedback "
                      "latency not measured")  # fmt: skip
         if runs.run_replies:
@@ -474,11 +466,6 @@ class GcuConformance:
         if self._identities > 1:
             notes.append(f"the pod's identity changed {self._identities - 1} times (another pod "
                          "or firmware answered)")  # fmt: skip
-
-
-def _when(t: float | None) -> float:
-    """An example's time: NaN when the input had none."""
-    return math.nan if t is None else t
 
 
 __all__ = ["MODE_SETTLE_S", "STUCK_MOVE_DEG", "GcuConformance", "GcuReport"]

@@ -1,6 +1,7 @@
 """The command session, sans-I/O: scheduling, null separation, feedback matching, the
 heartbeat's content, link health and the lifecycle (docs/client.md, "The session")."""
 
+from gcu_async.session.config import SessionConfig
 from gcu_async.session.control import ControlKind
 from gcu_async.session.events import (
     Event,
@@ -13,11 +14,12 @@ from gcu_async.session.events import (
 )
 from gcu_async.session.health import LinkHealth
 from gcu_async.session.restart import StateChange
-from gcu_async.session.session import Session, SessionState, SessionStats
+from gcu_async.session.session import Session
+from gcu_async.session.state import SessionState, SessionStats
 from gcu_async.session.tickets import Ticket, TicketState
 
 __all__ = [
     "ControlKind", "Event", "LinkDown", "LinkHealth", "LinkUp", "ResetLink", "Restarted",
-    "Session", "SessionState", "SessionStats", "StateChange", "TelemetrySample", "Ticket",
-    "TicketDone", "TicketState",
+    "Session", "SessionConfig", "SessionState", "SessionStats", "StateChange",
+    "TelemetrySample", "Ticket", "TicketDone", "TicketState",
 ]  # fmt: skip

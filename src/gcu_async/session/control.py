@@ -20,10 +20,11 @@ from __future__ import annotations
 
 import enum
 
+from gcu_async._checks import check_int
 from gcu_async.protocol.command_base import Command
 from gcu_async.protocol.commands import COMMAND_TYPES, Track
-from gcu_async.protocol.enums import Mode, Opcode
-from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.protocol.enums import Mode, Opcode, opcode_name
+from gcu_async.protocol.host_frames import CONTROL_ANGLE_RAW, CONTROL_RATE_RAW, ControlValues
 from gcu_async.session.tickets import Ticket, TicketState
 
 
@@ -49,6 +50,18 @@ MODE_CHANGING = frozenset(
     {*KIND, *(op for op, c in COMMAND_TYPES.items() if c.SCHEMA.changes_mode)}
 )
 """Commands during which (queued or in flight) no control values are sent valid."""
+
+
+def check_values(values: ControlValues, kind: ControlKind | None, opcode: int | None) -> None:
+    """Control values must fit the wire and, when the mode (``opcode``) is known, its
+    ``kind``: angles ±18000 (0.01°), rates ±1500 (0.1 °/s ÷ zoom); ValueError/TypeError
+    naming the field otherwise."""
+    ControlValues.check(values)
+    limit = CONTROL_RATE_RAW if kind is ControlKind.RATES else CONTROL_ANGLE_RAW
+    for field, raw in zip(("roll_raw", "pitch_raw", "yaw_raw"), values, strict=True):
+        check_int(f"control.{field}", raw, -limit, limit)
+    if kind is ControlKind.NONE and opcode is not None:
+        raise ValueError(f"control: {opcode_name(opcode)} takes no control values")
 
 
 class ControlState:

@@ -21,6 +21,8 @@ class TelemetrySample(NamedTuple):
     """The latest sub frame: versions, pod model, faults, ranging, zoom, flags (None until
     one arrived)."""
     feedback: Feedback
+    """The reply's feedback, in every sample: the command it answers and its status; a
+    reply to the null command (nothing in flight) has ``opcode`` 0 and ``status`` None."""
     received_at: float
     """Time of arrival (the session's clock)."""
 

@@ -25,8 +25,11 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
+from dataclasses import fields, replace
+from typing import Any
 
+from gcu_async._checks import type_error
 from gcu_async.protocol.aircraft import AircraftState
 from gcu_async.protocol.enums import SubFrameRequest
 from gcu_async.protocol.host_frames import (
@@ -44,6 +47,7 @@ INS_PARTS = ("attitude", "acceleration", "velocity")
 PARTS = (*INS_PARTS, "position")
 """The parts whose age is tracked (satellites, relative altitude and GNSS time go with the
 position in the sub frame)."""
+AIRCRAFT_FIELDS = tuple(f.name for f in fields(AircraftState))
 TIMEOUT_MAX = 10.0
 """Seconds; the longest ``aircraft_timeout`` accepted (beyond it a value is no measurement
 of the aircraft any more)."""
@@ -74,6 +78,20 @@ class AircraftFeed:
         """Stale episodes so far (rule 4)."""
 
     # -- input -------------------------------------------------------------------------------
+    def update(self, changes: Mapping[str, Any], now: float) -> AircraftState:
+        """Change the named fields of the state (the others keep their value and the time
+        they were given), as measured at ``now``; ``TypeError``/``ValueError`` (nothing
+        changes) for an unknown field or a bad value. Returns the new state."""
+        if not isinstance(changes, Mapping):
+            raise type_error("changes", "a mapping of AircraftState fields", changes)
+        unknown = sorted(str(k) for k in changes if k not in AIRCRAFT_FIELDS)
+        if unknown:
+            raise TypeError(f"changes: {', '.join(unknown)}: not AircraftState fields "
+                            f"({', '.join(AIRCRAFT_FIELDS)})")  # fmt: skip
+        state = replace(self.state, **changes)  # validates
+        self.set(state, now, changes)
+        return state
+
     def set(self, state: AircraftState, now: float, given: Iterable[str]) -> None:
         """``state`` is the aircraft state from now on; the parts named in ``given`` were
         measured at ``now`` (the others keep the time they were given)."""

@@ -3,7 +3,31 @@
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
+from typing import TypedDict, cast
+
+from gcu_async.protocol.deframer import DeframerStats
+from gcu_async.session.runs import RunStats
+
+
+class LinkHealthDict(TypedDict):
+    """:meth:`LinkHealth.as_dict`: the fields by name (JSON-ready)."""
+
+    up: bool
+    reply_rate: float
+    last_reply_age: float | None
+    packets_sent: int
+    packets_received: int
+    send_errors: int
+    crc_errors: int
+    length_errors: int
+    bytes_discarded: int
+    other_versions: int
+    unmatched_feedback: int
+    ambiguous_feedback: int
+    lost_count: int
+    restored_count: int
+    restarted_count: int
 
 RATE_WINDOW_S = 1.0
 """Seconds of replies :attr:`LinkHealth.reply_rate` counts (a rate shown less than this
@@ -40,6 +64,11 @@ class LinkHealth:
     """Times the GCU came back from a loss with its state reset (docs/client.md, "GCU
     restarts")."""
 
+    def as_dict(self) -> LinkHealthDict:
+        """Every field by name: numbers, a bool and ``None`` (JSON-ready, e.g. for a web
+        page)."""
+        return cast(LinkHealthDict, {f.name: getattr(self, f.name) for f in fields(self)})
+
 
 class HealthTracker:
     """Counts and timestamps behind :class:`LinkHealth` (no I/O, no clock of its own)."""
@@ -72,3 +101,19 @@ class HealthTracker:
         while recent and now - recent[0] > RATE_WINDOW_S:
             recent.popleft()
         return float(len(recent))
+
+    def snapshot(self, now: float, up: bool, deframer: DeframerStats,
+                 runs: RunStats) -> LinkHealth:  # fmt: skip
+        """The :class:`LinkHealth` at ``now``: these counts, the deframer's and the run
+        ledger's."""
+        last = self.last_reply
+        return LinkHealth(
+            up=up, reply_rate=self.reply_rate(now),
+            last_reply_age=None if last is None else now - last,
+            packets_sent=self.packets_sent, packets_received=self.packets_received,
+            send_errors=self.send_errors, crc_errors=deframer.crc_errors,
+            length_errors=deframer.length_errors, bytes_discarded=deframer.bytes_discarded,
+            other_versions=self.other_versions, unmatched_feedback=runs.unmatched,
+            ambiguous_feedback=runs.ambiguous, lost_count=self.lost_count,
+            restored_count=self.restored_count, restarted_count=self.restarted_count,
+        )  # fmt: skip

@@ -76,8 +76,8 @@ class Pacer:
 
     def open_at(self, opcode: int) -> float:
         """Earliest time the rate bound and the edge guard both allow a packet with
-        ``opcode`` (the later of :meth:`window_open_at` and :meth:`edge_open_at`, in one
-        call: the session asks twice per heartbeat)."""
+        ``opcode``: :meth:`window_open_at` and, for an opcode other than the last packet's,
+        that packet plus the guard (in one call: the session asks twice per heartbeat)."""
         sent = self._sent
         when = sent[0] + (WINDOW + MARGIN) if len(sent) == self.limit else -math.inf
         last = self.last_opcode
@@ -88,12 +88,6 @@ class Pacer:
     def early_open_at(self) -> float:
         """Earliest time a packet may go before its slot (one per :data:`WINDOW`)."""
         return self.last_early + WINDOW
-
-    def edge_open_at(self, opcode: int) -> float:
-        """Earliest time a packet with ``opcode`` may follow the previous packet."""
-        if opcode == self.last_opcode or self.last_opcode is None:
-            return -math.inf
-        return self.last_time + self.guard
 
     def record(self, now: float, opcode: int, *, early: bool) -> None:
         """A packet with ``opcode`` went out at ``now`` (on its slot, or ``early``)."""

@@ -35,7 +35,8 @@ from gcu_async.protocol.command_base import Command
 from gcu_async.protocol.commands import ZoomTo
 from gcu_async.protocol.enums import CameraFlags, Mode, Opcode, PodStatus
 from gcu_async.protocol.gcu_frames import GCU_SUB_SCHEMA, GcuMainFrame, GcuSubFrame
-from gcu_async.session.control import MODE_CHANGING
+from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.session.control import KIND, MODE_CHANGING, REPORTED, ControlState
 from gcu_async.session.tickets import TicketState
 
 REPORT_SETTLE = 1.0
@@ -128,6 +129,24 @@ class RestartWatch:
         """A reply brought a sub frame other than ``previous`` (the last one)."""
         if previous is not None and sub.camera1_zoom_raw != previous.camera1_zoom_raw:
             self._zoom_changed_at = now
+
+    def to_restore(self, changes: tuple[StateChange, ...], control: ControlState
+                   ) -> tuple[Command | None, ControlValues | None, float | None]:  # fmt: skip
+        """What a driver needs to restore the host's state after a restart found by
+        :meth:`compare`: the mode command the GCU confirmed last (if it was in that mode
+        before the loss and the mode changed) with its control values, and camera 1's zoom
+        (if it changed)."""
+        before = self.compared
+        assert before is not None
+        aspects = {change.aspect for change in changes}
+        mode = None
+        if ("mode" in aspects and control.command is not None and control.confirmed in KIND
+                and REPORTED[control.confirmed] == before.mode_raw):  # fmt: skip
+            mode = control.command
+        zoom = None
+        if "zoom" in aspects and before.zoom_raw is not None:
+            zoom = before.zoom_raw / ZOOM_SCALE
+        return mode, control.values if mode else None, zoom
 
     def finished(self, opcode: int, command: Command, state: TicketState, now: float) -> None:
         """A command reached a final state."""

@@ -19,64 +19,32 @@ go), :mod:`~gcu_async.session.runs` (what a reply proves, when an opcode may sta
 
 from __future__ import annotations
 
-import enum
 import heapq
-import logging
 import math
+import sys
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, fields, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from gcu_async._checks import (
-    check_bool,
-    check_instance,
-    check_int,
-    check_positive,
-    check_real,
-    type_error,
-)
+from gcu_async._checks import check_instance
 from gcu_async.errors import (
     CommandError,
-    CommandFailed,
     CommandLinkLost,
-    CommandTimeout,
-    FieldRangeError,
     GcuError,
     Outcome,
-    RemoteProtocolError,
 )
 from gcu_async.protocol.aircraft import AircraftState
-from gcu_async.protocol.anomalies import Anomaly
 from gcu_async.protocol.command_base import Command
-from gcu_async.protocol.command_decode import AnomalousCommand, command_code
 from gcu_async.protocol.commands import NullCommand
 from gcu_async.protocol.deframer import Deframer
-from gcu_async.protocol.enums import (
-    CameraFlags,
-    ExecutionStatus,
-    Opcode,
-    opcode_name,
-)
+from gcu_async.protocol.enums import CameraFlags, Opcode, opcode_name
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
-from gcu_async.protocol.host_frames import (
-    CONTROL_ANGLE_RAW,
-    CONTROL_RATE_RAW,
-    ControlValues,
-    HostMainFrame,
-    HostSubFrame,
-)
-from gcu_async.protocol.packets import (
-    BASE_LENGTH,
-    DEFAULT_VERSION,
-    GCU_HEADER,
-    SUPPORTED_VERSIONS,
-    GcuPacket,
-    HostPacket,
-    decode_gcu_packet,
-)
-from gcu_async.session.control import KIND, REPORTED, ControlKind, ControlState
+from gcu_async.protocol.host_frames import ControlValues, HostMainFrame, HostSubFrame
+from gcu_async.protocol.packets import SUPPORTED_VERSIONS, GcuPacket, HostPacket, decode_gcu_packet
+from gcu_async.session.config import SessionConfig, SessionOptions
+from gcu_async.session.control import KIND, ControlKind, ControlState, check_values
+from gcu_async.session.deviations import DeviationLog
 from gcu_async.session.events import (
     Event,
     LinkDown,
@@ -86,130 +54,46 @@ from gcu_async.session.events import (
     TelemetrySample,
     TicketDone,
 )
-from gcu_async.session.feed import TIMEOUT_MAX, AircraftFeed
+from gcu_async.session.feed import AIRCRAFT_FIELDS, AircraftFeed
 from gcu_async.session.health import HealthTracker, LinkHealth
 from gcu_async.session.pacing import Pacer
 from gcu_async.session.recording import RecordingBelief
-from gcu_async.session.restart import ZOOM_SCALE, RestartWatch, StateChange
+from gcu_async.session.restart import RestartWatch, StateChange
 from gcu_async.session.runs import RunLedger
+from gcu_async.session.state import SessionState, SessionStats
 from gcu_async.session.tickets import Ticket, TicketState
 
-log = logging.getLogger("gcu_async.session")
+if sys.version_info >= (3, 11):
+    from typing import Unpack
+elif TYPE_CHECKING:
+    from typing_extensions import Unpack
 
 NULL = NullCommand()
 _NULL_OPCODE = int(Opcode.NULL)
 _RECORDING = int(CameraFlags.RECORDING)
-RATE_MIN_HZ = 2.0
-"""Slowest heartbeat accepted (the protocol advises 30–50 Hz and must never stop)."""
-RATE_MAX_HZ = 200.0
-FLAGGED_MAX = 64
-"""Kinds of anomaly logged once each per session (a GCU sending junk cannot flood the log)."""
 MIN_WAKE = 1e-4
 """Seconds; the smallest step :meth:`Session.next_wakeup` asks for while no packet may go
 (a floor against float round-off, never a busy loop)."""
 
 
-class SessionState(enum.Enum):
-    """The session's lifecycle: one state, not a set of flags."""
-
-    CLOSED = "closed"
-    """Not open (never opened, or closed: it may be opened again)."""
-    OPENING = "opening"
-    """Open; the heartbeat runs; no reply yet."""
-    UP = "up"
-    """Replies arrive; commands are accepted."""
-    DOWN = "down"
-    """The link was lost; the heartbeat goes on; commands fail at once until replies return."""
-
-
-@dataclass
-class SessionStats:
-    """Counters of one session (since it was created)."""
-
-    submitted: int = 0
-    succeeded: int = 0
-    skipped: int = 0
-    failed: int = 0
-    not_sent: int = 0
-    unknown: int = 0
-    cancelled: int = 0
-    late_feedback: int = 0
-    """Replies to an earlier run of the same opcode as the command in flight (expected:
-    the GCU answers every repeat of the previous command)."""
-    separator_packets: int = 0
-    """Null packets sent because the next command had to wait for proof of separation."""
-    early_packets: int = 0
-    """Commands sent before their heartbeat slot (the phase moved instead)."""
-    aircraft_stale: int = 0
-    """Episodes in which packets withheld aircraft data because it was older than
-    ``aircraft_timeout`` (one per run of such packets; docs/client.md, "Aircraft data:
-    what the packets claim")."""
-
-
 class Session:
     """One host's session with one GCU. See the module docstring and docs/client.md.
 
-    Args:
-        rate_hz: heartbeat rate, [2, 200] packets per second (the protocol advises 30–50).
-        reorder_guard: seconds between the last packet of one opcode and the first of the
-            next; must exceed how much more the link may delay one packet than another
-            (0 on links that never reorder: TCP, serial).
-        command_timeout: default seconds a command may spend on the wire (from its first
-            packet to its feedback).
-        queue_timeout: default seconds a command may wait before its first packet.
-        silence_timeout: seconds without a reply after which the link counts as lost; more
-            than the heartbeat period.
-        control_silence: seconds without a reply after which control values go out invalid.
-        reply_window: longest round trip (GCU included) assumed possible; only used to tell
-            which packets a reply may answer when no later reply settles it.
-        record_settle: seconds a camera may take to report a record toggle in its flags.
-        aircraft_timeout: seconds an aircraft part (attitude, acceleration, velocity,
-            position) stays current after it was given, (0, 10]; then the packets stop
-            claiming it (:mod:`~gcu_async.session.feed`).
-        version: protocol version byte to send (2; some devices expect 1).
-        name: how errors name the link (e.g. its URL).
-    """
+    ``Session(config)`` takes a :class:`SessionConfig`; ``Session(**options)`` makes one from
+    its fields (``Session(rate_hz=30, reorder_guard=0.015)``), which checks them all."""
 
-    def __init__(
-        self,
-        *,
-        rate_hz: float = 50.0,
-        reorder_guard: float = 0.0,
-        command_timeout: float = 2.0,
-        queue_timeout: float = 30.0,
-        silence_timeout: float = 1.0,
-        control_silence: float = 0.2,
-        reply_window: float = 1.0,
-        record_settle: float = 1.0,
-        aircraft_timeout: float = 1.0,
-        version: int = DEFAULT_VERSION,
-        name: str = "gcu",
-    ) -> None:
-        rate_hz = check_real("rate_hz", rate_hz, RATE_MIN_HZ, RATE_MAX_HZ, "Hz")
-        self.rate_hz = rate_hz
-        self.reorder_guard = check_positive("reorder_guard", reorder_guard, allow_zero=True)
-        self.command_timeout = check_positive("command_timeout", command_timeout)
-        self.queue_timeout = check_positive("queue_timeout", queue_timeout)
-        period = 1.0 / rate_hz
-        beyond = "must exceed the heartbeat period 1 / rate_hz: no link without packets"
-        self.silence_timeout = check_real("silence_timeout", silence_timeout, period, math.inf,
-                                          "s", detail=beyond)  # fmt: skip
-        if self.silence_timeout == period:
-            raise FieldRangeError("silence_timeout", silence_timeout, period, math.inf, "s",
-                                  detail=beyond)  # fmt: skip
-        self.control_silence = check_positive("control_silence", control_silence)
-        self.reply_window = check_positive("reply_window", reply_window)
-        self.version = check_int("version", version, 1, 2)
-        self.name = check_instance("name", name, str)
-        self.aircraft_timeout = check_real("aircraft_timeout", aircraft_timeout, 0.0,
-                                           TIMEOUT_MAX, "s")  # fmt: skip
-        if self.aircraft_timeout == 0.0:
-            raise FieldRangeError("aircraft_timeout", aircraft_timeout, 0.0, TIMEOUT_MAX, "s",
-                                  detail="must be greater than 0")  # fmt: skip
-        self._pacer = Pacer(rate_hz, self.reorder_guard)
-        self._ledger = RunLedger(self.reorder_guard, self.reply_window)
+    def __init__(self, config: SessionConfig | None = None, /,
+                 **options: Unpack[SessionOptions]) -> None:  # fmt: skip
+        if config is None:
+            config = SessionConfig(**options)
+        elif options:
+            raise TypeError("Session: give a SessionConfig or its fields as options, not both")
+        self.config = check_instance("config", config, SessionConfig)
+        """The options (read-only: a new session takes new ones)."""
+        self._pacer = Pacer(config.rate_hz, config.reorder_guard)
+        self._ledger = RunLedger(config.reorder_guard, config.reply_window)
         self._control = ControlState()
-        self._recording = RecordingBelief(check_positive("record_settle", record_settle))
+        self._recording = RecordingBelief(config.record_settle)
         self._deframer = Deframer.for_gcu_packets()
         self._health = HealthTracker()
         self._restart = RestartWatch()
@@ -230,7 +114,7 @@ class Session:
         self._feedback: Feedback | None = None
         self.trace: Callable[[bytes], None] | None = None
         """Called with every whole packet received (before it is decoded), e.g. to log it."""
-        self._feed = AircraftFeed(self.aircraft_timeout, self.name)
+        self._feed = AircraftFeed(config.aircraft_timeout, config.name)
         self._last_encoded: tuple[object, object, object, bytes] = (None, None, None, b"")
         self._last_datagram = b""
         self._last_packet: GcuPacket | None = None
@@ -238,8 +122,7 @@ class Session:
         function of the bytes: a repeated datagram reuses it)."""
         self._silent_at = math.inf
         """When the link counts as lost if no reply comes first (set by every reply)."""
-        self._flagged: set[tuple[str, str]] = set()
-        """The kinds of anomaly (field, detail) already logged (:meth:`_flag`)."""
+        self._deviations = DeviationLog(config.name)
 
     # -- lifecycle -------------------------------------------------------------------------
     @property
@@ -252,7 +135,7 @@ class Session:
         if self._state is not SessionState.CLOSED:
             raise RuntimeError(f"session is already {self._state.value}")
         self._pacer.reset()
-        self._ledger = RunLedger(self.reorder_guard, self.reply_window)
+        self._ledger = RunLedger(self.config.reorder_guard, self.config.reply_window)
         self._control.reset()
         self._recording.reset()
         self._restart.reset()
@@ -265,7 +148,7 @@ class Session:
         more is sent. Idempotent."""
         if self._state is SessionState.CLOSED:
             return
-        self._end_all(now, f"{self.name}: {reason}")
+        self._end_all(now, f"{self.config.name}: {reason}")
         self._state = SessionState.CLOSED
 
     # -- inputs ----------------------------------------------------------------------------
@@ -281,38 +164,19 @@ class Session:
         if self._state is SessionState.CLOSED:
             return
         deframer = self._deframer
-        if datagram and not deframer.buffered:
-            packet: GcuPacket | None = None
-            if data == self._last_datagram:  # one memcmp: an idle GCU repeats its reply
-                packet = self._last_packet
-            elif (len(data) >= BASE_LENGTH and data[2] | data[3] << 8 == len(data)
-                    and data[:2] == GCU_HEADER):  # fmt: skip
-                try:  # the usual datagram: exactly one packet (the decoder checks the CRC)
-                    packet = decode_gcu_packet(data)
-                except RemoteProtocolError:
-                    pass  # the deframer below sorts it out and counts what it discards
-                else:
-                    if type(data) is bytes:  # immutable: safe to compare with later
-                        self._last_datagram, self._last_packet = data, packet
-            if packet is not None:
-                if self.trace is not None:
-                    self.trace(data)
-                if packet.version not in SUPPORTED_VERSIONS:
-                    self._other_version(packet.version)
-                sub = packet.sub if type(packet.sub) is GcuSubFrame else None
-                self._on_reply(packet.main, sub, packet.feedback, now, arrived_after)
-                return
+        if datagram and data == self._last_datagram and not deframer.buffered:
+            packet = self._last_packet  # one memcmp: an idle GCU repeats its reply
+            assert packet is not None
+            self._on_reply(data, packet, now, arrived_after)
+            return
         packets = deframer.feed(data)
         if datagram and deframer.buffered:
             packets += deframer.flush()  # a datagram's leftovers never join the next one
         for raw in packets:
-            if self.trace is not None:
-                self.trace(raw)
             packet = decode_gcu_packet(raw)  # framed: header, length and CRC are right
-            if packet.version not in SUPPORTED_VERSIONS:
-                self._other_version(packet.version)
-            sub = packet.sub if isinstance(packet.sub, GcuSubFrame) else None
-            self._on_reply(packet.main, sub, packet.feedback, now, arrived_after)
+            if datagram and raw is data and type(data) is bytes:  # whole, immutable: kept
+                self._last_datagram, self._last_packet = data, packet
+            self._on_reply(raw, packet, now, arrived_after)
 
     def connection_lost(self, now: float, reason: str) -> None:
         """The transport lost its connection (stream transports): no reply to anything sent
@@ -344,29 +208,18 @@ class Session:
         Raises :class:`CommandLinkLost` (``NOT_SENT``) unless the link is up, TypeError /
         ValueError for bad arguments.
         """
-        check_instance("command", command, Command, "a Command")
-        if isinstance(command, AnomalousCommand):  # decoded, never sent: send is strict
-            raise command.error()
-        if isinstance(command, NullCommand):
-            raise ValueError("command: the null command is the session's own separator")
-        opcode = command_code(command)
-        timeout = self.command_timeout if timeout is None else check_positive("timeout", timeout)
-        queue_timeout = (self.queue_timeout if queue_timeout is None
-                         else check_positive("queue_timeout", queue_timeout))  # fmt: skip
+        config = self.config
+        ticket = Ticket.new(command, now, config.command_timeout if timeout is None else timeout,
+                            config.queue_timeout if queue_timeout is None else queue_timeout,
+                            recording_target)  # fmt: skip
+        opcode = ticket.opcode
         if control is not None:
-            self._check_values(control, KIND.get(opcode), opcode)
-        if recording_target is not None:
-            check_bool("recording_target", recording_target)
-            if opcode != Opcode.RECORD:
-                raise ValueError(f"recording_target: only for RECORD, not {opcode_name(opcode)}")
+            check_values(control, KIND.get(opcode), opcode)
         if self._state is not SessionState.UP:
             state = "closed" if self._state is SessionState.CLOSED else "down"
-            raise CommandLinkLost(
-                f"{opcode_name(opcode)}: {self.name}: link is {state}; not sent",
-                outcome=Outcome.NOT_SENT, opcode=opcode, command=command,
-            )  # fmt: skip
-        ticket = Ticket(command, opcode, now, timeout, now + queue_timeout,
-                        recording_target=recording_target)  # fmt: skip
+            raise CommandLinkLost(f"{opcode_name(opcode)}: {config.name}: link is {state}; not "
+                                  "sent", outcome=Outcome.NOT_SENT, opcode=opcode,
+                                  command=command)  # fmt: skip
         self.stats.submitted += 1
         self._queue.append(ticket)
         self._seq += 1
@@ -390,22 +243,14 @@ class Session:
         it gives counts as measured at ``now`` (docs/client.md, "Aircraft data: what the
         packets claim")."""
         check_instance("state", state, AircraftState)
-        self._feed.set(state, now, _AIRCRAFT_FIELDS)
+        self._feed.set(state, now, AIRCRAFT_FIELDS)
 
     def update_aircraft(self, changes: Mapping[str, Any], now: float) -> AircraftState:
         """Change the named fields of the aircraft state (the others keep their value and
         the time they were given); the parts named count as measured at ``now``. Raises
         ``TypeError``/``ValueError`` (nothing changes) for an unknown field or a bad value;
         returns the new state."""
-        if not isinstance(changes, Mapping):
-            raise type_error("changes", "a mapping of AircraftState fields", changes)
-        unknown = sorted(str(k) for k in changes if k not in _AIRCRAFT_FIELDS)
-        if unknown:
-            raise TypeError(f"changes: {', '.join(unknown)}: not AircraftState fields "
-                            f"({', '.join(_AIRCRAFT_FIELDS)})")  # fmt: skip
-        state = replace(self._feed.state, **changes)  # validates
-        self._feed.set(state, now, changes)
-        return state
+        return self._feed.update(changes, now)
 
     @property
     def aircraft(self) -> AircraftState:
@@ -426,7 +271,7 @@ class Session:
         no mode takes values."""
         if values is not None:
             opcode, _ = self._control.target()
-            self._check_values(values, KIND.get(opcode) if opcode is not None else None, opcode)
+            check_values(values, KIND.get(opcode) if opcode is not None else None, opcode)
         return self._control.set_values(values, kind)
 
     # -- outputs ---------------------------------------------------------------------------
@@ -446,33 +291,27 @@ class Session:
         pacer = self._pacer
         if pacer.late:
             pacer.settle(now)
-        slot_due = now >= pacer.next_slot
-        if not slot_due and not self._kick:
-            return None  # the gate's slot bound, without building the decision
-        when, command, opcode, start = self._gate(now)
+        when, start = self._gate(now)
         if now < when:
-            if not slot_due and (start is None or now < pacer.early_open_at()):
-                self._kick = False  # early only to start a command, once per window
             return None
         self._kick = False
+        early = now < pacer.next_slot
         ticket = self._in_flight
         if start is not None:
             self._queue.popleft()
-            start.state = TicketState.SENT
-            start.first_sent = now
-            if start.opcode == Opcode.RECORD:
-                belief = self._recording.value(now)
-                start.expect_recording = None if belief is None else not belief
+            start.start(now, self._recording.value(now))
             self._in_flight = ticket = start
+        command, opcode = (NULL, _NULL_OPCODE) if ticket is None else (ticket.command,
+                                                                        ticket.opcode)
         run = self._ledger.sent(opcode, now)
         if ticket is not None:
             ticket.run = run
             ticket.packets += 1
         elif self._queue:
             self.stats.separator_packets += 1
-        if not slot_due:
+        if early:
             self.stats.early_packets += 1
-        pacer.record(now, opcode, early=not slot_due)
+        pacer.record(now, opcode, early=early)
         self._health.packets_sent += 1
         if self._feed.check(now):
             self.stats.aircraft_stale += 1
@@ -481,7 +320,8 @@ class Session:
         return self._encode(main, sub, command)
 
     def next_wakeup(self, now: float) -> float:
-        """When :meth:`poll` must be called next (``inf`` when closed).
+        """When :meth:`poll` must be called next (``inf`` when closed): when the gate lets
+        the next packet go, or a timer is due, whichever comes first.
 
         ``now`` itself when a packet may go now, or when the last packet went out late
         (:attr:`~gcu_async.session.pacing.Pacer.late`): the driver then polls
@@ -492,51 +332,53 @@ class Session:
         when = self._gate(now)[0]
         if when <= now or self._pacer.late:
             return now  # poll(now) sends (after its timers), or settles the late packet
-        timer = self._timers_due_at()
+        timer = self._timers_due_at(now)
         if timer <= now:
             return now  # poll(now) fires it
         if timer < when:
             when = timer
-        if self._queue and self._queue[0].recording_target is not None:
-            settle = self._recording.settles_at()  # the head waits for the belief to settle
-            if now < settle < when:
-                when = settle
         return when if when > now + MIN_WAKE else now + MIN_WAKE
 
-    def _gate(self, now: float) -> tuple[float, Command, int, Ticket | None]:
+    def _gate(self, now: float) -> tuple[float, Ticket | None]:
         """The one gate of sending, read by :meth:`poll` (a packet goes iff ``now`` has
-        reached it) and :meth:`next_wakeup` (it wakes the driver then): (the earliest time
-        the next packet may go, its command and opcode, the queued ticket it would start).
+        reached it) and :meth:`next_wakeup` (it wakes the driver then): the earliest time
+        the next packet may go, and the queued ticket it would start (``None``: the command
+        in flight or a null packet).
 
         A packet goes on its heartbeat slot, or early (before it) to start a command that
         was just queued (``_kick``) once the early window is open; never before the rate
-        bound and the edge guard allow (:mod:`~gcu_async.session.pacing`)."""
+        bound and the edge guard allow (:mod:`~gcu_async.session.pacing`). A kick that
+        cannot start its command early now (nothing may start, or the early window is not
+        open) is spent: the command goes on a slot."""
         pacer = self._pacer
-        command: Command = NULL
         opcode, start, t = _NULL_OPCODE, None, self._in_flight
         if t is not None:  # it repeats until its feedback
-            command, opcode = t.command, t.opcode
+            opcode = t.opcode
         elif self._queue:  # the head starts once a reply proved it may, and its state is known
             head = self._queue[0]
             if self._ledger.may_start(head.opcode) and (
                 head.recording_target is None or self._recording.value(now) is not None
             ):
-                command, opcode, start = head.command, head.opcode, head
+                opcode, start = head.opcode, head
         gate = pacer.open_at(opcode)
         when = pacer.next_slot
         if gate > when:
             when = gate
-        if self._kick and start is not None:
+        if self._kick and now < pacer.next_slot:
             early = pacer.early_open_at()
-            if gate > early:
-                early = gate
-            if early < when:
-                when = early
-        return when, command, opcode, start
+            if start is None or now < early:
+                self._kick = False  # early only to start a command, once per window
+            else:
+                if gate > early:
+                    early = gate
+                if early < when:
+                    when = early
+        return when, start
 
-    def _timers_due_at(self) -> float:
+    def _timers_due_at(self, now: float) -> float:
         """When the earliest timer :meth:`_timers` fires is due: the link's silence, the
-        command in flight's timeout, a queued command's deadline (``inf``: none)."""
+        command in flight's timeout, a queued command's deadline, the recording belief of a
+        state-checked head settling (``inf``: none)."""
         when = self._silent_at if self._state is SessionState.UP else math.inf
         t = self._in_flight
         if t is not None and t.first_sent is not None and t.first_sent + t.timeout < when:
@@ -546,6 +388,10 @@ class Session:
             heapq.heappop(deadlines)
         if deadlines and deadlines[0][0] < when:
             when = deadlines[0][0]
+        if self._queue and self._queue[0].recording_target is not None:
+            settle = self._recording.settles_at()  # the head waits for the belief to settle
+            if now < settle < when:
+                when = settle
         return when
 
     # -- observations ----------------------------------------------------------------------
@@ -566,10 +412,6 @@ class Session:
         if status is None or feedback is None or at is None:
             return None
         return TelemetrySample(status, self._info, feedback, at)
-
-    @property
-    def in_flight(self) -> Ticket | None:
-        return self._in_flight
 
     @property
     def pending(self) -> int:
@@ -595,59 +437,29 @@ class Session:
         return self._recording.value(now)
 
     def link_health(self, now: float) -> LinkHealth:
-        h, d, r = self._health, self._deframer.stats, self._ledger.stats
-        return LinkHealth(
-            up=self._state is SessionState.UP,
-            reply_rate=h.reply_rate(now),
-            last_reply_age=None if h.last_reply is None else now - h.last_reply,
-            packets_sent=h.packets_sent,
-            packets_received=h.packets_received,
-            send_errors=h.send_errors,
-            crc_errors=d.crc_errors,
-            length_errors=d.length_errors,
-            bytes_discarded=d.bytes_discarded,
-            other_versions=h.other_versions,
-            unmatched_feedback=r.unmatched,
-            ambiguous_feedback=r.ambiguous,
-            lost_count=h.lost_count,
-            restored_count=h.restored_count,
-            restarted_count=h.restarted_count,
-        )
+        return self._health.snapshot(now, self._state is SessionState.UP,
+                                     self._deframer.stats, self._ledger.stats)  # fmt: skip
 
     def send_failed(self) -> None:
         """The driver could not hand the last packet to the transport (counted)."""
         self._health.send_errors += 1
 
     # -- internals: replies ----------------------------------------------------------------
-    def _other_version(self, version: int) -> None:
-        """A reply of a version V2.0.6 does not define: decoded with its layout, counted;
-        the first one of the session is logged as a warning."""
-        self._health.other_versions += 1
-        if self._health.other_versions == 1:
-            log.warning("%s: reply of protocol version %d (V2.0.6 defines 1 and 2): decoded "
-                        "with the V2.0.6 layout; further ones are only counted "
-                        "(link_health().other_versions)", self.name, version)  # fmt: skip
-
-    def _flag(self, anomalies: tuple[Anomaly, ...]) -> None:
-        """Log each kind of value outside V2.0.6 (field and reading) the first time a reply
-        carries it: a firmware deviation is said once, not per packet; every reply keeps its
-        own in its ``anomalies``."""
-        for anomaly in anomalies:
-            key = (anomaly.field, anomaly.detail)
-            if key in self._flagged or len(self._flagged) >= FLAGGED_MAX:
-                continue
-            self._flagged.add(key)
-            log.warning("%s: the GCU sends a value outside V2.0.6, %s; said once, each reply "
-                        "keeps it in its anomalies (docs/protocol-notes.md, \"What real pods "
-                        "do\")", self.name, anomaly)  # fmt: skip
-
-    def _on_reply(self, main: GcuMainFrame, sub: GcuSubFrame | None, feedback: Feedback,
-                  now: float, earliest: float | None) -> None:  # fmt: skip
+    def _on_reply(self, raw: bytes, packet: GcuPacket, now: float,
+                  earliest: float | None) -> None:  # fmt: skip
+        """One reply (``raw``: its bytes) that arrived in ``[earliest, now]``."""
+        if self.trace is not None:
+            self.trace(raw)
+        if packet.version not in SUPPORTED_VERSIONS:  # decoded with the V2.0.6 layout
+            self._health.other_versions += 1
+            self._deviations.other_version(packet.version, self._health.other_versions)
+        main, feedback = packet.main, packet.feedback
+        sub = packet.sub if type(packet.sub) is GcuSubFrame else None
         self._health.on_reply(now)
         if main is not self._status and (main.anomalies or feedback.anomalies):
-            self._flag(main.anomalies + feedback.anomalies)  # a new frame: an idle GCU repeats
+            self._deviations.flag(main.anomalies + feedback.anomalies)  # an idle GCU repeats
         # the first instant the silence since this reply exceeds silence_timeout
-        self._silent_at = math.nextafter(now + self.silence_timeout, math.inf)
+        self._silent_at = math.nextafter(now + self.config.silence_timeout, math.inf)
         self._status = main
         self._feedback = feedback
         if sub is not None:
@@ -674,19 +486,9 @@ class Session:
             if run is not ticket.run:
                 self.stats.late_feedback += 1
             else:
-                result = feedback.result
-                if result is ExecutionStatus.IN_PROGRESS:
-                    ticket.progress.append(feedback)
-                elif result is ExecutionStatus.SUCCESS:
-                    ticket.feedback = feedback
-                    self._finish(ticket, TicketState.SUCCEEDED, now)
-                else:
-                    ticket.feedback = feedback
-                    error = CommandFailed(
-                        feedback.opcode, feedback.status, feedback.failed_cameras,
-                        command=ticket.command, name=feedback.command,
-                    )  # fmt: skip
-                    self._finish(ticket, TicketState.FAILED, now, error)
+                ended = ticket.answered(feedback)
+                if ended is not None:
+                    self._finish(ticket, ended[0], now, ended[1])
         elif run is not None and ticket is None and run.opcode != Opcode.NULL:
             self.stats.late_feedback += 1
         if self.telemetry:
@@ -697,30 +499,19 @@ class Session:
     # -- internals: timers and the queue ---------------------------------------------------
     def _timers(self, now: float) -> None:
         if self._state is SessionState.UP and now >= self._silent_at:
-            self._link_down(now, f"no reply for {self.silence_timeout:g} s", reset=True)
+            self._link_down(now, f"no reply for {self.config.silence_timeout:g} s", reset=True)
         if not self._deadlines and self._in_flight is None:
             return
         t = self._in_flight
         if t is not None and t.first_sent is not None and now >= t.first_sent + t.timeout:
-            progress = " (last status: in progress)" if t.progress else ""
-            message = (
-                f"{opcode_name(t.opcode)}: no feedback within {t.timeout:g} s of its first "
-                f"packet{progress}; outcome unknown (it may have executed)"
-            )
-            self._finish(t, TicketState.UNKNOWN, now, CommandTimeout(
-                message, outcome=Outcome.UNKNOWN, opcode=t.opcode, command=t.command))  # fmt: skip
+            self._finish(t, TicketState.UNKNOWN, now, t.timeout_error(now))
         deadlines = self._deadlines
         while deadlines and (deadlines[0][0] <= now
                              or deadlines[0][2].state is not TicketState.QUEUED):  # fmt: skip
             _, _, ticket = heapq.heappop(deadlines)
             if ticket.state is TicketState.QUEUED:
-                queued = now - ticket.submitted_at
-                message = (f"{opcode_name(ticket.opcode)}: not sent: still queued after "
-                           f"{queued:.3g} s (queue_timeout)")  # fmt: skip
                 self._queue.remove(ticket)
-                self._finish(ticket, TicketState.NOT_SENT, now, CommandTimeout(
-                    message, outcome=Outcome.NOT_SENT, opcode=ticket.opcode,
-                    command=ticket.command))  # fmt: skip
+                self._finish(ticket, TicketState.NOT_SENT, now, ticket.timeout_error(now))
         self._advance_queue(now)
 
     def _advance_queue(self, now: float) -> None:
@@ -734,21 +525,9 @@ class Session:
             self._finish(head, TicketState.SKIPPED, now)
 
     def _restarted(self, changes: tuple[StateChange, ...]) -> None:
-        """The GCU restarted: the event, with what a driver needs to restore the host's
-        mode (the mode command it confirmed last, if the GCU was in that mode before the
-        loss and the mode changed) and camera 1's zoom (if it changed)."""
+        """The GCU restarted: the event, with what a driver needs to restore."""
         self._health.restarted_count += 1
-        before, control = self._restart.compared, self._control
-        assert before is not None
-        aspects = {change.aspect for change in changes}
-        mode = None
-        if ("mode" in aspects and control.command is not None and control.confirmed in KIND
-                and REPORTED[control.confirmed] == before.mode_raw):  # fmt: skip
-            mode = control.command
-        zoom = None
-        if "zoom" in aspects and before.zoom_raw is not None:
-            zoom = before.zoom_raw / ZOOM_SCALE
-        self._events.append(Restarted(changes, mode, control.values if mode else None, zoom))
+        self._events.append(Restarted(changes, *self._restart.to_restore(changes, self._control)))
 
     def _link_down(self, now: float, reason: str, *, reset: bool) -> None:
         up = self._state is SessionState.UP
@@ -756,7 +535,7 @@ class Session:
             self._health.lost_count += 1
         was = self._state
         self._state = SessionState.DOWN
-        self._end_all(now, f"{self.name}: {reason}")
+        self._end_all(now, f"{self.config.name}: {reason}")
         if up:
             self._restart.lost(self._status, self._info, self._health.last_reply)
         if was is not SessionState.DOWN:
@@ -770,16 +549,12 @@ class Session:
 
     def _end(self, ticket: Ticket, now: float, reason: str, cls: type[CommandError]) -> None:
         """End a pending ticket from outside: ``UNKNOWN`` if it was sent, else ``NOT_SENT``."""
-        sent = ticket.state is TicketState.SENT
-        state = TicketState.UNKNOWN if sent else TicketState.NOT_SENT
-        outcome = Outcome.UNKNOWN if sent else Outcome.NOT_SENT
-        what = ("outcome unknown (it may have executed)" if sent
-                else "not sent (it did not execute)")  # fmt: skip
-        message = f"{opcode_name(ticket.opcode)}: {reason}; {what}"
-        error = cls(message, outcome=outcome, opcode=ticket.opcode, command=ticket.command)
-        if not sent:
+        error = ticket.end_error(reason, cls)
+        if ticket.state is TicketState.SENT:
+            self._finish(ticket, TicketState.UNKNOWN, now, error)
+        else:
             self._queue.remove(ticket)
-        self._finish(ticket, state, now, error)
+            self._finish(ticket, TicketState.NOT_SENT, now, error)
 
     def _finish(self, ticket: Ticket, state: TicketState, now: float,
                 error: GcuError | None = None) -> None:  # fmt: skip
@@ -795,17 +570,7 @@ class Session:
                 self._recording.toggled(ticket.expect_recording, now)
             elif state is TicketState.UNKNOWN:
                 self._recording.uncertain(now)
-        s = self.stats
-        if state is TicketState.SUCCEEDED:
-            s.succeeded += 1
-        elif state is TicketState.SKIPPED:
-            s.skipped += 1
-        elif state is TicketState.FAILED:
-            s.failed += 1
-        elif state is TicketState.NOT_SENT:
-            s.not_sent += 1
-        else:
-            s.unknown += 1
+        self.stats.ended(state)
         self._events.append(TicketDone(ticket))
 
     # -- internals: packets ----------------------------------------------------------------
@@ -815,7 +580,7 @@ class Session:
             return None
         status = self._status
         reported = status.mode_raw if status is not None else None
-        silent = self._health.silent_for(now) > self.control_silence
+        silent = self._health.silent_for(now) > self.config.control_silence
         return control.valid(reported, silent)
 
     def _encode(self, main: HostMainFrame, sub: HostSubFrame | None, command: Command) -> bytes:
@@ -824,23 +589,8 @@ class Session:
         last = self._last_encoded
         if last[0] is main and last[1] is sub and last[2] is command:
             return last[3]
-        data = HostPacket(main, sub, command, self.version).encode()
+        data = HostPacket(main, sub, command, self.config.version).encode()
         self._last_encoded = (main, sub, command, data)
         return data
 
-    @staticmethod
-    def _check_values(values: ControlValues, kind: ControlKind | None,
-                      opcode: int | None) -> None:  # fmt: skip
-        """Control values must fit the wire and, when the mode is known, its kind: angles
-        ±18000 (0.01°), rates ±1500 (0.1 °/s ÷ zoom)."""
-        ControlValues.check(values)
-        limit = CONTROL_RATE_RAW if kind is ControlKind.RATES else CONTROL_ANGLE_RAW
-        for field, raw in zip(("roll_raw", "pitch_raw", "yaw_raw"), values, strict=True):
-            check_int(f"control.{field}", raw, -limit, limit)
-        if kind is ControlKind.NONE and opcode is not None:
-            raise ValueError(f"control: {opcode_name(opcode)} takes no control values")
-
-
-_AIRCRAFT_FIELDS = tuple(f.name for f in fields(AircraftState))
-
-__all__ = ["Session", "SessionState", "SessionStats"]
+__all__ = ["Session"]

@@ -17,11 +17,11 @@ from dataclasses import dataclass, field
 from typing import NamedTuple
 
 from gcu_async._checks import check_bool
+from gcu_async.conformance import HostConformance, field_diagnosis, frame_anomalies
 from gcu_async.errors import ProtocolErrorReason, RemoteProtocolError
 from gcu_async.protocol.anomalies import Anomaly
 from gcu_async.protocol.command_base import Command
 from gcu_async.protocol.command_decode import AnomalousCommand, command_code
-from gcu_async.protocol.conformance import HostConformance, field_diagnosis, frame_anomalies
 from gcu_async.protocol.deframer import Deframer
 from gcu_async.protocol.enums import Mode, Opcode, PodModel, SubFrameRequest, opcode_name
 from gcu_async.protocol.feedback import Feedback

@@ -8,9 +8,9 @@ and focus with parameter byte 0x00".
 
 from __future__ import annotations
 
+from gcu_async.conformance.host_fields import FIXED_PARAMETER_OPCODES
 from gcu_async.protocol.command_base import Command
 from gcu_async.protocol.command_decode import AnomalousCommand
-from gcu_async.protocol.conformance import FIXED_PARAMETER_OPCODES
 from gcu_async.protocol.enums import CameraMask
 
 DOCUMENT_VALUE = CameraMask.CAMERA_1

@@ -7,8 +7,9 @@ transport registers its own reader (``loop.add_reader``), which per readiness ev
 ``recvfrom`` until the socket is empty (``BlockingIOError``) or :data:`MAX_PER_EVENT`
 datagrams were read (so one busy socket cannot starve the loop either). One event reads a
 single datagram instead: the first after a timer found the socket empty without reading it
-(:meth:`~DrainingDatagramTransport.empty_at_poll`, which tells a timer callback whether the
-socket was empty when its loop iteration polled the OS: ``gcu_async.transport.arrival``).
+(:meth:`~DrainingDatagramTransport.caught_up`, which tells a timer callback whether the
+socket was empty when its loop iteration polled the OS: the transport's arrival hook,
+:meth:`gcu_async.transport.Transport.caught_up`).
 That is a reply after a quiet spell, the heartbeat's usual case, and it then costs no
 failing ``recvfrom``; whatever else is queued is drained by the next event.
 
@@ -48,10 +49,10 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from gcu_async.transport.base import CLOCK_RESOLUTION
+
 MAX_PER_EVENT = 10_000
 """Most datagrams read per readiness event; the rest wait for the next loop iteration."""
-RESOLUTION = time.get_clock_info("monotonic").resolution
-"""Seconds: the monotonic clock's resolution, by which asyncio runs a timer before its time."""
 
 # Linux's <linux/in.h>, <linux/in6.h>, <linux/errqueue.h>, <sys/socket.h> (Python 3.10-3.13
 # define none of these names in the socket module).
@@ -154,12 +155,12 @@ class DrainingDatagramTransport(asyncio.DatagramTransport):
         self.max_per_event = MAX_PER_EVENT
         self.unread_since: float | None = None
         """None: the last read found the socket empty (or a timer's iteration proved it was,
-        :meth:`empty_at_poll`); else the ``time.monotonic()`` at which that read began (it
+        :meth:`caught_up`); else the ``time.monotonic()`` at which that read began (it
         stopped after one datagram, at :attr:`max_per_event` or on an error, with datagrams
         possibly left in the socket)."""
         self._quiet = False
         """A timer found the socket empty at its poll since the last readiness event, without
-        reading it (:meth:`empty_at_poll`): the next event reads one datagram."""
+        reading it (:meth:`caught_up`): the next event reads one datagram."""
         loop.add_reader(sock.fileno(), self._read_ready)  # NotImplementedError: no selector
 
     def _read_ready(self) -> None:
@@ -173,19 +174,19 @@ class DrainingDatagramTransport(asyncio.DatagramTransport):
         the socket was found empty at the end."""
         return self._read(time.monotonic(), self.max_per_event, woken=False)
 
-    def empty_at_poll(self, due: float) -> bool:
-        """Call first thing in a timer callback whose timer was due at ``due`` (the loop's
-        time, ``time.monotonic`` on asyncio's loops): True if nothing that reached the
-        socket before this loop iteration polled the OS is still unread.
+    def caught_up(self, due: float | None = None) -> bool:
+        """:meth:`gcu_async.transport.Transport.caught_up`: True if nothing that reached the
+        socket before this loop iteration polled the OS (``due`` given: a timer callback due
+        then) or before this call is still unread.
 
         asyncio's selector is level-triggered and runs this iteration's I/O callbacks before
         its timers, and a timer due at ``due`` runs only in an iteration whose poll returned
-        after ``due - RESOLUTION``. A read that began no later than that was an earlier
-        iteration's: had it left a datagram, this iteration's poll would have run the reader
-        again. Otherwise (the reader ran in this iteration and may have left some), the
-        socket is read empty now."""
+        after ``due - CLOCK_RESOLUTION``. A read that began no later than that was an
+        earlier iteration's: had it left a datagram, this iteration's poll would have run
+        the reader again. Otherwise (the reader ran in this iteration and may have left
+        some, or no ``due``), the socket is read empty now."""
         since = self.unread_since
-        if since is None or since <= due - RESOLUTION:
+        if due is not None and (since is None or since <= due - CLOCK_RESOLUTION):
             self.unread_since = None
             self._quiet = True
             return True
@@ -269,9 +270,6 @@ class DrainingDatagramTransport(asyncio.DatagramTransport):
 
     def abort(self) -> None:
         self.close()
-
-    def get_protocol(self) -> asyncio.BaseProtocol:
-        return self._protocol
 
     def _call_connection_lost(self) -> None:
         try:

@@ -7,14 +7,15 @@ changes go to ``on_event``. ``send`` never blocks: it hands bytes to the OS (or 
 may drop them when the OS cannot take more (stream transports, counted in
 ``sends_dropped``), and raises :class:`~gcu_async.errors.LinkLost` when the link is down.
 :meth:`Transport.reset` discards whatever is still queued towards the peer. A transport
-that can bound when its replies arrived (UDP) also implements the optional
-:class:`~gcu_async.transport.arrival.ReadsOnDemand`; the others need not.
+that may reorder and can tell when its replies arrived (UDP) also overrides the optional
+:meth:`Transport.caught_up`; the others need not.
 """
 
 from __future__ import annotations
 
 import abc
 import enum
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -22,6 +23,8 @@ from gcu_async._lifecycle import OpenClose
 from gcu_async.transport._common import check_reason
 
 DataHandler = Callable[[bytes], None]
+CLOCK_RESOLUTION = time.get_clock_info("monotonic").resolution
+"""Seconds: the monotonic clock's resolution, by which asyncio runs a timer before its time."""
 
 
 class LinkEventKind(enum.Enum):
@@ -121,6 +124,21 @@ class Transport(OpenClose):
         The default does nothing: transports that queue nothing (UDP, in-memory) keep it.
         Raises TypeError if ``reason`` is not a ``str``."""
         check_reason(reason)
+
+    def caught_up(self, due: float | None = None) -> bool:
+        """Optional, for a transport that may reorder: deliver, now, what it received and
+        has not delivered yet, and say whether nothing that arrived before a point in time
+        is still undelivered, so that whatever it delivers later arrived after that point
+        (the session's reorder proofs rely on it: docs/client.md, "The session contract",
+        A4).
+
+        With ``due`` (seconds on :func:`time.monotonic`; the caller is a timer callback of
+        a loop whose time is that clock, due then), the point is when this loop iteration
+        polled the OS, no earlier than ``due - CLOCK_RESOLUTION``: a transport that reads
+        on the loop's level-triggered readiness events may know it without reading.
+        Without ``due``, the point is this call. The default, False: it cannot tell (the
+        client then assumes a responsive event loop)."""
+        return False
 
     @abc.abstractmethod
     async def open(self) -> None:

@@ -12,6 +12,7 @@ import ipaddress
 import random
 import re
 from collections.abc import Callable
+from typing import TypedDict
 
 from gcu_async.transport.serial import check_baudrate
 
@@ -21,6 +22,29 @@ Converter = Callable[[str, object, bool], object]
 _LABEL = re.compile(r"(?!-)[A-Za-z0-9-]{1,63}(?<!-)\Z")
 _TRUE = {"1", "true", "yes", "on"}
 _FALSE = {"0", "false", "no", "off"}
+
+
+class TransportOptions(TypedDict, total=False):
+    """Every transport's keyword options, for type checkers (``connect(url, **options)``);
+    which a scheme takes is its registry record's ``options``
+    (:data:`~gcu_async.transport.registry.KINDS`), which checks them at run time. TCP's
+    ``connect_timeout`` is not here: to :func:`~gcu_async.connect` that keyword is the
+    client's (the URL query gives the transport's)."""
+
+    local_port: int
+    local_host: str
+    broadcast: bool
+    discovery: bool
+    follow_peer: bool
+    reuse_port: bool | None
+    baudrate: int
+    reconnect: bool
+    backoff_base: float
+    backoff_factor: float
+    backoff_cap: float
+    max_attempts: int | None
+    max_total: float | None
+    rng: random.Random
 
 
 def check_host(field: str, host: str) -> str:

@@ -1,11 +1,10 @@
 """A transport that records what another transport sends and receives in a capture file.
 
 :class:`CapturingTransport` wraps any :class:`~gcu_async.transport.Transport` and behaves
-exactly like it (every property and method is the wrapped one's; attributes it does not
-define, such as ``local_address``, ``rx_datagrams`` or the optional
-:class:`~gcu_async.transport.arrival.ReadsOnDemand` members, are read from the wrapped
-transport, so it has a capability exactly when the wrapped one has),
-while writing each datagram, TCP segment or serial chunk to a
+exactly like it (every property and method is the wrapped one's, the arrival hook
+:meth:`~gcu_async.transport.Transport.caught_up` included; attributes it does not define,
+such as ``local_address`` or ``rx_datagrams``, are read from the wrapped transport), while
+writing each datagram, TCP segment or serial chunk to a
 :class:`~gcu_async.capture.PacketCapture`:
 
 - UDP: one IP/UDP packet per datagram, between the bound local address (the address the
@@ -26,8 +25,7 @@ from __future__ import annotations
 from typing import Any
 
 from gcu_async.capture.synth import source_address
-from gcu_async.capture.writer import PacketCapture
-from gcu_async.transport.arrival import ReadsOnDemand
+from gcu_async.capture.writer import PacketCapture, as_capture
 from gcu_async.transport.base import LinkEvent, LinkEventKind, Transport
 from gcu_async.transport.serial import SerialTransport
 from gcu_async.transport.tcp import TcpTransport
@@ -44,14 +42,6 @@ def _address(value: Any) -> Address | None:
 
 class CapturingTransport(Transport):
     """``inner`` with every byte it exchanges written to ``capture``."""
-
-    def __new__(cls, inner: Transport, capture: PacketCapture) -> CapturingTransport:
-        # A runtime-checkable protocol's isinstance looks members up statically from
-        # Python 3.12 (``__getattr__`` does not count): a wrapper of a transport that
-        # reads on demand is the subclass that spells those members out.
-        if cls is CapturingTransport and isinstance(inner, ReadsOnDemand):
-            cls = _CapturingReader
-        return super().__new__(cls)
 
     def __init__(self, inner: Transport, capture: PacketCapture) -> None:
         super().__init__()
@@ -121,6 +111,9 @@ class CapturingTransport(Transport):
             self._acquired = False
             self.capture.release()
 
+    def caught_up(self, due: float | None = None) -> bool:
+        return self.inner.caught_up(due)  # what it delivers reaches _received: recorded
+
     def reset(self, reason: str) -> None:
         self.inner.reset(reason)
         if self._tcp is not None and not self.inner.connected:
@@ -189,24 +182,6 @@ def with_capture(transport: Transport, capture: object) -> Transport:
     """``transport`` itself when ``capture`` is ``None``, else a :class:`CapturingTransport`
     writing to ``capture`` (a :class:`~gcu_async.capture.PacketCapture` or a file path;
     anything else is a ``TypeError`` naming ``capture``)."""
-    from gcu_async.capture.writer import as_capture
-
     sink = as_capture(capture)
     return transport if sink is None else CapturingTransport(transport, sink)
 
-
-class _CapturingReader(CapturingTransport):
-    """A :class:`CapturingTransport` of a :class:`ReadsOnDemand` transport (what it
-    delivers on demand reaches the capture through the handlers it installed)."""
-
-    inner: Any
-
-    @property
-    def drains(self) -> bool:
-        return bool(self.inner.drains)
-
-    def empty_at_poll(self, due: float) -> bool:
-        return bool(self.inner.empty_at_poll(due))
-
-    def read_pending(self) -> bool:
-        return bool(self.inner.read_pending())

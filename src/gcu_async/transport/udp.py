@@ -351,27 +351,14 @@ class UdpTransport(Reopening, Transport):
         self.tx_datagrams += 1
         dtransport.sendto(data if type(data) is bytes else bytes(data), dest)
 
-    @property
-    def drains(self) -> bool:
-        """True on the draining reader (:attr:`draining`): it never falls behind the socket,
-        and knows at a timer whether the socket was empty (:meth:`empty_at_poll`)."""
-        return self.draining
-
-    def empty_at_poll(self, due: float) -> bool:
-        """On the draining reader, called first thing in a timer callback due at ``due``:
-        True if nothing that arrived before this loop iteration polled the OS is unread
-        (it may read the socket to make sure). False on the fallback path."""
+    def caught_up(self, due: float | None = None) -> bool:
+        """The arrival hook (:meth:`~gcu_async.transport.Transport.caught_up`): on the
+        draining reader (:attr:`draining`), True once nothing that arrived before the point
+        in time it names is unread (it may read and deliver to make sure). False on the
+        fallback path (no ``add_reader``: Windows' proactor loop), which cannot tell."""
         dtransport = self._dtransport
-        return isinstance(dtransport, DrainingDatagramTransport) and dtransport.empty_at_poll(due)
-
-    def read_pending(self) -> bool:
-        """Read and deliver every datagram the OS holds now; True if the socket was then
-        empty. Only the draining reader (:attr:`draining`) can do this; on the fallback
-        path (no ``add_reader``: Windows' proactor loop) it returns False."""
-        dtransport = self._dtransport
-        if isinstance(dtransport, DrainingDatagramTransport) and not dtransport.is_closing():
-            return dtransport.read_all()
-        return False
+        return (isinstance(dtransport, DrainingDatagramTransport)
+                and not dtransport.is_closing() and dtransport.caught_up(due))  # fmt: skip
 
     async def close(self) -> None:
         """Stop reopening, close the socket; returns once it is released. Idempotent."""
