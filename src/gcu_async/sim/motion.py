@@ -279,6 +279,33 @@ class Gimbal:
         self._finish_pan()
         self._update_miss(zoom)
 
+    def settled(self, zoom: float) -> bool:
+        """True when :meth:`step` would change nothing, for any ``dt`` (with the camera at
+        ``zoom``): the pointing at rest. Conservative: no click-to-pan, not in gaze (its aim
+        is recomputed every step), no control rate, every measured rate zero, the setpoints
+        within their limits, and on every axis the slew's error too small to move the motor
+        angle (adding it leaves the angle as it is; a smaller move, ``max_rate * dt``, then
+        does too: rounding is monotonic), the miss distances those of the present pointing."""
+        if self.pan is not None or self.mode == Mode.GAZE or any(self.control_rates) or any(
+            self.rates
+        ):
+            return False
+        if self.mode in RATE_MODES:  # _integrate re-limits the setpoints it moves
+            for axis in (YAW,) if self.mode == Mode.TOP_DOWN else (PITCH, YAW):
+                sp = self.setpoints[axis]
+                if self._limit(axis, sp.frame, sp.value) != sp.value:
+                    return False
+        for axis in range(3):
+            angle = self.relative[axis]
+            error = self._relative_target(axis) - angle
+            if axis == YAW:
+                error = wrap_degrees_180(error)
+                if wrap_degrees_180(angle) != angle:
+                    return False
+            if angle + error != angle:
+                return False
+        return self._miss(zoom) == self.miss
+
     # -- internals -----------------------------------------------------------------------
     def _limit(self, axis: int, frame: Frame, value: float) -> float:
         if axis == ROLL:
@@ -336,12 +363,15 @@ class Gimbal:
             self.setpoints[YAW] = Setpoint(ABS, yaw)
 
     def _update_miss(self, zoom: float) -> None:
+        self.miss = self._miss(zoom)
+
+    def _miss(self, zoom: float) -> tuple[int, int]:
+        """The miss distances (main frame bytes 8–11) the present pointing gives."""
         if self.mode != Mode.TRACK or self.track is None:
-            self.miss = (0, 0)
-            return
+            return (0, 0)
         h, v = field_of_view(zoom)
         now = self.absolute()
         dx = wrap_degrees_180(self.track[1] - now.yaw) / (h / 2)
         dy = -(self.track[0] - now.pitch) / (v / 2)
         full = MISS_FULL_SCALE
-        self.miss = (round(_clamp(dx * full, -full, full)), round(_clamp(dy * full, -full, full)))
+        return (round(_clamp(dx * full, -full, full)), round(_clamp(dy * full, -full, full)))
