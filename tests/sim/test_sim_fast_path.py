@@ -13,13 +13,14 @@ simulator's ManualClock, so the comparison is exact.
 
 from __future__ import annotations
 
+import copy
 import heapq
 from collections.abc import Callable
 from dataclasses import asdict
 from typing import Any
 
 import pytest
-from hypothesis import HealthCheck, event, given, settings
+from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
 from _protocol_strategies import seal
@@ -27,6 +28,7 @@ from _sim_helpers import host_bytes
 from gcu_async.protocol import (
     HOST_HEADER,
     AngleControl,
+    Attitude,
     Calibration,
     CameraMask,
     Centre,
@@ -37,9 +39,11 @@ from gcu_async.protocol import (
     Fpv,
     GazeAtCoordinates,
     GazeLock,
+    GeoPosition,
     HostSubFrame,
     ImageBox,
     ImagePoint,
+    Mode,
     NightVision,
     NightVisionMode,
     PointingFollow,
@@ -55,7 +59,9 @@ from gcu_async.protocol import (
     ZoomTo,
 )
 from gcu_async.sim import FaultConfig, FaultPlan, GcuSimulator, ManualClock, SimulatorModel
+from gcu_async.sim.aircraft import ReceivedAircraft
 from gcu_async.sim.exchange import Exchange
+from gcu_async.sim.motion import REL, Gimbal, Setpoint
 
 
 class _Timer:
@@ -266,7 +272,7 @@ STEPS = st.one_of(
     SEND,
     SEND,  # half the steps
     st.tuples(st.just("wait"), st.sampled_from([0.0, 0.01, 0.5, 3.5])),
-    st.tuples(st.just("faults"), FAULTS, st.booleans()),
+    st.tuples(st.just("faults"), FAULTS, st.sampled_from(["both", "requests", "replies"])),
     st.tuples(st.just("silence"), st.sampled_from([0.0, 0.05, 1.0])),
     st.tuples(st.just("stall"), st.sampled_from([0.0, 0.05, 0.3])),
     st.tuples(st.just("mutate"), st.integers(0, len(MUTATIONS) - 1)),
@@ -288,9 +294,9 @@ def run(steps: list[tuple[Any, ...]], stream: bool) -> tuple[Side, Side]:
             elif kind == "wait":
                 side.loop.advance(step[1])
             elif kind == "faults":
-                config, both = step[1], step[2]
-                side.sim.set_faults(None if config is None else
-                                    config if both else FaultPlan(replies=config))  # fmt: skip
+                config, where = step[1], step[2]
+                side.sim.set_faults(None if config is None else FaultPlan(**{where: config})
+                                    if where != "both" else config)  # fmt: skip
             elif kind == "silence":
                 side.sim.silence(step[1])
             elif kind == "stall":
@@ -341,15 +347,28 @@ def test_an_idle_host_is_answered_from_the_memo(stream: bool) -> None:
         ([("send", 7, 30, 0.02)], 0),
         # faults: the exchange routes every packet (here: delays it), the model still
         # answers from the memo; silent, it processes nothing
-        ([("faults", FaultConfig(delay=0.001), True), ("send", 0, 10, 0.02)], 9),
-        ([("silence", 1.0), ("send", 0, 10, 0.02)], 0),
+        ([("send", 0, 3, 0.02), ("faults", FaultConfig(delay=0.001), "both"),
+          ("send", 0, 10, 0.02)], 2 + 10),
+        ([("send", 0, 3, 0.02), ("faults", FaultConfig(drop=0.5), "replies"),
+          ("send", 0, 10, 0.02)], 2 + 10),
+        ([("send", 0, 3, 0.02), ("faults", FaultConfig(drop=0.5), "requests"),
+          ("send", 0, 10, 0.02)], lambda side: 2 + 10 - side.sim.request_faults.stats.dropped),
+        ([("send", 0, 3, 0.02), ("silence", 1.0), ("send", 0, 10, 0.02)], 2),
+        # heartbeats during a calibration run in full (its end is a state change)
+        ([("send", 15, 1, 0.02), ("send", 0, 10, 0.02), ("wait", 3.5),
+          ("send", 0, 5, 0.02)], 4),
+        # a packet too long for a host packet (128 bytes) is no packet in a datagram, even
+        # when the model, handed it directly, answered it (and made it its memo)
+        ([("mutate", MUTATIONS.index(_direct)), ("mutate", MUTATIONS.index(_direct)),
+          ("send", len(REQUESTS) - 1, 3, 0.02)], 0),
         # a stall: the 5 packets held are answered from the memo when it ends
         ([("send", 0, 2, 0.02), ("stall", 0.1), ("send", 0, 10, 0.02)], 11),
     ],
 )
-def test_when_the_memo_answers(steps: list[tuple[Any, ...]], replayed: int) -> None:
+def test_when_the_memo_answers(steps: list[tuple[Any, ...]],
+                               replayed: int | Callable[[Side], int]) -> None:  # fmt: skip
     fast, _ = run(steps, stream=False)
-    assert fast.replayed == replayed
+    assert fast.replayed == (replayed if isinstance(replayed, int) else replayed(fast))
 
 
 SAME = ("state.camera.ambient_dark=False", "firmware='v2.0.6'", "protocol_version=2")
@@ -367,18 +386,117 @@ def test_a_state_change_between_two_heartbeats_reaches_the_next_reply(
 
 
 @pytest.mark.parametrize("stream", [False, True])
-def test_overriding_the_model_turns_the_memo_off(stream: bool) -> None:
+@pytest.mark.parametrize("method", ["handle", "handle_bytes", "encode"])
+def test_overriding_the_model_turns_the_memo_off(method: str, stream: bool) -> None:
     side = Side(True, stream)
-    seen: list[int] = []
-    handle = side.sim.model.handle
+    for _ in range(3):
+        side.feed(HEARTBEAT)
+        side.loop.advance(0.02)
+    assert side.replayed == 2
+    calls: list[object] = []
+    original = getattr(side.sim.model, method)
 
-    def spy(packet: Any) -> Any:
-        seen.append(packet.main.flags_raw)
-        return handle(packet)
+    def spy(arg: Any) -> Any:
+        calls.append(arg)
+        return original(arg)
 
-    side.sim.model.handle = spy  # type: ignore[method-assign]
+    setattr(side.sim.model, method, spy)  # an application watching packets
     for _ in range(10):
         side.feed(HEARTBEAT)
         side.loop.advance(0.02)
-    assert len(seen) == 10
-    assert side.replayed == 0
+    assert len(calls) == 10  # every packet
+    assert side.replayed == 2
+    delattr(side.sim.model, method)
+    for _ in range(3):
+        side.feed(HEARTBEAT)
+        side.loop.advance(0.02)
+    assert side.replayed == 2 + 3  # the memo made before still holds: nothing changed
+
+
+@pytest.mark.parametrize("index", range(len(REQUESTS)))
+def test_every_request_repeated(index: int) -> None:
+    run([("send", 0, 3, 0.02), ("send", index, 6, 0.02), ("send", 0, 3, 0.02),
+         ("send", index, 3, 0.3)], stream=False)  # fmt: skip
+
+
+# -- the gimbal's rest, against its own step ----------------------------------------------
+POSITION = GeoPosition(38.0, 117.0, 150.0)
+PERTURB: dict[str, Callable[[Gimbal], None]] = {
+    "none": lambda g: None,
+    "gaze moving": lambda g: setattr(g, "gaze_moving", True),
+    "pan here": lambda g: setattr(g, "pan", (g.absolute().pitch, g.absolute().yaw)),
+    "pitch setpoint past its limit": lambda g: setattr(g.setpoints[1], "value", -95.0),
+    "yaw setpoint at 360": lambda g: setattr(g.setpoints[2], "value", 360.0),
+    "stale miss": lambda g: setattr(g, "miss", (5, -5)),
+    "a rate": lambda g: g.rates.__setitem__(0, 0.5),
+    "a control rate": lambda g: setattr(g, "control_rates", (0.0, 0.0, 1.0)),
+    "an ulp off": lambda g: g.relative.__setitem__(1, g.relative[1] + 1e-13),
+    "yaw at 180": lambda g: _yaw_at_180(g),
+    "frozen here": lambda g: _frozen(g),
+}
+
+
+def _frozen(g: Gimbal) -> None:
+    """Setpoints where the camera points, rates zero: held as it is (unless its mode aims
+    elsewhere)."""
+    g.setpoints = [Setpoint(f, g.current(axis, f)) for axis, f in enumerate(g.frames())]
+    g.rates = [0.0, 0.0, 0.0]
+
+
+def _yaw_at_180(g: Gimbal) -> None:
+    """The motor yaw at +180 and its setpoint there: the step wraps it to -180."""
+    g.relative[2] = 180.0
+    frame = g.setpoints[2].frame
+    g.setpoints[2] = Setpoint(frame, 180.0 if frame is REL else g.absolute().yaw)
+    g.rates = [0.0, 0.0, 0.0]
+
+
+SETUPS = ["mode", "gaze lock", "gaze at", "track", "track far", "pan", "angles", "angles far"]
+
+
+@settings(max_examples=400, deadline=None)
+@example(Mode.GAZE, (0.0, 0.0, 0.0), POSITION, "mode", 0, "none", 1.0, 0.02)  # a point appears
+@example(Mode.GAZE, (0.0, 0.0, 0.0), POSITION, "gaze at", 0, "frozen here", 1.0, 0.02)  # aim
+@example(Mode.FPV, (0.0, 0.0, 0.0), None, "mode", 0, "yaw at 180", 1.0, 0.02)
+@given(
+    mode=st.sampled_from(sorted(set(Mode) - {Mode.UNKNOWN})),
+    attitude=st.sampled_from([(0.0, 0.0, 0.0), (4.0, -3.0, 123.45), (-30.0, 60.0, 359.99)]),
+    position=st.sampled_from([None, POSITION]),
+    setup=st.sampled_from(SETUPS),
+    converge=st.sampled_from([0, 1, 2, 5, 60]),
+    perturb=st.sampled_from(sorted(PERTURB)),
+    zoom=st.sampled_from([1.0, 7.5]),
+    dt=st.sampled_from([1e-9, 0.001, 0.02, 1.0, 100.0]),
+)
+def test_a_settled_gimbal_is_left_as_it_is_by_a_step(
+    mode: Mode, attitude: tuple[float, float, float], position: GeoPosition | None,
+    setup: str, converge: int, perturb: str, zoom: float, dt: float,
+) -> None:  # fmt: skip
+    """:meth:`Gimbal.settled` against :meth:`Gimbal.step`: whatever state a run and a
+    change from outside leave, a settled gimbal is left exactly as it is by a step of any
+    length (the reply memo's definition of rest for the gimbal)."""
+    aircraft = ReceivedAircraft(attitude=Attitude(*attitude), position=position)
+    g = Gimbal(aircraft, mode=mode)
+    if setup == "gaze lock":
+        g.gaze_at(None)
+    elif setup == "gaze at":
+        g.gaze_at(GeoPosition(38.001, 117.002, 0.0))
+    elif setup in ("track", "track far"):
+        g.start_track(ImageBox(0.45, 0.45, 0.55, 0.55) if setup == "track" else
+                      ImageBox(0.0, 0.0, 0.1, 0.05), zoom)  # fmt: skip
+    elif setup == "pan":
+        g.click_to_pan(ImagePoint(0.9, 0.1), zoom)
+    elif setup.startswith("angles"):
+        far = setup == "angles far"
+        control = ControlValues.angles(roll=30.0 if far else 3.0, pitch=-150.0 if far else -20.0,
+                                       yaw=170.0)  # fmt: skip
+        g.control_input(control, True, zoom)
+    for _ in range(converge):
+        g.step(0.05, zoom)
+    PERTURB[perturb](g)
+    settled = g.settled(zoom)
+    event(f"settled: {settled}")
+    if settled:
+        before = copy.deepcopy(g)
+        g.step(dt, zoom)
+        assert g == before

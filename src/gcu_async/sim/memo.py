@@ -10,8 +10,9 @@ in full, with its reply, when handling it again could change nothing but counter
   calibration (whose repeated status is recomputed from the clock);
 - **the pod was at rest** after it (:func:`at_rest`): no calibration running, no zoom
   travelling, the gimbal settled (:meth:`~gcu_async.sim.motion.Gimbal.settled`: no
-  click-to-pan, not in gaze, no control rate, no measured rate, every motor where its
-  setpoint holds it), the rangefinder steady (off, or on with nothing hit: no noise drawn).
+  click-to-pan, no control rate, no measured rate, every motor where its setpoint holds
+  it, in gaze the aim where the setpoints are), the rangefinder steady (off, or on with
+  nothing hit: no noise drawn).
 
 The same bytes again are then answered from the memo, with every count the full path keeps:
 the model's :class:`~gcu_async.sim.ModelStats`, the aircraft's packet counters, the host

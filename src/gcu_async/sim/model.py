@@ -304,7 +304,6 @@ class SimulatorModel:
         """Answer one host packet: advance time, run its command, take its control values.
         (Applications and tests override it to watch packets: its signature stays this.)"""
         raw, self._raw = self._raw, b""
-        self._memo = None
         now = self.clock.now()
         self.stats.received += 1
         if packet.version not in SUPPORTED_VERSIONS:

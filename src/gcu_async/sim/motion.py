@@ -280,15 +280,16 @@ class Gimbal:
         self._update_miss(zoom)
 
     def settled(self, zoom: float) -> bool:
-        """True when :meth:`step` would change nothing, for any ``dt`` (with the camera at
-        ``zoom``): the pointing at rest. Conservative: no click-to-pan, not in gaze (its aim
-        is recomputed every step), no control rate, every measured rate zero, the setpoints
-        within their limits, and on every axis the slew's error too small to move the motor
-        angle (adding it leaves the angle as it is; a smaller move, ``max_rate * dt``, then
-        does too: rounding is monotonic), the miss distances those of the present pointing."""
-        if self.pan is not None or self.mode == Mode.GAZE or any(self.control_rates) or any(
-            self.rates
-        ):
+        """True when :meth:`step` would change nothing, for any ``dt`` (the camera at
+        ``zoom``): the pointing at rest. That is: no click-to-pan running, no control rate,
+        every measured rate zero; in gaze, the aim where the setpoints are (and not to be
+        recomputed); the setpoints within their limits; on every axis the slew's error too
+        small to move the motor angle (adding it leaves the angle as it is, and so does any
+        smaller move, ``max_rate * dt``: rounding is monotonic); the miss distances those of
+        the present pointing."""
+        if self.pan is not None or any(self.control_rates) or any(self.rates):
+            return False
+        if self.mode == Mode.GAZE and not self._gaze_held():
             return False
         if self.mode in RATE_MODES:  # _integrate re-limits the setpoints it moves
             for axis in (YAW,) if self.mode == Mode.TOP_DOWN else (PITCH, YAW):
@@ -333,12 +334,27 @@ class Gimbal:
         if self.gaze_moving or self.gaze is None:
             self.gaze = self.point_of_view()
             self.gaze_moving = False
+        aim = self._gaze_aim()
+        if aim is not None:
+            self.setpoints[PITCH], self.setpoints[YAW] = aim
+
+    def _gaze_aim(self) -> tuple[Setpoint, Setpoint] | None:
+        """The pitch and yaw setpoints that aim at the gaze point (None: no point, or no
+        aircraft position to aim from)."""
         position = self.aircraft.position
         if self.gaze is None or position is None:
-            return
+            return None
         pitch, yaw = direction_to(position, self.gaze)
-        self.setpoints[PITCH] = Setpoint(ABS, _clamp(pitch, *ABSOLUTE_PITCH_LIMITS))
-        self.setpoints[YAW] = Setpoint(ABS, yaw)
+        return Setpoint(ABS, _clamp(pitch, *ABSOLUTE_PITCH_LIMITS)), Setpoint(ABS, yaw)
+
+    def _gaze_held(self) -> bool:
+        """In gaze, the next step's aim leaves everything as it is: the point is not to be
+        found again (after a move by rate, or a point of view that has appeared) and the
+        setpoints are its aim already."""
+        if self.gaze_moving or (self.gaze is None and self.aircraft.position is not None):
+            return False
+        aim = self._gaze_aim()
+        return aim is None or (self.setpoints[PITCH], self.setpoints[YAW]) == aim
 
     def _relative_target(self, axis: int) -> float:
         sp = self.setpoints[axis]
