@@ -180,6 +180,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_sim_exports.py": FAST,
     "test_sim_firmware.py": FAST,
     "test_sim_execution_log.py": FAST,
+    "test_sim_fast_path.py": FAST,
     "test_sim_fault_bounds.py": FAST,
     "test_sim_faults.py": "realtime",
     "test_sim_liberal_udp.py": "realtime",

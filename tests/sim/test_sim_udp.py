@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import AsyncIterator
+from typing import Any
 
 import pytest
 
@@ -18,6 +20,20 @@ from gcu_async.protocol import (
     ZoomIn,
 )
 from gcu_async.sim import GcuSimulator, ManualClock, SimulatorModel
+
+
+@pytest.fixture(autouse=True, params=["add_reader", "fallback"])
+async def reader_path(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> str:
+    """Every test on both of the server's receive paths: its own reader (``add_reader``),
+    and asyncio's datagram transport, which it falls back to on loops without add_reader
+    (Windows' proactor loop; simulated here by refusing add_reader on the running loop)."""
+    if request.param == "fallback":
+
+        def refuse(*args: object) -> None:
+            raise NotImplementedError("add_reader is refused by this test")
+
+        monkeypatch.setattr(asyncio.get_running_loop(), "add_reader", refuse)
+    return str(request.param)
 
 
 @pytest.fixture
@@ -165,3 +181,35 @@ async def test_replies_go_to_the_senders_host_at_a_fixed_port(peer: UdpPeer) -> 
         await listener.close()
     with pytest.raises(ValueError, match="at most one"):
         GcuSimulator().serve_udp(port=0, reply_to=("127.0.0.1", 1), reply_port=2)
+
+
+async def test_an_idle_host_gets_the_replies_of_the_full_path(peer: UdpPeer) -> None:
+    """The reply memo over a real socket: a heartbeat repeated 30 times, with a command run
+    in between, answered byte for byte as a simulator without the memo answers it."""
+    replies: dict[bool, list[bytes]] = {}
+    models: dict[bool, SimulatorModel] = {}
+    traffic = [host_bytes()] * 10 + [host_bytes(TakePhoto())] * 3 + [host_bytes()] * 17
+    for memo in (True, False):
+        clock = ManualClock()
+        models[memo] = model = SimulatorModel(clock=clock, reply_memo=memo)
+        replayed = 0
+        replay = model.replay
+
+        def counted(packet: bytes, replay: Any = replay) -> bytes | None:
+            nonlocal replayed
+            reply = replay(packet)
+            replayed += reply is not None
+            return reply
+
+        model.replay = counted  # type: ignore[method-assign]
+        async with GcuSimulator(model).serve_udp(port=0) as server:
+            got = []
+            for packet in traffic:
+                peer.send(packet, server.address)
+                got.append((await peer.receive())[0])
+                clock.advance(0.02)
+            replies[memo] = got
+        assert replayed == (9 + 1 + 16 if memo else 0)
+    assert replies[True] == replies[False]
+    assert models[True].stats == models[False].stats
+    assert models[True].conformance.report() == models[False].conformance.report()

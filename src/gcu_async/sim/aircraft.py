@@ -58,12 +58,9 @@ class ReceivedAircraft:
     def update(self, main: HostMainFrame, sub: object) -> None:
         """Take the aircraft data of one host packet."""
         valid = main.ins_valid
-        if self.packets and valid is not self.ins_valid:
-            self.ins_changes += 1
-        self.packets += 1
+        self.count(valid)
         self.ins_valid = valid
         if valid:
-            self.ins_valid_packets += 1
             self.attitude = Attitude(
                 main.aircraft_roll_raw / 100,
                 main.aircraft_pitch_raw / 100,
@@ -78,6 +75,16 @@ class ReceivedAircraft:
             self.satellites = sub.satellites
             self.gnss_week = sub.gnss_week
             self.gnss_ms = sub.gnss_ms
+
+    def count(self, valid: bool) -> None:
+        """Count one host packet with INS valid ``valid`` (the counters :meth:`update`
+        keeps: a packet repeated while the model is at rest is counted so, its data being
+        what this object holds already)."""
+        if self.packets and valid is not self.ins_valid:
+            self.ins_changes += 1
+        self.packets += 1
+        if valid:
+            self.ins_valid_packets += 1
 
     @property
     def height(self) -> float:

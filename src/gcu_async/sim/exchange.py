@@ -10,6 +10,12 @@ after it entered, with ``0 <= d <= delay + reorder_hold`` of that direction's
 is the timer's schedule: the event loop adds its own latency. While the simulator is stalled,
 packets that reach :meth:`Exchange._process` are held and processed, in order, when the
 stall ends (``sim.stats.held_while_stalled``).
+
+Fast path: a datagram that is the request of the model's reply memo (:mod:`gcu_async.sim.memo`,
+an idle host's heartbeat) while no fault is configured in either direction and the simulator
+is neither stalled nor silenced is answered by :meth:`SimulatorModel.replay` at once: what the
+general path does with it (one packet, no discarded byte, no fault drawn, the same counters),
+without deframing or routing it.
 """
 
 from __future__ import annotations
@@ -28,18 +34,17 @@ log = logging.getLogger("gcu_async.sim")
 Deliver = Callable[[bytes], None]
 
 
-class _Direction:
-    """Faults of one direction. The injector is looked up on every packet, so
-    :meth:`GcuSimulator.set_faults` acts at once."""
+Direction = Callable[[ExchangeHost], FaultInjector]
+"""The fault injector of one direction, looked up on every packet (so
+:meth:`GcuSimulator.set_faults` acts at once)."""
 
-    def __init__(self, sim: ExchangeHost, attribute: str) -> None:
-        self._sim = sim
-        self._attribute = attribute
 
-    @property
-    def injector(self) -> FaultInjector:
-        injector: FaultInjector = getattr(self._sim, self._attribute)
-        return injector
+def _requests(sim: ExchangeHost) -> FaultInjector:
+    return sim.request_faults
+
+
+def _replies(sim: ExchangeHost) -> FaultInjector:
+    return sim.reply_faults
 
 
 class Exchange:
@@ -47,9 +52,13 @@ class Exchange:
 
     def __init__(self, sim: ExchangeHost, *, stream: bool) -> None:
         self._sim = sim
-        self._deframer = Deframer.for_host_packets() if stream else None
-        self._requests = _Direction(sim, "request_faults")
-        self._replies = _Direction(sim, "reply_faults")
+        self._stream = stream
+        self._deframer = Deframer.for_host_packets()
+        """The connection's (a stream), or the one every datagram is deframed with (each
+        settled at its end: one datagram never runs into the next)."""
+        self._longest = self._deframer.max_length
+        self._requests: Direction = _requests
+        self._replies: Direction = _replies
         self._timers: set[asyncio.TimerHandle] = set()
         self._held: list[tuple[bytes, Deliver]] = []
         self._closed = False
@@ -59,11 +68,19 @@ class Exchange:
         """Bytes from the peer; replies go to ``send`` (a datagram is deframed on its own)."""
         if self._closed:
             return
-        model = self._sim.model
-        if self._deframer is not None:
-            packets = model.split(data, self._deframer)
+        sim = self._sim
+        model = sim.model
+        if not self._stream:
+            if (len(data) <= self._longest and not sim.stalls.stalled
+                    and not sim.request_faults.config.active
+                    and not sim.reply_faults.config.active and not sim.silenced):  # fmt: skip
+                reply = model.replay(data)
+                if reply is not None:
+                    self._send(send, reply)
+                    return
+            packets = model.split(data, self._deframer, end=True)
         else:
-            packets = model.split(data, Deframer.for_host_packets(), end=True)
+            packets = model.split(data, self._deframer)
 
         def process(packet: bytes) -> None:
             self._process(packet, send)
@@ -81,7 +98,7 @@ class Exchange:
         for timer in self._timers:
             timer.cancel()
         self._timers.clear()
-        if self._deframer is not None:
+        if self._stream:
             self._sim.model.discard(self._deframer)
 
     def pause(self) -> None:
@@ -118,8 +135,8 @@ class Exchange:
         else:
             self._sim.stats.replies_sent += 1
 
-    def _route(self, direction: _Direction, data: bytes, deliver: Deliver) -> None:
-        injector = direction.injector
+    def _route(self, direction: Direction, data: bytes, deliver: Deliver) -> None:
+        injector = direction(self._sim)
         if not injector.config.active:
             deliver(data)
             return

@@ -50,7 +50,7 @@ class FaultConfig:
     @property
     def active(self) -> bool:
         """Does this configuration change anything?"""
-        return any((self.drop, self.corrupt, self.duplicate, self.reorder, self.delay))
+        return bool(self.drop or self.corrupt or self.duplicate or self.reorder or self.delay)
 
 
 @dataclass(frozen=True)

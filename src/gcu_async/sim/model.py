@@ -37,6 +37,7 @@ from gcu_async.sim.camera import CameraState
 from gcu_async.sim.clock import Clock, MonotonicClock
 from gcu_async.sim.executor import Executor
 from gcu_async.sim.firmware import DEFAULT_FIRMWARE, Firmware, firmware_for
+from gcu_async.sim.memo import ReplyMemo, at_rest
 from gcu_async.sim.motion import DEFAULT_MAX_RATE, Gimbal
 from gcu_async.sim.profiles import PodProfile, profile_for
 from gcu_async.sim.rangefinder import Rangefinder
@@ -112,6 +113,11 @@ class SimulatorModel:
     ``state`` is the live :class:`SimState`. ``firmware`` (a name of
     :data:`~gcu_async.sim.firmware.FIRMWARES` or a :class:`~gcu_async.sim.firmware.Firmware`)
     says how the replies are filled: ``"v2.0.6"``, the document, by default.
+
+    ``reply_memo`` (default on; settable): a request repeated while the pod is at rest (an
+    idle host's heartbeat) is answered from a memo of the last reply, every counter and the
+    conformance report kept as the full path keeps them (:mod:`gcu_async.sim.memo` says when
+    exactly); off, every packet takes the full path. The replies are the same either way.
     """
 
     def __init__(
@@ -128,6 +134,7 @@ class SimulatorModel:
         protocol_version: int = DEFAULT_VERSION,
         record_executions: bool = False,
         firmware: Firmware | str = DEFAULT_FIRMWARE,
+        reply_memo: bool = True,
     ) -> None:
         if not calibration_seconds >= 0:
             raise ValueError(f"calibration_seconds: {calibration_seconds!r} must be >= 0")
@@ -162,6 +169,12 @@ class SimulatorModel:
         self.conformance = HostConformance()
         """Every host packet handled, checked against V2.0.6 (:meth:`HostConformance.report`)."""
         self._raw = b""
+        self.reply_memo = check_bool("reply_memo", reply_memo)
+        """Answer a request repeated at rest from the memo (:mod:`gcu_async.sim.memo`)."""
+        self._memo: ReplyMemo | None = None
+        self._handled: tuple[tuple[Anomaly, ...], bool] = ((), False)
+        """What :meth:`handle` found in its last packet: the frame anomalies, and whether
+        it ran no command (the null command or a repeated opcode other than calibration)."""
 
     @property
     def firmware(self) -> Firmware:
@@ -209,6 +222,9 @@ class SimulatorModel:
     def handle_bytes(self, packet: bytes) -> bytes | None:
         """Answer one complete packet; ``None`` (counted by reason) only when its header,
         length or CRC is wrong: any CRC-valid host packet is answered."""
+        reply = self.replay(packet)
+        if reply is not None:
+            return reply
         try:
             decoded = decode_host_packet(packet)
         except RemoteProtocolError as exc:
@@ -224,9 +240,60 @@ class SimulatorModel:
             return None
         self._raw = packet  # for the conformance report's examples; handle() keeps its shape
         try:
-            return self.encode(self.handle(decoded))
+            reply = self.encode(self.handle(decoded))
         finally:
             self._raw = b""
+        frame, ran_none = self._handled
+        if ran_none and self.reply_memo and self._plain() and at_rest(self.state):
+            self._memo = ReplyMemo(
+                bytes(packet), decoded, reply, frame=frame,
+                repeated=command_code(decoded.command) != Opcode.NULL,
+                anomalous=isinstance(decoded.command, AnomalousCommand),
+                other_version=decoded.version not in SUPPORTED_VERSIONS,
+                state=self.state, executor=self.executor, model=self._memo_key(),
+            )  # fmt: skip
+        return reply
+
+    def replay(self, packet: bytes | bytearray | memoryview) -> bytes | None:
+        """The memo's reply to ``packet``, counted as the full path counts it, if ``packet``
+        is the memo's request and the state is the one its reply was made in; else ``None``,
+        nothing done (:mod:`gcu_async.sim.memo`). :meth:`handle_bytes` tries it first; a
+        server's exchange calls it for a datagram, which it then need not deframe."""
+        memo = self._memo
+        if (memo is None or packet != memo.request or not self.reply_memo or not self._plain()
+                or not memo.holds(self.state, self.executor, self._memo_key())):  # fmt: skip
+            return None
+        now = self.clock.now()
+        stats = self.stats
+        stats.received += 1
+        decoded = memo.packet
+        if memo.other_version:
+            self._other_version(decoded.version)
+        self.conformance.add_packet(decoded, now, raw=memo.request, frame=memo.frame)
+        if memo.frame:
+            self._frame_anomalies(memo.frame)
+        self.state.aircraft.count(memo.ins_valid)
+        if now > self._time:  # advance(now): nothing moves at rest
+            self._time = now
+        if memo.anomalous:
+            stats.anomalous += 1
+        if memo.repeated:
+            stats.repeated += 1
+        stats.answered += 1
+        return memo.reply
+
+    def _plain(self) -> bool:
+        """None of the methods the memo stands for is overridden (an override sees every
+        packet)."""
+        cls = type(self)
+        return (cls.handle, cls.handle_bytes, cls.encode) == _OWN and vars(self).keys().isdisjoint(
+            _OWN_NAMES
+        )
+
+    def _memo_key(self) -> tuple[object, ...]:
+        """The model's own attributes a reply depends on (besides its state's)."""
+        return (self.state, self.executor, self.profile, self.protocol_version,
+                self.last_opcode, self._last_feedback)  # fmt: skip
 
     def encode(self, reply: GcuPacket) -> bytes:
         """The wire bytes of a reply :meth:`handle` made, with this firmware's deviations from
@@ -252,6 +319,7 @@ class SimulatorModel:
         opcode = command_code(packet.command)
         if isinstance(packet.command, AnomalousCommand):
             self.stats.anomalous += 1
+        ran_none = opcode != Opcode.CALIBRATION
         if opcode == Opcode.NULL:  # with parameter bytes too (flagged): still the separator
             feedback = Feedback(Opcode.NULL)
         elif opcode == self.last_opcode:
@@ -260,6 +328,7 @@ class SimulatorModel:
             if opcode == Opcode.CALIBRATION:
                 feedback = Feedback(opcode, self.executor.calibration_status(now))
         else:
+            ran_none = False
             run = packet.command
             if isinstance(run, AnomalousCommand):
                 instead = tolerated(run)
@@ -285,6 +354,7 @@ class SimulatorModel:
         self.state.gimbal.control_input(main.control, main.control_valid, cam.main_zoom)
         self.state.rangefinder.measure(self.state.attitude, self.state.aircraft, self.rng)
         self.stats.answered += 1
+        self._handled = (found, ran_none)
         standard = main.subframe_request == SubFrameRequest.STANDARD
         return GcuPacket(
             main_frame(self.state, self.firmware),
@@ -334,3 +404,7 @@ class SimulatorModel:
         return (f"<SimulatorModel {self.profile.name} firmware={self.firmware.name} "
                 f"mode={self.state.mode.name} "
                 f"answered={self.stats.answered}>")  # fmt: skip
+
+
+_OWN = (SimulatorModel.handle, SimulatorModel.handle_bytes, SimulatorModel.encode)
+_OWN_NAMES = ("handle", "handle_bytes", "encode")

@@ -280,6 +280,34 @@ class Gimbal:
         self._finish_pan()
         self._update_miss(zoom)
 
+    def settled(self, zoom: float) -> bool:
+        """True when :meth:`step` would change nothing, for any ``dt`` (the camera at
+        ``zoom``): the pointing at rest. That is: no click-to-pan running, no control rate,
+        every measured rate zero; in gaze, the aim where the setpoints are (and not to be
+        recomputed); the setpoints within their limits; on every axis the slew's error too
+        small to move the motor angle (adding it leaves the angle as it is, and so does any
+        smaller move, ``max_rate * dt``: rounding is monotonic); the miss distances those of
+        the present pointing."""
+        if self.pan is not None or any(self.control_rates) or any(self.rates):
+            return False
+        if self.mode == Mode.GAZE and not self._gaze_held():
+            return False
+        if self.mode in RATE_MODES:  # _integrate re-limits the setpoints it moves
+            for axis in (YAW,) if self.mode == Mode.TOP_DOWN else (PITCH, YAW):
+                sp = self.setpoints[axis]
+                if self._limit(axis, sp.frame, sp.value) != sp.value:
+                    return False
+        for axis in range(3):
+            angle = self.relative[axis]
+            error = self._relative_target(axis) - angle
+            if axis == YAW:
+                error = wrap_degrees_180(error)
+                if wrap_degrees_180(angle) != angle:
+                    return False
+            if angle + error != angle:
+                return False
+        return self._miss(zoom) == self.miss
+
     # -- internals -----------------------------------------------------------------------
     def _limit(self, axis: int, frame: Frame, value: float) -> float:
         if axis == ROLL:
@@ -307,12 +335,27 @@ class Gimbal:
         if self.gaze_moving or self.gaze is None:
             self.gaze = self.point_of_view()
             self.gaze_moving = False
+        aim = self._gaze_aim()
+        if aim is not None:
+            self.setpoints[PITCH], self.setpoints[YAW] = aim
+
+    def _gaze_aim(self) -> tuple[Setpoint, Setpoint] | None:
+        """The pitch and yaw setpoints that aim at the gaze point (None: no point, or no
+        aircraft position to aim from)."""
         position = self.aircraft.position
         if self.gaze is None or position is None:
-            return
+            return None
         pitch, yaw = direction_to(position, self.gaze)
-        self.setpoints[PITCH] = Setpoint(ABS, _clamp(pitch, *ABSOLUTE_PITCH_LIMITS))
-        self.setpoints[YAW] = Setpoint(ABS, yaw)
+        return Setpoint(ABS, _clamp(pitch, *ABSOLUTE_PITCH_LIMITS)), Setpoint(ABS, yaw)
+
+    def _gaze_held(self) -> bool:
+        """In gaze, the next step's aim leaves everything as it is: the point is not to be
+        found again (after a move by rate, or a point of view that has appeared) and the
+        setpoints are its aim already."""
+        if self.gaze_moving or (self.gaze is None and self.aircraft.position is not None):
+            return False
+        aim = self._gaze_aim()
+        return aim is None or (self.setpoints[PITCH], self.setpoints[YAW]) == aim
 
     def _relative_target(self, axis: int) -> float:
         sp = self.setpoints[axis]
@@ -337,12 +380,15 @@ class Gimbal:
             self.setpoints[YAW] = Setpoint(ABS, yaw)
 
     def _update_miss(self, zoom: float) -> None:
+        self.miss = self._miss(zoom)
+
+    def _miss(self, zoom: float) -> tuple[int, int]:
+        """The miss distances (main frame bytes 8–11) the present pointing gives."""
         if self.mode != Mode.TRACK or self.track is None:
-            self.miss = (0, 0)
-            return
+            return (0, 0)
         h, v = field_of_view(zoom)
         now = self.absolute()
         dx = wrap_degrees_180(self.track[1] - now.yaw) / (h / 2)
         dy = -(self.track[0] - now.pitch) / (v / 2)
         full = MISS_FULL_SCALE
-        self.miss = (round(_clamp(dx * full, -full, full)), round(_clamp(dy * full, -full, full)))
+        return (round(_clamp(dx * full, -full, full)), round(_clamp(dy * full, -full, full)))

@@ -33,6 +33,12 @@ class Rangefinder:
         """Distance and target coordinates valid (pod status B7)."""
         return self.on and self.distance > 0 and self.position is not None
 
+    @property
+    def steady(self) -> bool:
+        """The next :meth:`measure` at the same attitude draws no noise and finds what the
+        last one found: off, or on with nothing hit."""
+        return not self.on or (self.distance == NO_HIT_M and self.position is None)
+
     def measure(self, attitude: Attitude, aircraft: ReceivedAircraft, rng: random.Random) -> None:
         """Take a reading for the camera's current ``attitude``."""
         self.position = None

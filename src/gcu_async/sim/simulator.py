@@ -26,6 +26,9 @@ from gcu_async.sim.tcp import TcpServer
 from gcu_async.sim.udp import UdpServer
 from gcu_async.transport.registry import kind_of
 
+_NEVER = -math.inf
+"""The end of a silence that never began."""
+
 
 class GcuSimulator:
     """A simulated GCU you can reach over the network, a pty or in memory.
@@ -61,7 +64,7 @@ class GcuSimulator:
         self.reply_faults = FaultInjector(self.faults.replies)
         self.set_faults(faults)
         self.stats = SimulatorStats()
-        self._silent_until = -math.inf
+        self._silent_until = _NEVER
         self.stalls = StallSwitch(self.model.clock)
         """The stall switch every endpoint and exchange of this simulator joins."""
         self.capture = as_capture(capture)
@@ -82,11 +85,12 @@ class GcuSimulator:
         silence early."""
         if not 0 <= seconds < math.inf:
             raise ValueError(f"seconds: {seconds!r} is outside the allowed range [0, inf)")
-        self._silent_until = self.model.clock.now() + seconds if seconds else -math.inf
+        self._silent_until = self.model.clock.now() + seconds if seconds else _NEVER
 
     @property
     def silenced(self) -> bool:
-        return self.model.clock.now() < self._silent_until
+        until = self._silent_until
+        return until != _NEVER and self.model.clock.now() < until
 
     def stall(self, seconds: float) -> None:
         """Freeze for ``seconds`` of the model's clock: every endpoint stops reading, so the

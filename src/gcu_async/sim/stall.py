@@ -65,7 +65,7 @@ class StallSwitch:
         if seconds == 0:
             self._end()
             return
-        loop = asyncio.get_running_loop()  # before any change: no loop, no stall
+        loop = self._loop()  # before any change: no loop, no stall
         self._until = self._clock.now() + seconds
         if not self.stalled:
             self.stalled = True
@@ -83,6 +83,10 @@ class StallSwitch:
         self._members.pop(member, None)
 
     # -- internals ----------------------------------------------------------------------------
+    @staticmethod
+    def _loop() -> asyncio.AbstractEventLoop:
+        return asyncio.get_running_loop()
+
     def _schedule(self, loop: asyncio.AbstractEventLoop) -> None:
         if self._timer is not None:
             self._timer.cancel()
@@ -96,7 +100,7 @@ class StallSwitch:
         if self._clock.now() >= self._until:
             self._end()
         else:
-            self._schedule(asyncio.get_running_loop())
+            self._schedule(self._loop())
 
     def _end(self) -> None:
         self._until = -math.inf
