@@ -179,17 +179,7 @@ def test_no_cycle_between_units() -> None:
     assert find_cycle(ALLOWED) is None, "the table itself has a cycle"
 
 
-PENDING: Mapping[tuple[str, str], str] = {
-    ("gcu_async.bridge.links", "gcu_async.bridge.stream_link"):
-        "make_link imports the link classes that import links: it moves beside its caller "
-        "(issue 26, agent str)",
-    ("gcu_async.bridge.links", "gcu_async.bridge.udp_link"): "make_link, as above",
-    ("gcu_async.client.restore", "gcu_async.client.driver"):
-        "restore() takes the Driver that imports it (a TYPE_CHECKING import): not yet assigned",
-    ("gcu_async.cli.send", "gcu_async.cli"):
-        "send imports VERBOSE_HELP and configure_logging from the package that imports it "
-        "(inside functions): the command line's (issue 25, agent cli)",
-}
+PENDING: Mapping[tuple[str, str], str] = {}
 """Module edges that close a cycle, each with the work that removes it (none should be added:
 a new cycle is fixed, not listed)."""
 

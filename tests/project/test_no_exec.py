@@ -14,9 +14,7 @@ SRC = Path(__file__).resolve().parent.parent.parent / "src" / "gcu_async"
 
 BUILTINS = frozenset({"exec", "eval", "compile"})
 
-PENDING = {
-    "protocol/frame_schema.py": "the frame codec's two generators (issue 26, agent frm)",
-}
+PENDING: dict[str, str] = {}
 """Modules whose calls are being removed, with the work that removes them."""
 
 

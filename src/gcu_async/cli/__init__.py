@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import logging
 import sys
 from collections.abc import Sequence
 from typing import NoReturn
@@ -11,10 +10,8 @@ from typing import NoReturn
 from gcu_async import __version__
 from gcu_async.cli import decode, demo, mavlink_bridge, monitor, send, sim, wireshark
 from gcu_async.cli._exit import EXIT_USAGE
+from gcu_async.cli._logging import VERBOSE_HELP, configure_logging
 from gcu_async.cli._parser import CliParser
-
-VERBOSE_HELP = ("log the library's lifecycle to stderr (INFO); -vv: every packet in and out "
-                "too (DEBUG, the gcu_async.wire logger)")  # fmt: skip
 
 
 class OneLineParser(CliParser):
@@ -56,15 +53,6 @@ def parse(parser: argparse.ArgumentParser, argv: Sequence[str] | None) -> argpar
         owner = parser if any(arg in before for arg in extra) else args.command_parser
         owner.error(f"unrecognized arguments: {' '.join(extra)}")
     return args
-
-
-def configure_logging(verbose: int) -> None:
-    """``-v``: the ``gcu_async`` loggers at INFO on stderr; ``-vv``: DEBUG (every packet)."""
-    if verbose <= 0:
-        return
-    logging.basicConfig(stream=sys.stderr, level=logging.WARNING,
-                        format="%(asctime)s %(name)s %(levelname)s %(message)s")  # fmt: skip
-    logging.getLogger("gcu_async").setLevel(logging.DEBUG if verbose >= 2 else logging.INFO)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

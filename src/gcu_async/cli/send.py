@@ -35,6 +35,7 @@ from gcu_async.cli._exit import (
     interruptible,
     silence_stdout,
 )
+from gcu_async.cli._logging import VERBOSE_HELP, configure_logging
 from gcu_async.cli._parser import CliParser
 from gcu_async.cli.send_commands import (
     COMMANDS,
@@ -140,8 +141,6 @@ class CommandParser(CliParser):
 def command_parser(name: str) -> CommandParser:
     """The parser of command ``name``: its arguments (converted, in ``arg_<name>``), the
     shared options, ``-v`` and ``--help`` (the command's own help)."""
-    from gcu_async.cli import VERBOSE_HELP  # the package is loaded once a command is parsed
-
     spec = COMMANDS[name]
     parser = CommandParser(
         name, prog=f"{PROG} URL {name}", description=spec.description(),
@@ -293,8 +292,6 @@ def run(args: argparse.Namespace) -> int:
         print(f"{PROG}: {exc}", file=sys.stderr)
         return EXIT_USAGE
     if args.verbose != verbose:  # -v after the command's name
-        from gcu_async.cli import configure_logging
-
         configure_logging(args.verbose)
     try:
         feedback, state = asyncio.run(interruptible(_send(inv)))

@@ -158,6 +158,15 @@ class Driver:
             return f"the client failed ({self.failure}); open it again"
         return "the client is not open"
 
+    @property
+    def url(self) -> str:
+        """The transport's URL."""
+        return self.transport.url
+
+    def emit(self, event: LinkEvent) -> None:
+        """Hand ``event`` to the link-event subscribers."""
+        self.links.emit(event)
+
     def context(self) -> Context:
         """What the command builder needs of the GCU's latest reports."""
         session = self.session

@@ -16,19 +16,30 @@ from __future__ import annotations
 
 import asyncio
 import logging
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from gcu_async.errors import GcuError
-from gcu_async.protocol.builder import Submission, build
+from gcu_async.protocol.builder import Context, Submission, build
 from gcu_async.protocol.enums import opcode_name
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.session import Restarted
 from gcu_async.transport.base import LinkEvent, LinkEventKind
 
-if TYPE_CHECKING:
-    from gcu_async.client.driver import Driver
-
 log = logging.getLogger("gcu_async.client")
+
+
+class Restorer(Protocol):
+    """What :func:`restore` needs of the client's driver (which calls it)."""
+
+    @property
+    def url(self) -> str: ...
+
+    def context(self) -> Context: ...
+
+    def enqueue(self, submission: Submission) -> tuple[object, asyncio.Future[Feedback | None]]:
+        ...
+
+    def emit(self, event: LinkEvent) -> None: ...
 
 
 def restored(event: Restarted) -> list[str]:
@@ -42,7 +53,7 @@ def restored(event: Restarted) -> list[str]:
     return what
 
 
-def _submissions(driver: Driver, event: Restarted) -> list[tuple[str, Submission]]:
+def _submissions(driver: Restorer, event: Restarted) -> list[tuple[str, Submission]]:
     runs = []
     if event.mode is not None:
         runs.append((f"mode {opcode_name(event.mode.OPCODE)}",
@@ -53,15 +64,15 @@ def _submissions(driver: Driver, event: Restarted) -> list[tuple[str, Submission
     return runs
 
 
-async def restore(driver: Driver, event: Restarted) -> None:
+async def restore(driver: Restorer, event: Restarted) -> None:
     """Re-apply the mode and zoom ``event`` names; report each that fails."""
-    url = driver.transport.url
+    url = driver.url
     pending: list[tuple[str, asyncio.Future[Feedback | None]]] = []
 
     def failed(what: str, exc: BaseException) -> None:
         detail = f"restoring {what} after the GCU restarted failed: {exc}"
         log.warning("%s: %s", url, detail)
-        driver.links.emit(LinkEvent(LinkEventKind.ERROR, detail))
+        driver.emit(LinkEvent(LinkEventKind.ERROR, detail))
 
     for what, submission in _submissions(driver, event):
         try:
