@@ -11,6 +11,7 @@ modules (:data:`PENDING` lists the edges whose removal is under way).
 from __future__ import annotations
 
 import ast
+import functools
 import re
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -135,29 +136,41 @@ def find_cycle(graph: Mapping[str, Iterable[str]]) -> list[str] | None:
     return None
 
 
-MODULES = module_graph()
-UNITS = unit_graph(MODULES)
+@functools.cache
+def _graphs() -> tuple[dict[str, set[str]], dict[str, set[str]]]:
+    """The module graph and the unit graph, parsed once per process and only when a test
+    asks (parsing every module at collection would cost each pytest-xdist worker)."""
+    modules = module_graph()
+    return modules, unit_graph(modules)
+
+
+def modules_() -> dict[str, set[str]]:
+    return _graphs()[0]
+
+
+def units_() -> dict[str, set[str]]:
+    return _graphs()[1]
 
 
 def test_the_graph_is_read() -> None:
     """The parser finds the imports (a graph read wrongly would pass every rule)."""
-    assert len(MODULES) > 80
-    assert "gcu_async.protocol.packets" in MODULES["gcu_async.client.client"] or any(
-        m.startswith("gcu_async.protocol") for m in MODULES["gcu_async.client.client"]
+    assert len(modules_()) > 80
+    assert "gcu_async.protocol.packets" in modules_()["gcu_async.client.client"] or any(
+        m.startswith("gcu_async.protocol") for m in modules_()["gcu_async.client.client"]
     )
-    assert {"protocol", "session", "transport"} <= UNITS["client"]
-    assert "cli" in UNITS["__main__"]
+    assert {"protocol", "session", "transport"} <= units_()["client"]
+    assert "cli" in units_()["__main__"]
 
 
 def test_every_unit_is_in_the_table() -> None:
-    missing = sorted(set(UNITS) - set(ALLOWED))
+    missing = sorted(set(units_()) - set(ALLOWED))
     assert not missing, f"add {missing} to ALLOWED here and to docs/architecture.md"
 
 
 def test_every_import_is_allowed() -> None:
     wrong = [
         f"{source} -> {target}"
-        for source, targets in sorted(UNITS.items())
+        for source, targets in sorted(units_().items())
         for target in sorted(targets)
         if target not in ALLOWED.get(source, frozenset())
     ]
@@ -175,7 +188,7 @@ def test_the_named_rules() -> None:
 
 
 def test_no_cycle_between_units() -> None:
-    assert find_cycle(UNITS) is None, find_cycle(UNITS)
+    assert find_cycle(units_()) is None, find_cycle(units_())
     assert find_cycle(ALLOWED) is None, "the table itself has a cycle"
 
 
@@ -187,15 +200,15 @@ a new cycle is fixed, not listed)."""
 def test_no_cycle_between_modules() -> None:
     """No module imports, however lazily, a module that imports it back (a cycle inside a
     unit is still a cycle for the reader)."""
-    graph = {m: targets - {t for s, t in PENDING if s == m} for m, targets in MODULES.items()}
+    graph = {m: targets - {t for s, t in PENDING if s == m} for m, targets in modules_().items()}
     assert find_cycle(graph) is None, " -> ".join(find_cycle(graph) or [])
 
 
 def test_every_pending_edge_still_closes_a_cycle() -> None:
     """A pending edge whose import is gone is dropped, not kept."""
     for source, target in PENDING:
-        assert target in MODULES[source], f"{source} -> {target} is gone: drop it from PENDING"
-        assert _reaches(MODULES, target, source), f"{source} -> {target} closes no cycle"
+        assert target in modules_()[source], f"{source} -> {target} is gone: drop it from PENDING"
+        assert _reaches(modules_(), target, source), f"{source} -> {target} closes no cycle"
 
 
 def _reaches(graph: Mapping[str, Iterable[str]], start: str, goal: str) -> bool:
@@ -230,7 +243,7 @@ def test_the_module_graph_reads_lazy_and_type_checking_imports(tmp_path: Path) -
 def test_no_cycle_between_the_simulators_modules() -> None:
     sim = {
         m: {t for t in targets if t.startswith("gcu_async.sim.")}
-        for m, targets in MODULES.items()
+        for m, targets in modules_().items()
         if m.startswith("gcu_async.sim.")
     }
     assert find_cycle(sim) is None, " -> ".join(find_cycle(sim) or [])
