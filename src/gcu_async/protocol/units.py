@@ -75,7 +75,7 @@ class ImageBox(NamedTuple):
 YAW_INPUT_RANGE = (-180.0, 360.0)
 """Degrees, half-open: how every absolute yaw or heading may be given (the Euler yaw of
 ``enter_euler_control``, the aircraft's yaw of ``update_aircraft``, the waits): MAVLink's
-±180° headings and compass 0–360° alike; each is sent in the range its wire field takes."""
+signed headings and compass headings alike; each is sent in the range its wire field takes."""
 
 
 METRES_PER_DEGREE = 111_320.0
