@@ -8,7 +8,7 @@ sans-I/O session driven over the transport: timers, futures, the packet pump), a
 abstract hooks. Its command methods come from its base
 :class:`~gcu_async.client.command_methods.GcuCommands`, one line each naming what it sends.
 Every rule (pacing, separation, matching, timeouts, control values, link health) lives in the
-session (docs/client.md, "The session contract").
+session (docs/session-contract.md, "The session contract").
 """
 
 from __future__ import annotations
@@ -367,8 +367,8 @@ class GcuClient(GcuCommands, OpenClose):
 
     @property
     def control_valid(self) -> bool:
-        """True if the next packet carries the control values valid (docs/client.md,
-        "Control values")."""
+        """True if the next packet carries the control values valid (docs/client.md, "Modes
+        and control values")."""
         return self.session.control_valid(self._clock()) is not None
 
     def set_control(self, control: ControlValues | None) -> None:

@@ -2,7 +2,7 @@
 
 Control values change meaning with the mode (docs/protocol-notes.md §5 "Control values change
 meaning with the mode"): the same raw numbers are Euler angles in one mode, angular rates in
-another. The rule (docs/client.md, "Control values"): values are sent valid only while
+another. The rule (docs/client.md, "Modes and control values"): values are sent valid only while
 
 - the mode they were given for is the last mode the GCU confirmed (its mode command got a
   success feedback), and
