@@ -68,7 +68,7 @@ lint: $(CHECK_STAMP)
 	$(BIN)/mypy
 
 docs: $(DOCS_STAMP)
-	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet --site-dir $(CURDIR)/site
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --site-dir $(CURDIR)/site
 
 # The web example's page is tested in Debian's Chromium when it is there. In CI (CI=true,
 # root, apt available) it is installed; elsewhere the test skips and says why.

@@ -7,7 +7,7 @@ which keeps the latest value of each field (``None`` until its source message ar
 ============================  =====================================================
 MAVLink message               AircraftState field
 ============================  =====================================================
-ATTITUDE                      attitude: rad → °, roll [-180, 180), yaw [0, 360)
+ATTITUDE                      attitude: rad → °, roll signed, yaw a compass heading
 GLOBAL_POSITION_INT           position (1e-7 °, mm MSL), relative_altitude (mm),
                               velocity (cm/s NED → m/s N/E/U: up = −vz)
 LOCAL_POSITION_NED            velocity (m/s NED → N/E/U); acceleration (its default
@@ -144,10 +144,13 @@ class _VelocitySample:
 
 # -- pure conversions ---------------------------------------------------------------------
 def convert_attitude(msg: AttitudeMsg) -> Attitude:
-    """ATTITUDE (rad) → degrees; roll wrapped into [-180, 180), yaw into [0, 360).
+    """ATTITUDE (rad) → degrees; roll wrapped signed
+    (:func:`~gcu_async.protocol.units.wrap_degrees_180`), yaw to a compass heading
+    (:func:`~gcu_async.protocol.units.wrap_degrees_360`).
 
     Wrapping happens at the wire's 0.01° resolution, so a yaw of −0.001° becomes 0.00°, not
-    360.00° (which bytes 16–17 cannot carry). Pitch is converted as is (±90° by definition).
+    360.00° (which bytes 16–17 cannot carry). Pitch is converted as is (a quarter turn
+    either way by definition).
     """
     return Attitude(
         wrap_degrees_180(round(math.degrees(msg.roll), 2)),

@@ -1,7 +1,7 @@
 """The bridge works unchanged with a standard SDK: MAVSDK-Python's Gimbal and Camera plugins
 (the ``mavsdk`` package ships MAVSDK's C library) drive the simulated gimbal and camera —
 angles, rates, region of interest, photo, video, zoom. Skips, saying why, where the
-library cannot be loaded or started (docs/mavlink-bridge.md, "Tested with")."""
+library cannot be loaded or started (docs/testing.md, "Ground stations and SDKs")."""
 
 from __future__ import annotations
 

@@ -7,9 +7,12 @@ that file under GitHub's slug rule. Links between docs pages must also hit the h
 the docs site's rule (Python-Markdown's ``toc``), so a fragment works in both places; the
 strict docs build checks the site's side too (``validation`` in mkdocs.yml).
 
-Citations of a docs section in prose (``docs/client.md, "Lifecycle"``) must name a heading
-that exists. ``python tests/docs/test_docs_links.py`` lists the stale citations of the whole
-repository (source comments and tests included), for whoever moves a section.
+Citations of a docs section in prose (``docs/client.md, "Lifecycle"``, or a numbered one,
+``docs/protocol-notes.md §4 "The same-opcode rule"``) must name a heading that exists, in the
+docs and wherever a reader meets them: the docstrings, comments and messages of ``src/``
+(a log message sends a user there), the tests, the examples and CONTRIBUTING.md.
+``python tests/docs/test_docs_links.py`` lists the stale citations of the whole repository
+(benchmarks and tools included), for whoever moves a section.
 """
 
 from __future__ import annotations
@@ -159,15 +162,19 @@ def test_the_links_were_found() -> None:
 
 
 # -- citations in prose ----------------------------------------------------------------------
-CITATION = re.compile(r"docs/(?P<page>[\w/-]+\.md)(?:,\s*|\s+\(?)\"(?P<title>[^\"]+)\"")
+CITATION = re.compile(r"docs/(?P<page>[\w/-]+\.md)(?:\s+§(?P<number>\d+))?(?:,\s*|\s+\(?)"
+                      r"\"(?P<title>[^\"]+)\"")
 
 
 def citations(path: Path) -> list[tuple[str, str, str]]:
-    """``(where, page, title)`` of each ``docs/PAGE.md, "Heading"`` in ``path``."""
-    text = re.sub(r"\s*\n\s*(?:#\s*|\*\s*)?", " ", path.read_text(encoding="utf-8"))
+    """``(where, page, title)`` of each ``docs/PAGE.md, "Heading"`` in ``path`` (of
+    ``docs/PAGE.md §N "Heading"``: the title ``N. Heading``)."""
+    # a line break, with the comment marker (Python, Lua) or list bullet that follows it
+    text = re.sub(r"\s*\n\s*(?:#\s*|--\s*|\*\s*)?", " ", path.read_text(encoding="utf-8"))
     text = text.replace('\\"', '"')
     where = str(path.relative_to(ROOT)) if path.is_relative_to(ROOT) else path.name
-    return [(where, m["page"], m["title"]) for m in CITATION.finditer(text)]
+    return [(where, m["page"], f"{m['number']}. {m['title']}" if m["number"] else m["title"])
+            for m in CITATION.finditer(text)]  # fmt: skip
 
 
 def stale_citations(paths: list[Path]) -> list[str]:
@@ -180,15 +187,29 @@ def stale_citations(paths: list[Path]) -> list[str]:
                 continue
             titles = headings(target)
             # a title may be cut short at a word ("Errata", "Waiting for …"), or name a
-            # numbered section without its number
+            # numbered section without its number (with one, the number must match)
             short = title.removesuffix("…").rstrip()
-            if not any(re.match(rf"(?:\d+\. )?{re.escape(short)}(?!\w)", t) for t in titles):
+            numbered = "" if re.match(r"\d+\. ", short) else r"(?:\d+\. )?"
+            if not any(re.match(rf"{numbered}{re.escape(short)}(?!\w)", t) for t in titles):
                 bad.append(f"{where}: docs/{page} has no heading {title!r}")
     return bad
 
 
 def test_citations_in_the_docs_name_existing_sections() -> None:
     assert stale_citations(PAGES) == []
+
+
+CITING = sorted(p for top in ("src", "tests", "examples") for p in (ROOT / top).rglob("*")
+                if p.suffix in (".py", ".md", ".lua") and p.resolve() != Path(__file__).resolve()
+                and "node_modules" not in p.parts)  # fmt: skip
+"""The files outside docs/ whose citations readers follow (this file's samples are stale on
+purpose and left out)."""
+
+
+def test_citations_in_the_code_name_existing_sections() -> None:
+    """A moved section leaves no stale citation in a docstring, comment or message."""
+    assert len(CITING) >= 300 and any(citations(p) for p in CITING)
+    assert stale_citations([*CITING, ROOT / "CONTRIBUTING.md"]) == []
 
 
 # -- the machinery can fail ------------------------------------------------------------------
@@ -225,11 +246,16 @@ def test_a_stale_citation_is_found(tmp_path: Path) -> None:
     sample = tmp_path / "x.py"
     sample.write_text('"""As docs/client.md, "Lifecycle", and docs/cli.md, "No such\n'
                       '    heading", say; docs/nowhere.md "X"; docs/client.md ("Waiting for …");\n'
-                      '    docs/client.md, "Life"."""\n', encoding="utf-8")  # fmt: skip
+                      '    docs/client.md, "Life"; docs/protocol-notes.md §4 "The same-opcode\n'
+                      '    rule"; docs/protocol-notes.md §5 "The same-opcode rule"."""\n'
+                      'log.info("see docs/client.md, \\"The session contract\\"")\n',
+                      encoding="utf-8")  # fmt: skip
     found = [line.split(": ", 1)[1] for line in stale_citations([sample])]
     assert found == ["docs/cli.md has no heading 'No such heading'",
                      "docs/nowhere.md does not exist (cited for 'X')",
-                     "docs/client.md has no heading 'Life'"]  # fmt: skip
+                     "docs/client.md has no heading 'Life'",
+                     "docs/protocol-notes.md has no heading '5. The same-opcode rule'",
+                     "docs/client.md has no heading 'The session contract'"]  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""The session contract (docs/client.md, "The session contract"), tried adversarially in
+"""The session contract (docs/session-contract.md, "The session contract"), tried adversarially in
 virtual time: the sans-I/O session, the simulator's GCU model and a network that loses,
 corrupts, duplicates and delays packets, with delay variation bounded by D, driven by
 hypothesis-generated schedules of calls, network fates and event-loop stalls.

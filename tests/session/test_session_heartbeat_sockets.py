@@ -1,4 +1,4 @@
-"""The heartbeat on a busy event loop over real UDP (docs/client.md, "The session contract",
+"""The heartbeat on a busy event loop over real UDP (docs/session-contract.md, "Guarantees",
 G4 and G6): the client in this process, its loop kept busy by four tasks that each spin
 5 ms per step (about 20 ms iterations, the issue's load); the simulator in a process of its
 own, counting the host packets it receives on the shared monotonic clock.

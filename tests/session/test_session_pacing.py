@@ -1,4 +1,4 @@
-"""The heartbeat on a late event loop (docs/client.md, "The session contract", G4 and G6), in
+"""The heartbeat on a late event loop (docs/session-contract.md, "Guarantees", G4 and G6), in
 virtual time on a modelled asyncio loop (tests/_vloop.py): the session and the simulator's
 GCU model, the loop's iterations as the schedule says.
 

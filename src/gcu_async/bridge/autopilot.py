@@ -23,7 +23,8 @@ from gcu_async.protocol.units import Attitude, NorthEastUp, wrap_degrees_180, wr
 
 def gimbal_device_state_changes(msg: Any) -> dict[str, Any]:
     """AUTOPILOT_STATE_FOR_GIMBAL_DEVICE → ``update_aircraft`` keyword arguments: attitude
-    from the quaternion (degrees, roll in [-180, 180), yaw in [0, 360)) and velocity from
+    from the quaternion (degrees, roll wrapped signed, yaw to a compass heading:
+    :func:`~gcu_async.protocol.units.wrap_degrees_180` and ``wrap_degrees_360``) and velocity from
     vx/vy/vz (m/s NED → north/east/up), each only when finite."""
     changes: dict[str, Any] = {}
     q = list(msg.q)

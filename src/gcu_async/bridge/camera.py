@@ -1,12 +1,13 @@
 """The camera component (MAV_COMP_ID_CAMERA): Camera Protocol v2 over the GCU's camera.
 
 Pure, like :mod:`gcu_async.bridge.gimbal` (docs/mavlink-bridge.md, "Camera"). Capabilities
-follow the pod model's Appendix 8 row once the GCU reported it: tracking (0x17), zoom to a
-ratio (0x25), focus (0x26) and picture-in-picture (0x74) are offered, and accepted, only
-where the model supports them; a request for what it lacks is UNSUPPORTED.
+follow the pod model's Appendix 8 row once the GCU reported it: tracking (``TRACK``), zoom
+to a ratio (``ZOOM_TO``), focus (``FOCUS``) and picture-in-picture (``PICTURE_IN_PICTURE``)
+are offered, and accepted, only where the model supports them; a request for what it lacks
+is UNSUPPORTED.
 
-Zoom "range" is MAVLink's 0–100 % of the full range; the GCU's own fraction form of 0x25
-is the same idea (a fraction of the maximum ratio: 50 % of a 30× camera is 15×, 0 % the
+Zoom "range" is MAVLink's 0–100 % of the full range; the GCU's own fraction form of
+``ZOOM_TO`` is the same idea (a fraction of the maximum ratio: 50 % of a 30× camera is 15×, 0 % the
 minimum 1×), so the bridge sends it unchanged and needs no knowledge of the maximum. The
 reverse (CAMERA_SETTINGS zoomLevel) needs the maximum ratio, which V2.0.6 does not report:
 it is NaN ("not known") unless :attr:`CameraConfig.max_zoom` is given.
@@ -128,7 +129,7 @@ def camera_information(view: GcuView, config: CameraConfig) -> Any:
 
 def zoom_level(view: GcuView, config: CameraConfig) -> float:
     """Camera 1's zoom as % of the full range (the fraction of the maximum ratio, as the
-    GCU's 0x25 defines it); NaN while the maximum or the zoom is unknown."""
+    GCU's ``ZOOM_TO`` defines it); NaN while the maximum or the zoom is unknown."""
     if config.max_zoom is None or view.info is None:
         return math.nan
     return max(0.0, min(100.0, view.info.camera1_zoom / config.max_zoom * 100.0))
@@ -229,9 +230,9 @@ def fov_status(view: GcuView, config: CameraConfig) -> Any:
 def tracking_status(view: GcuView) -> Any:
     """CAMERA_TRACKING_IMAGE_STATUS: ACTIVE while the pod tracks and reports the target
     (pod status B0), ERROR while in tracking mode without it, IDLE otherwise; the target
-    point from the miss distances (centre 0, ±1000 at the edges; right and down
-    positive). The GCU reports only the centre: a rectangle track is reported with the
-    size it was started with around that centre; the radius is unknown (NaN)."""
+    point from the miss distances (centre 0, the ends of their fields' range at the edges;
+    right and down positive). The GCU reports only the centre: a rectangle track is reported
+    with the size it was started with around that centre; the radius is unknown (NaN)."""
     status = view.status
     nan = math.nan
     if status is None or status.mode is not Mode.TRACK:
@@ -313,7 +314,7 @@ def _fraction(value: float) -> bool:
 
 def zoom_plan(cmd: CommandIn, view: GcuView, config: CameraConfig) -> Plan:
     """MAV_CMD_SET_CAMERA_ZOOM: param1 ZOOM_TYPE, param2 value. CONTINUOUS −1/0/1 → zoom
-    out/stop/in; RANGE 0–100 % → 0x25 fraction (0 % → the minimum); STEP ±n → the current
+    out/stop/in; RANGE 0–100 % → ``ZOOM_TO`` fraction (0 % → the minimum); STEP ±n → the current
     ratio ± n × :data:`ZOOM_STEP` (kept ≥ 1×, and ≤ max_zoom when known); focal length
     and field of view: UNSUPPORTED (the GCU takes neither)."""
     kind, value = cmd.param(1), cmd.param(2)
@@ -346,7 +347,7 @@ def zoom_plan(cmd: CommandIn, view: GcuView, config: CameraConfig) -> Plan:
 
 
 def focus_plan(cmd: CommandIn, view: GcuView) -> Plan:
-    """MAV_CMD_SET_CAMERA_FOCUS: AUTO and AUTO_SINGLE → one focus (0x26); the other types
+    """MAV_CMD_SET_CAMERA_FOCUS: AUTO and AUTO_SINGLE → one ``FOCUS``; the other types
     (manual, continuous auto) have no GCU command: UNSUPPORTED."""
     kind = cmd.param(1)
     if kind not in (mavlink.FOCUS_TYPE_AUTO, mavlink.FOCUS_TYPE_AUTO_SINGLE):

@@ -5,7 +5,7 @@ MAVLink's gimbal protocol gives attitudes as quaternions ``(w, x, y, z)`` of the
 from the reference frame (north-east-down, or the vehicle's forward-right-down frame for a
 yaw "in vehicle frame") to the camera's forward-right-down frame; Euler angles are applied
 yaw → pitch → roll (Z → Y → X, aerospace order), pitch positive up, yaw positive clockwise
-seen from above. The GCU reports the same Euler angles in degrees (yaw in [0, 360)), so
+seen from above. The GCU reports the same Euler angles in degrees (yaw a compass heading), so
 the conversion is the textbook one (docs/mavlink-bridge.md, "Frames").
 
 The ground point is flat-earth: good to well under a metre over the few kilometres a

@@ -13,10 +13,10 @@ Control requests map onto the GCU's modes:
 =====================================  ===============================================
 request                                client call (mode)
 =====================================  ===============================================
-angles, yaw lock (earth frame)         ``enter_euler_control`` (Euler control, 0x14)
-angles, yaw follow (vehicle frame)     ``enter_angle_control`` (angle control, 0x10)
-rates only, yaw lock                   ``enter_pointing_lock`` (pointing lock, 0x11)
-rates only, yaw follow                 ``enter_pointing_follow`` (pointing follow, 0x12)
+angles, yaw lock (earth frame)         ``enter_euler_control`` (Euler control)
+angles, yaw follow (vehicle frame)     ``enter_angle_control`` (angle control)
+rates only, yaw lock                   ``enter_pointing_lock`` (pointing lock)
+rates only, yaw follow                 ``enter_pointing_follow`` (pointing follow)
 neither (all NaN)                      ``release_control`` (values invalid: hold)
 NEUTRAL flag                           ``centre``
 =====================================  ===============================================
@@ -210,7 +210,8 @@ def attitude_call(
 ) -> GcuCall:
     """The client call for an attitude request in degrees and °/s (NaN: not given). Angles
     win over rates when both are given (the GCU takes one or the other); a missing angle
-    keeps the current one; yaw is wrapped to [-180, 180) (the same direction)."""
+    keeps the current one; yaw is wrapped signed
+    (:func:`~gcu_async.protocol.units.wrap_degrees_180`, the same direction)."""
     if math.isfinite(pitch) or math.isfinite(yaw):
         status = view.status
         if yaw_lock:

@@ -61,7 +61,8 @@ class AircraftFix(NamedTuple):
     altitude: float
     """Metres above mean sea level."""
     yaw: float = 0.0
-    """Heading, degrees (north = 0; ±180 or 0-360)."""
+    """Heading, degrees (north = 0; signed or compass, as
+    :data:`~gcu_async.protocol.units.YAW_INPUT_RANGE` allows)."""
 
     def state(self) -> dict[str, Any]:
         """The keyword arguments of :meth:`GcuClient.update_aircraft` that claim it."""

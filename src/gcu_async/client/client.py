@@ -8,7 +8,7 @@ sans-I/O session driven over the transport: timers, futures, the packet pump), a
 abstract hooks. Its command methods come from its base
 :class:`~gcu_async.client.command_methods.GcuCommands`, one line each naming what it sends.
 Every rule (pacing, separation, matching, timeouts, control values, link health) lives in the
-session (docs/client.md, "The session contract").
+session (docs/session-contract.md, "The session contract").
 """
 
 from __future__ import annotations
@@ -135,7 +135,8 @@ class GcuClient(GcuCommands, OpenClose):
             :class:`~gcu_async.capture.PacketCapture`; needs the ``capture`` extra).
         max_zoom: camera 1's largest zoom ratio (the pod's datasheet: the protocol reports
             no limit). Given, :meth:`zoom_to` and :meth:`reach_zoom` refuse a larger ratio
-            before sending; ``None`` (default): only the field's range, 1–3276.8.
+            before sending; ``None`` (default): only the field's range, 1 to
+            :data:`~gcu_async.protocol.commands.ZOOM_RATIO_MAX`.
         conformance: collect the GCU conformance report (:meth:`conformance_report`): every reply
             and host packet is analysed (a few µs each, bounded memory). Default ``False``.
     """
@@ -330,8 +331,9 @@ class GcuClient(GcuCommands, OpenClose):
     ) -> AircraftState:
         """Update the aircraft state carried by the heartbeat; fields not given (default
         :data:`KEEP`) keep their value, ``None`` clears one. A triple is a NamedTuple, a
-        tuple or a list of three. Units: degrees (attitude; yaw in [-180, 360), MAVLink's
-        ±180° or compass 0–360°, sent as its 0–360° equivalent), m/s² north/east/up without
+        tuple or a list of three. Units: degrees (attitude; yaw in
+        :data:`~gcu_async.protocol.units.YAW_INPUT_RANGE`, MAVLink's signed or a compass
+        heading, sent as its compass equivalent), m/s² north/east/up without
         gravity, m/s north/east/up, (latitude °,
         longitude °, altitude m MSL), metres. ``gnss_time`` (aware UTC) sets week + ms with
         leap seconds applied.
@@ -365,8 +367,8 @@ class GcuClient(GcuCommands, OpenClose):
 
     @property
     def control_valid(self) -> bool:
-        """True if the next packet carries the control values valid (docs/client.md,
-        "Control values")."""
+        """True if the next packet carries the control values valid (docs/client.md, "Modes
+        and control values")."""
         return self.session.control_valid(self._clock()) is not None
 
     def set_control(self, control: ControlValues | None) -> None:
@@ -377,8 +379,9 @@ class GcuClient(GcuCommands, OpenClose):
         self.session.set_control(control)
 
     def set_angles(self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0) -> None:
-        """New target angles (degrees, ±180) for the current angle-based mode (Euler, angle
-        control, FPV). Raises ``ValueError`` if the current mode does not take angles."""
+        """New target angles (degrees, up to :data:`~gcu_async.protocol.commands.ANGLE_LIMIT`
+        either way) for the current angle-based mode (Euler, angle control, FPV). Raises
+        ``ValueError`` if the current mode does not take angles."""
         self.session.set_control(angles(roll, pitch, yaw), ControlKind.ANGLES)
 
     def set_rates(self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0) -> None:

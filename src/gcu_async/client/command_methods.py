@@ -71,13 +71,14 @@ class GcuCommands:
         self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0
     ) -> Feedback:
         """Angle-control mode: roll/pitch Euler angles, yaw relative to the aircraft
-        (degrees, ±180)."""
+        (degrees, up to :data:`~gcu_async.protocol.commands.ANGLE_LIMIT` either way)."""
         return await self._build(builder.enter_angle_control, roll=roll, pitch=pitch, yaw=yaw)
 
     async def enter_fpv(
         self, *, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0
     ) -> Feedback:
-        """FPV mode: roll/pitch/yaw angles relative to the aircraft, degrees (±180)."""
+        """FPV mode: roll/pitch/yaw angles relative to the aircraft, degrees (up to
+        :data:`~gcu_async.protocol.commands.ANGLE_LIMIT` either way)."""
         return await self._build(builder.enter_fpv, roll=roll, pitch=pitch, yaw=yaw)
 
     async def enter_pointing_lock(

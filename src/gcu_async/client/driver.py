@@ -5,7 +5,7 @@ It does I/O only: it hands received bytes and transport news to the session, sen
 packet the session asks for at the time it asks, and turns the session's events into
 resolved futures, telemetry (:class:`~gcu_async.client.telemetry.Telemetry`) and link
 events. Every rule (pacing, separation, matching, timeouts, control values, link health)
-lives in the session (docs/client.md, "The session contract").
+lives in the session (docs/session-contract.md, "The session contract").
 """
 
 from __future__ import annotations
@@ -355,7 +355,7 @@ class Driver:
 
     # -- the pump: the only place packets are sent -----------------------------------------
     def _arrival_start(self) -> float | None:
-        """The first bound of reply arrival (docs/client.md, "The session contract", A4):
+        """The first bound of reply arrival (docs/session-contract.md, "Assumptions", A4):
         ``None`` on a link that never reorders, or one that cannot be read on demand (the
         transport's :meth:`~gcu_async.transport.Transport.caught_up`: the session then
         assumes a responsive loop, logged); else now."""
@@ -365,7 +365,8 @@ class Driver:
         if self.transport.caught_up():
             return now
         log.info("%s cannot be read on demand: reply timing assumes a responsive event loop "
-                 "(docs/client.md, \"The session contract\")", self.transport.url)  # fmt: skip
+                 "(docs/session-contract.md, \"Assumptions\", A4)",
+                 self.transport.url)  # fmt: skip
         return None
 
     def _on_timer(self) -> None:

@@ -71,10 +71,17 @@ STUCK_AXES = (("yaw_raw", "relative_z_raw", "yaw"), ("pitch_raw", "relative_x_ra
               ("roll_raw", "relative_y_raw", "roll"))  # fmt: skip
 """(absolute field, the relative angle of its axis, name): Appendix 4's axes (pitch = −X,
 roll = +Y, yaw = +Z)."""
-_BANDS = ("0-17999", "18000-35999", "36000-47535", "47536-65535")
-"""The raw camera yaw in four bands: what a signed pod sends (first and last), what only a
-U16 pod sends (second), what neither explains (third)."""
 _HALF, _TURN, _SIGNED_LOW = CAMERA_YAW.turn // 2, CAMERA_YAW.turn, CAMERA_YAW.signed_low
+_BANDS = (f"0-{_HALF - 1}", f"{_HALF}-{_TURN - 1}", f"{_TURN}-{_SIGNED_LOW - 1}",
+          f"{_SIGNED_LOW}-{CAMERA_YAW.span - 1}")  # fmt: skip
+"""The raw camera yaw in four bands, split at half a turn, a full turn and the lowest
+negative S16 a signed pod sends: what a signed pod sends (first and last), what only a U16
+pod sends (second), what neither explains (third)."""
+_DEG = CAMERA_YAW.field.scale
+_SIGNED_DEG = f"±{_HALF / _DEG:g}°"
+_TURN_DEG = f"{_TURN / _DEG:g}°"
+_U16_OFF = CAMERA_YAW.span - _TURN
+"""How far a signed heading read as U16 lands past the heading it means, raw steps."""
 _AXES = tuple((GcuMainFrame._fields.index(f), GcuMainFrame._fields.index(r), f, r)
               for f, r, _ in STUCK_AXES)  # fmt: skip
 
@@ -259,12 +266,12 @@ class GcuConformance:
     def _yaw(self, main: GcuMainFrame, yaw: int, t: float | None, raw: bytes) -> None:
         if yaw >= _SIGNED_LOW:
             d = self._findings.dev("main.yaw_raw.signed", "camera yaw sent as a signed S16 "
-                                   "(±180°) in the U16 [0, 36000) field")  # fmt: skip
+                                   f"({_SIGNED_DEG}) in the U16 [0, {_TURN}) field")  # fmt: skip
             reading = f"S16 {CAMERA_YAW.signed(yaw)}"
         else:
-            d = self._findings.dev("main.yaw_raw.past_turn", "camera yaw 36000…47535: neither "
-                                   "U16 nor signed S16")  # fmt: skip
-            reading = "past 360°"
+            d = self._findings.dev("main.yaw_raw.past_turn", f"camera yaw {_TURN}…"
+                                   f"{_SIGNED_LOW - 1}: neither U16 nor signed S16")  # fmt: skip
+            reading = f"past {_TURN_DEG}"
         d.count += 1
         if len(d.examples) < self._examples:  # the text only for an example
             self._findings.example(d, t, raw, f"yaw_raw = {yaw}: {reading}, heading "
@@ -388,16 +395,18 @@ class GcuConformance:
         if signed is not None:
             if not u16_high:
                 signed.diagnosis = (
-                    f"no camera yaw in the U16-only band 18000…35999: the pod sends its yaw "
-                    f"as a signed S16 ±{_HALF} (−180°…180°) ({spread}). gcu_async shows it as "
-                    "the heading it means, in [0°, 360°); a host reading the field as U16 "
-                    "puts headings west of north 295.36° off (655.36° − 360°)")  # fmt: skip
+                    f"no camera yaw in the U16-only band {_HALF}…{_TURN - 1}: the pod sends its "
+                    f"yaw as a signed S16 ±{_HALF} (−{_HALF / _DEG:g}°…{_HALF / _DEG:g}°) "
+                    f"({spread}). gcu_async shows it as the heading it means, in "
+                    f"[0°, {_TURN_DEG}); a host reading the field as U16 "
+                    f"puts headings west of north {_U16_OFF / _DEG:g}° off "
+                    f"({CAMERA_YAW.span / _DEG:g}° − {_TURN_DEG})")  # fmt: skip
             else:
                 signed.diagnosis = (f"some camera yaws read only as signed S16, others only "
                                     f"as U16: a mixed or changing encoding ({spread})")
         if past is not None:
-            past.diagnosis = (f"neither reading explains these: shown as an angle past 360° "
-                              f"and wrapped ({spread})")  # fmt: skip
+            past.diagnosis = (f"neither reading explains these: shown as an angle past "
+                              f"{_TURN_DEG} and wrapped ({spread})")  # fmt: skip
 
     def _stuck_report(self, devs: dict[str, Deviation]) -> None:
         for field, rel, name in STUCK_AXES:

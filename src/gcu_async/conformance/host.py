@@ -7,8 +7,8 @@ decoded), and a plain-language diagnosis where the pattern is recognisable. One 
 check:
 
 - :mod:`~gcu_async.conformance.host_fields`: values outside their V2.0.6 range, the version
-  byte, unknown opcodes and sub-frame headers; an aircraft yaw ≥ 36000 that reads as a
-  signed ±18000 value;
+  byte, unknown opcodes and sub-frame headers; an aircraft yaw past a full turn that reads
+  as a signed value of half a turn either way;
 - :mod:`~gcu_async.conformance.host_velocity`: the aircraft velocity against the change of
   the GNSS position over time (a scale off by ≈10 is 0.1 m/s sent for 0.01 m/s);
 - :mod:`~gcu_async.conformance.host_ins`: command packets whose main frame is all zero

@@ -2,8 +2,9 @@
 
 Frame fields and command parameters outside their V2.0.6 range (a packet's
 :attr:`~gcu_async.protocol.HostPacket.anomalies`), the version byte, unknown opcodes and
-sub-frame headers; an aircraft yaw ≥ 36000 read as the signed ±18000 value a host sent by
-mistake or as an angle not wrapped into [0°, 360°); a parameter byte V2.0.6 gives as 0x01.
+sub-frame headers; an aircraft yaw past its range (a full turn, :data:`YAW_WRAP`) read as
+the signed half-turn-either-way value a host sent by mistake or as an angle not wrapped into
+one turn; a parameter byte V2.0.6 gives as 0x01.
 """
 
 from __future__ import annotations
@@ -19,11 +20,14 @@ from gcu_async.protocol.packets import HostPacket, version_anomalies
 _YAW = AIRCRAFT_YAW.field
 _U16_SPAN = AIRCRAFT_YAW.span
 YAW_WRAP = AIRCRAFT_YAW.turn
-"""The raw aircraft yaw one past the field's range: 360° (36000)."""
+"""The raw aircraft yaw one past the field's range: a full turn
+(:data:`~gcu_async.protocol.headings.TURN`)."""
 YAW_SIGNED_LOW = AIRCRAFT_YAW.signed_low
-"""Raw aircraft yaw values from here to 65535 read as S16 −18000 … −1 (−180° … −0.01°)."""
+"""Raw aircraft yaw values from here to the top of U16 read as S16 from minus half a turn
+to one step below zero (headings west of north)."""
 _SIGNED_TEXT = f"±{YAW_WRAP // 2}"
 _YAW_TEXT = f"U16 [0, {YAW_WRAP})"
+_TURN_TEXT = f"[0°, {YAW_WRAP / _YAW.scale:g}°)"
 FIXED_PARAMETER_OPCODES = frozenset({Opcode.TAKE_PHOTO, Opcode.RECORD, Opcode.FOCUS})
 """Commands whose parameter byte V2.0.6's table gives as the constant 0x01."""
 _VERSIONS = "V2.0.6 defines versions 1 and 2"
@@ -37,7 +41,7 @@ def yaw_reading(raw: int) -> str:
                 f"{_SIGNED_TEXT} value in the {_YAW_TEXT} field")  # fmt: skip
     if YAW_WRAP <= raw < YAW_SIGNED_LOW:
         return (f"{raw / _YAW.scale:.2f}° is past 360°: looks like an angle not wrapped into "
-                "[0°, 360°)")  # fmt: skip
+                f"{_TURN_TEXT}")  # fmt: skip
     return ""
 
 
@@ -124,7 +128,7 @@ class FieldCheck:
                                  f"U16: looks like a signed {_SIGNED_TEXT} value (headings "
                                  f"west of north, −180°…0°) in the {_YAW_TEXT} field")
             elif self._yaw_unwrapped and not self._yaw_signed:
-                yaw.diagnosis = f"{share}: looks like an angle not wrapped into [0°, 360°)"
+                yaw.diagnosis = f"{share}: looks like an angle not wrapped into {_TURN_TEXT}"
             else:
                 yaw.diagnosis = f"{share} ({self._yaw_signed} read as signed S16 values)"
         if "version" in devs:

@@ -8,7 +8,8 @@ package that takes user values checks type and range before anything is stored:
 
 - a bool is a ``bool``: ``"false"``, ``0``, ``1`` and ``None`` raise ``TypeError``;
 - an integer is an ``int``, not a bool, a float or a string (``IntEnum``/``IntFlag``
-  members are ints and fine); camera masks are ints 1–255 (``CameraMask`` members fine);
+  members are ints and fine); camera masks are ints within the camera mask field's range
+  (:data:`~gcu_async.protocol.command_fields.CAMERA_MASK`; ``CameraMask`` members fine);
 - a real number is an ``int`` or ``float`` (not a bool) and finite: NaN, ±inf and values
   outside the wire range (``1e30``, ``10**40``) are :class:`~gcu_async.errors.FieldRangeError`;
 - an enum parameter takes its members or their exact integer values;

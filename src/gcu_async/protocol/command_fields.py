@@ -78,12 +78,15 @@ def _real_parameter(w: WireField, name: str, default: object) -> Parameter:
 
 
 CAMERA_MASK = WireField("cameras", "B", "camera mask", 1, 0xFF, raw_unit="camera mask")
-"""The camera mask's one field: 1–255, one bit per camera (0x00 selects none)."""
+"""The camera mask's one field: one bit per camera, at least one set (0x00 selects none)."""
+_CAMERA_MASKS = range(CAMERA_MASK.raw_low, CAMERA_MASK.raw_high + 1)
+"""Every valid camera mask, for the encoder's one-test common case."""
 
 
 @dataclass(frozen=True)
 class Cameras(ParamKind):
-    """The camera mask (KK / NN), an ``int`` 1–255 (docs/protocol-notes.md §3)."""
+    """The camera mask (KK / NN), an ``int`` in :data:`CAMERA_MASK`'s range
+    (docs/protocol-notes.md §3)."""
 
     enum: ClassVar[type[CameraMask]] = CameraMask
     """The flags its bits name (the dissector's rows carry the name)."""
@@ -92,7 +95,7 @@ class Cameras(ParamKind):
         self._set(("cameras",), (CAMERA_MASK,))
 
     def encode(self, value: Any) -> tuple[int]:
-        if type(value) is int and 1 <= value <= 0xFF:  # the common case, one test
+        if type(value) is int and value in _CAMERA_MASKS:  # the common case, one test
             return (value,)
         w = CAMERA_MASK
         return (check_int(w.name, value, w.raw_low, w.raw_high, w.raw_unit),)
@@ -236,7 +239,7 @@ class Real(_Reals):
 
 
 IMAGE_SCALE = 10000
-"""Image coordinates: U16 [0, 10000], origin top-left."""
+"""Image coordinates: U16 from 0 to this scale (both ends included), origin top-left."""
 IMAGE_UNIT = "1/10000 of the image"
 
 

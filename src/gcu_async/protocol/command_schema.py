@@ -44,7 +44,9 @@ class Kind(enum.Enum):
     SWITCH = "switch"
     """``True`` or ``False``."""
     CAMERAS = "cameras"
-    """A camera mask, an ``int`` 1–255 (docs/protocol-notes.md §3 "Camera masks")."""
+    """A camera mask, an ``int`` in the range of
+    :data:`~gcu_async.protocol.command_fields.CAMERA_MASK` (docs/protocol-notes.md §3
+    "Camera masks")."""
     CHOICE = "choice"
     """A member of ``Parameter.choices`` or its exact value."""
     BOX = "box"
@@ -76,7 +78,7 @@ class Parameter:
         return self.default is REQUIRED
 
     def range_text(self) -> str:
-        """The range in words (``"-180 to 180"``, ``"OFF, ON or AUTO"``), ``""`` if none."""
+        """The range in words (``"<low> to <high>"``, ``"OFF, ON or AUTO"``), ``""`` if none."""
         if self.choices is not None:
             names = [m.name for m in self.choices]
             return f"{', '.join(names[:-1])} or {names[-1]}"

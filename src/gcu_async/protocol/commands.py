@@ -11,9 +11,10 @@ tests' tables derive from this table (docs/architecture.md, "Changing the protoc
 
 A command is validated when it is built (so a bad argument raises before anything is sent)
 under the package rule (:mod:`gcu_async.protocol`): ``bool`` fields take only
-``True``/``False``, integer fields only ``int`` (camera masks 1–255, ``CameraMask`` members
-welcome), real fields finite ``int``/``float`` inside the field's range, enum fields a member
-or its exact value, ``box``/``point`` an :class:`~gcu_async.protocol.ImageBox` /
+``True``/``False``, integer fields only ``int`` (camera masks within the range of
+:data:`~gcu_async.protocol.command_fields.CAMERA_MASK`, ``CameraMask`` members welcome), real
+fields finite ``int``/``float`` inside the field's range, enum fields a member or its exact
+value, ``box``/``point`` an :class:`~gcu_async.protocol.ImageBox` /
 :class:`~gcu_async.protocol.ImagePoint` (or a plain tuple, stored as the NamedTuple) checked
 element by element, each in the order of the class's fields. The first parameter byte of
 many commands is a camera mask (docs/protocol-notes.md §3 "Camera masks"): it is the
@@ -46,6 +47,7 @@ from gcu_async.protocol.command_schema import (
     StatusRule,
 )
 from gcu_async.protocol.enums import CameraMask, Mode, NightVisionMode, OsdCoordinateSource
+from gcu_async.protocol.fields import LATITUDE_RANGE, LONGITUDE_RANGE
 from gcu_async.protocol.host_frames import CONTROL_ANGLE_RAW, CONTROL_RATE_RAW
 from gcu_async.protocol.opcodes import Opcode
 from gcu_async.protocol.units import YAW_INPUT_RANGE, ImageBox, ImagePoint
@@ -83,7 +85,7 @@ _PITCH_YAW_RATES = (_rate("pitch_rate", "pitch rate"), _rate("yaw_rate", "yaw ra
 @codec
 @dataclass(frozen=True, slots=True)
 class NullCommand(Command):
-    """0x00: separates two commands with the same opcode (docs/protocol-notes.md §4 "The
+    """Separates two commands with the same opcode (docs/protocol-notes.md §4 "The
     same-opcode rule"). The client sends it by itself: no method."""
 
     OPCODE = Opcode.NULL
@@ -92,7 +94,7 @@ class NullCommand(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class EulerControl(Command):
-    """0x14: Euler-angle control mode. Control values: roll/pitch/yaw Euler angles."""
+    """Euler-angle control mode. Control values: roll/pitch/yaw Euler angles."""
 
     OPCODE = Opcode.EULER_CONTROL
     SCHEMA = CommandSchema(mode=ModeSpec(Mode.EULER_CONTROL, "angles"), methods=(Method(
@@ -103,7 +105,7 @@ class EulerControl(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class AngleControl(Command):
-    """0x10: angle-control mode. Control values: roll, pitch = Euler angle; yaw = angle
+    """Angle-control mode. Control values: roll, pitch = Euler angle; yaw = angle
     relative to the aircraft."""
 
     OPCODE = Opcode.ANGLE_CONTROL
@@ -115,7 +117,7 @@ class AngleControl(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class Fpv(Command):
-    """0x1C: FPV mode. Control values: roll/pitch/yaw angles relative to the aircraft."""
+    """FPV mode. Control values: roll/pitch/yaw angles relative to the aircraft."""
 
     OPCODE = Opcode.FPV
     SCHEMA = CommandSchema(mode=ModeSpec(Mode.FPV, "angles"), methods=(Method(
@@ -125,7 +127,7 @@ class Fpv(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class PointingLock(Command):
-    """0x11: pointing-lock mode. Control values: pitch/yaw angular rates."""
+    """Pointing-lock mode. Control values: pitch/yaw angular rates."""
 
     OPCODE = Opcode.POINTING_LOCK
     SCHEMA = CommandSchema(mode=ModeSpec(Mode.POINTING_LOCK, "rates"), methods=(Method(
@@ -135,7 +137,7 @@ class PointingLock(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class PointingFollow(Command):
-    """0x12: pointing-follow mode. Control values: pitch/yaw rates (yaw 0 → follow aircraft)."""
+    """Pointing-follow mode. Control values: pitch/yaw rates (yaw 0 → follow aircraft)."""
 
     OPCODE = Opcode.POINTING_FOLLOW
     SCHEMA = CommandSchema(mode=ModeSpec(Mode.POINTING_FOLLOW, "rates"), methods=(Method(
@@ -146,7 +148,7 @@ class PointingFollow(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class TopDown(Command):
-    """0x13: top-down mode (pitch −90°). Control values: yaw rate."""
+    """Top-down mode (pitch −90°). Control values: yaw rate."""
 
     OPCODE = Opcode.TOP_DOWN
     SCHEMA = CommandSchema(mode=ModeSpec(Mode.TOP_DOWN, "rates"), methods=(Method(
@@ -157,7 +159,7 @@ class TopDown(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class GazeLock(Command):
-    """0x16: gaze (geographic target lock) at the image centre; needs valid aircraft INS."""
+    """Gaze (geographic target lock) at the image centre; needs valid aircraft INS."""
 
     OPCODE = Opcode.GAZE_LOCK
     SCHEMA = CommandSchema(mode=ModeSpec(Mode.GAZE, "rates"), needs_ins=True, methods=(Method(
@@ -168,14 +170,14 @@ class GazeLock(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class GazeAtCoordinates(Command):
-    """0x15: gaze at a geographic coordinate (PP lon, QQ lat: S32 1e-7°; RR alt: S32 mm)."""
+    """Gaze at a geographic coordinate (PP lon, QQ lat: S32 1e-7°; RR alt: S32 mm)."""
 
     OPCODE = Opcode.GAZE_AT_COORDINATES
     SCHEMA = CommandSchema(
-        params=(real("longitude", "i", "WGS84, 1e-7 deg steps", -1_800_000_000, 1_800_000_000,
-                     1e7, "deg", "1e-7 deg"),
-                real("latitude", "i", "WGS84, 1e-7 deg steps", -900_000_000, 900_000_000, 1e7,
-                     "deg", "1e-7 deg"),
+        params=(real("longitude", "i", "WGS84, 1e-7 deg steps", *LONGITUDE_RANGE, 1e7, "deg",
+                     "1e-7 deg"),
+                real("latitude", "i", "WGS84, 1e-7 deg steps", *LATITUDE_RANGE, 1e7, "deg",
+                     "1e-7 deg"),
                 real("altitude", "i", "above mean sea level, 1 mm steps", None, None, 1000, "m")),
         mode=ModeSpec(Mode.GAZE, "rates"), needs_ins=True,
         methods=(Method("gaze_at", "Gaze at a coordinate; needs valid aircraft INS data."),))
@@ -187,7 +189,7 @@ class GazeAtCoordinates(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class Calibration(Command):
-    """0x01: calibrate the pod (keep it still; answers "in progress" for a few seconds)."""
+    """Calibrate the pod (keep it still; answers "in progress" for a few seconds)."""
 
     OPCODE = Opcode.CALIBRATION
     SCHEMA = CommandSchema(status=StatusRule.CALIBRATION, methods=(Method(
@@ -199,7 +201,7 @@ class Calibration(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class Centre(Command):
-    """0x03: centre pitch and heading (lock/follow), heading (top-down). Control values must
+    """Centre pitch and heading (lock/follow), heading (top-down). Control values must
     be sent invalid while it runs."""
 
     OPCODE = Opcode.CENTRE
@@ -210,7 +212,7 @@ class Centre(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class Track(Command):
-    """0x17: enter (``enter=True``) or exit image tracking of the target in ``box``."""
+    """Enter (``enter=True``) or exit image tracking of the target in ``box``."""
 
     OPCODE = Opcode.TRACK
     SCHEMA = CommandSchema(
@@ -229,7 +231,7 @@ class Track(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class ClickToPan(Command):
-    """0x1A: turn the camera so that ``point`` comes to the image centre; the pod then
+    """Turn the camera so that ``point`` comes to the image centre; the pod then
     switches to pointing-lock. Control values must be invalid while it runs."""
 
     OPCODE = Opcode.CLICK_TO_PAN
@@ -243,7 +245,7 @@ class ClickToPan(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class TakePhoto(Command):
-    """0x20: take a photo with the masked cameras."""
+    """Take a photo with the masked cameras."""
 
     OPCODE = Opcode.TAKE_PHOTO
     SCHEMA = CommandSchema(params=(CAM1,), methods=(Method("take_photo", "Take a photo."),))
@@ -253,7 +255,7 @@ class TakePhoto(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class Record(Command):
-    """0x21: start or stop recording (a toggle)."""
+    """Start or stop recording (a toggle)."""
 
     OPCODE = Opcode.RECORD
     SCHEMA = CommandSchema(params=(CAM1,), methods=(
@@ -268,7 +270,7 @@ class Record(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class ZoomIn(Command):
-    """0x22: zoom in continuously until :class:`ZoomStop`."""
+    """Zoom in continuously until :class:`ZoomStop`."""
 
     OPCODE = Opcode.ZOOM_IN
     SCHEMA = CommandSchema(params=(CAM1,), status=StatusRule.ZOOM,
@@ -279,7 +281,7 @@ class ZoomIn(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class ZoomOut(Command):
-    """0x23: zoom out continuously until :class:`ZoomStop`."""
+    """Zoom out continuously until :class:`ZoomStop`."""
 
     OPCODE = Opcode.ZOOM_OUT
     SCHEMA = CommandSchema(params=(CAM1,), status=StatusRule.ZOOM,
@@ -290,7 +292,7 @@ class ZoomOut(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class ZoomStop(Command):
-    """0x24: stop a continuous zoom."""
+    """Stop a continuous zoom."""
 
     OPCODE = Opcode.ZOOM_STOP
     SCHEMA = CommandSchema(params=(CAM1,), status=StatusRule.ZOOM,
@@ -301,7 +303,7 @@ class ZoomStop(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class ZoomTo(Command):
-    """0x25: zoom to a ratio (``ratio=10.0`` → wire −100) or to a fraction of the maximum
+    """Zoom to a ratio (``ratio=10.0`` → wire −100) or to a fraction of the maximum
     ratio (``fraction=0.5`` → wire 5000; 1/10000 → minimum, 1.0 → maximum). Give exactly one.
     """
 
@@ -327,7 +329,7 @@ class ZoomTo(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class Focus(Command):
-    """0x26: trigger focus."""
+    """Trigger focus."""
 
     OPCODE = Opcode.FOCUS
     SCHEMA = CommandSchema(params=(CAM1,),
@@ -338,7 +340,7 @@ class Focus(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class Palette(Command):
-    """0x2A: thermal palette 1–10, or 0 to cycle."""
+    """Thermal palette 1–10, or 0 to cycle."""
 
     OPCODE = Opcode.PALETTE
     SCHEMA = CommandSchema(
@@ -352,7 +354,7 @@ class Palette(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class NightVision(Command):
-    """0x2B: night vision off / on / auto."""
+    """Night vision off / on / auto."""
 
     OPCODE = Opcode.NIGHT_VISION
     SCHEMA = CommandSchema(
@@ -365,7 +367,7 @@ class NightVision(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class AreaTemperature(Command):
-    """0x30: area temperature measurement on/off over ``box``."""
+    """Area temperature measurement on/off over ``box``."""
 
     OPCODE = Opcode.AREA_TEMPERATURE
     SCHEMA = CommandSchema(
@@ -392,7 +394,7 @@ class _Thresholds(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class TemperatureAlarm(_Thresholds):
-    """0x31: temperature alarm on/off with high/low thresholds in °C (0.1 °C resolution)."""
+    """Temperature alarm on/off with high/low thresholds in °C (0.1 °C resolution)."""
 
     OPCODE = Opcode.TEMPERATURE_ALARM
     SCHEMA = CommandSchema(
@@ -405,7 +407,7 @@ class TemperatureAlarm(_Thresholds):
 @codec
 @dataclass(frozen=True, slots=True)
 class Isotherm(_Thresholds):
-    """0x32: isotherm off, or on in "inside the interval" mode with high/low thresholds (°C)."""
+    """Isotherm off, or on in "inside the interval" mode with high/low thresholds (°C)."""
 
     OPCODE = Opcode.ISOTHERM
     SCHEMA = CommandSchema(
@@ -417,7 +419,7 @@ class Isotherm(_Thresholds):
 @codec
 @dataclass(frozen=True, slots=True)
 class SpotTemperature(Command):
-    """0x33: spot temperature measurement on/off at ``point``."""
+    """Spot temperature measurement on/off at ``point``."""
 
     OPCODE = Opcode.SPOT_TEMPERATURE
     SCHEMA = CommandSchema(
@@ -433,7 +435,7 @@ class SpotTemperature(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class Osd(Command):
-    """0x73: on-screen display on/off."""
+    """On-screen display on/off."""
 
     OPCODE = Opcode.OSD
     SCHEMA = CommandSchema(params=(Switch(doc="OSD on/off"),),
@@ -444,7 +446,7 @@ class Osd(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class OsdCoordinates(Command):
-    """0x06: which coordinates the OSD shows (aircraft or target)."""
+    """Which coordinates the OSD shows (aircraft or target)."""
 
     OPCODE = Opcode.OSD_COORDINATES
     SCHEMA = CommandSchema(
@@ -457,7 +459,7 @@ class OsdCoordinates(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class ImageAutoFlip(Command):
-    """0x07: image auto-flip on/off (wire: 0x00 = on, 0x01 = off)."""
+    """Image auto-flip on/off (wire: 0x00 = on, 0x01 = off)."""
 
     OPCODE = Opcode.IMAGE_AUTO_FLIP
     SCHEMA = CommandSchema(
@@ -469,7 +471,7 @@ class ImageAutoFlip(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class TimeZone(Command):
-    """0x08: the pod's time zone as a whole-hour UTC offset (S8; real zones −12 … +14)."""
+    """The pod's time zone as a whole-hour UTC offset (S8; real zones −12 … +14)."""
 
     OPCODE = Opcode.TIME_ZONE
     SCHEMA = CommandSchema(
@@ -482,7 +484,7 @@ class TimeZone(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class PictureInPicture(Command):
-    """0x74: picture-in-picture mode 1–4, or 0 to cycle."""
+    """Picture-in-picture mode 1–4, or 0 to cycle."""
 
     OPCODE = Opcode.PICTURE_IN_PICTURE
     SCHEMA = CommandSchema(
@@ -494,7 +496,7 @@ class PictureInPicture(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class TargetDetection(Command):
-    """0x75: AI target detection on/off."""
+    """AI target detection on/off."""
 
     OPCODE = Opcode.TARGET_DETECTION
     SCHEMA = CommandSchema(params=(Switch(doc="detection on/off"),),
@@ -505,7 +507,7 @@ class TargetDetection(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class DigitalZoom(Command):
-    """0x76: digital zoom of the zoom camera on/off."""
+    """Digital zoom of the zoom camera on/off."""
 
     OPCODE = Opcode.DIGITAL_ZOOM
     SCHEMA = CommandSchema(params=(Switch(doc="digital zoom on/off"),),
@@ -516,7 +518,7 @@ class DigitalZoom(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class FillLight(Command):
-    """0x80: fill light brightness 0–255 (0 = off). Turning it on also turns night vision on."""
+    """Fill light brightness 0–255 (0 = off). Turning it on also turns night vision on."""
 
     OPCODE = Opcode.FILL_LIGHT
     SCHEMA = CommandSchema(
@@ -530,7 +532,7 @@ class FillLight(Command):
 @codec
 @dataclass(frozen=True, slots=True)
 class Ranging(Command):
-    """0x81: continuous laser ranging on/off (wire: 0x02 = on, 0x00 = off)."""
+    """Continuous laser ranging on/off (wire: 0x02 = on, 0x00 = off)."""
 
     OPCODE = Opcode.RANGING
     SCHEMA = CommandSchema(params=(Switch(doc="ranging on/off", on=2),),

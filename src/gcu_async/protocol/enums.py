@@ -149,7 +149,7 @@ class ExecutionStatus(IntEnum):
 
 
 class NightVisionMode(IntEnum):
-    """Night vision command (0x2B) parameter TT."""
+    """Night vision command (:class:`~gcu_async.protocol.commands.NightVision`) parameter TT."""
 
     OFF = 0
     ON = 1

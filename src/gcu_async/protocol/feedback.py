@@ -37,7 +37,8 @@ def failure_status(opcode: int, failed_cameras: int = CameraMask.CAMERA_1) -> in
     """The status byte a GCU sends when ``opcode`` (an ``int`` 0–255) fails (for the
     simulator and tests). For zoom commands it is ``failed_cameras``, the mask of the
     failed cameras; it must not be empty (0x00 would read as success), so it is an ``int``
-    1–255 for every opcode."""
+    within the camera mask's range
+    (:data:`~gcu_async.protocol.command_fields.CAMERA_MASK`) for every opcode."""
     check_int("opcode", opcode, 0, 0xFF)
     mask = check_int("failed_cameras", failed_cameras, CAMERA_MASK.raw_low, CAMERA_MASK.raw_high,
                      "camera mask")  # fmt: skip

@@ -75,7 +75,7 @@ class ImageBox(NamedTuple):
 YAW_INPUT_RANGE = (-180.0, 360.0)
 """Degrees, half-open: how every absolute yaw or heading may be given (the Euler yaw of
 ``enter_euler_control``, the aircraft's yaw of ``update_aircraft``, the waits): MAVLink's
-±180° headings and compass 0–360° alike; each is sent in the range its wire field takes."""
+signed headings and compass headings alike; each is sent in the range its wire field takes."""
 
 
 METRES_PER_DEGREE = 111_320.0
@@ -206,9 +206,9 @@ def check_finite(field: str, value: object) -> float:
 
 
 def wrap_degrees_360(angle: float) -> float:
-    """Wrap an angle into [0, 360), e.g. for yaw sources that report ±180° (call it explicitly).
-    ``angle`` is any finite real number (``float % 360`` is exact); NaN and infinities are a
-    :class:`FieldRangeError`, non-numbers a ``TypeError``."""
+    """Wrap an angle into [0, 360), e.g. for yaw sources that report signed headings (call it
+    explicitly). ``angle`` is any finite real number (``float % 360`` is exact); NaN and
+    infinities are a :class:`FieldRangeError`, non-numbers a ``TypeError``."""
     if type(angle) is not float or not -math.inf < angle < math.inf:
         angle = check_finite("angle", angle)
     wrapped = angle % 360.0

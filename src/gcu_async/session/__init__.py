@@ -1,5 +1,6 @@
 """The command session, sans-I/O: scheduling, null separation, feedback matching, the
-heartbeat's content, link health and the lifecycle (docs/client.md, "The session")."""
+heartbeat's content, link health and the lifecycle (docs/session-contract.md, "The session
+contract"; docs/client.md, "Lifecycle")."""
 
 from gcu_async.session.config import SessionConfig
 from gcu_async.session.control import ControlKind

@@ -2,7 +2,7 @@
 
 Control values change meaning with the mode (docs/protocol-notes.md §5 "Control values change
 meaning with the mode"): the same raw numbers are Euler angles in one mode, angular rates in
-another. The rule (docs/client.md, "Control values"): values are sent valid only while
+another. The rule (docs/client.md, "Modes and control values"): values are sent valid only while
 
 - the mode they were given for is the last mode the GCU confirmed (its mode command got a
   success feedback), and
@@ -54,8 +54,9 @@ MODE_CHANGING = frozenset(
 
 def check_values(values: ControlValues, kind: ControlKind | None, opcode: int | None) -> None:
     """Control values must fit the wire and, when the mode (``opcode``) is known, its
-    ``kind``: angles ±18000 (0.01°), rates ±1500 (0.1 °/s ÷ zoom); ValueError/TypeError
-    naming the field otherwise."""
+    ``kind``: angles within ±:data:`~gcu_async.protocol.host_frames.CONTROL_ANGLE_RAW`
+    (0.01°), rates within ±:data:`~gcu_async.protocol.host_frames.CONTROL_RATE_RAW`
+    (0.1 °/s ÷ zoom); ValueError/TypeError naming the field otherwise."""
     ControlValues.check(values)
     limit = CONTROL_RATE_RAW if kind is ControlKind.RATES else CONTROL_ANGLE_RAW
     for field, raw in zip(("roll_raw", "pitch_raw", "yaw_raw"), values, strict=True):

@@ -1,6 +1,6 @@
 """When the next host packet may go out: heartbeat slots, the rate bound and the edge guard.
 
-Sans-I/O; times are seconds on the caller's monotonic clock (docs/client.md, "The session
+Sans-I/O; times are seconds on the caller's monotonic clock (docs/session-contract.md, "The session
 contract", G4 and G6). Three rules, each checked by :class:`Pacer` alone:
 
 - **Heartbeat slots.** Packets go out on slots ``period = 1 / rate_hz`` apart, on a fixed

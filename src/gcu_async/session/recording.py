@@ -1,6 +1,6 @@
 """What the session believes about recording, for state-checked record toggles.
 
-Record (0x21) is a toggle: sending it twice stops what the first started. The session
+Record (``Opcode.RECORD``) is a toggle: sending it twice stops what the first started. The session
 therefore serializes record commands and checks the state when a state-checked one is
 about to be sent (docs/client.md, "Recording"). The state comes from the camera flags of
 the replies (sub frame bit B4), with one correction: right after a toggle executed, a camera

@@ -1,6 +1,6 @@
 """Which run of host packets a reply answers, and when an opcode may start a new run.
 
-The protocol has no sequence numbers. What the session knows instead (docs/client.md, "The
+The protocol has no sequence numbers. What the session knows instead (docs/session-contract.md, "The
 session contract"):
 
 - Host packets form **runs**: maximal stretches of consecutive packets with one opcode.

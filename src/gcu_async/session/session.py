@@ -9,7 +9,7 @@ when to call :meth:`Session.poll` next (:meth:`Session.next_wakeup`) and events
 (:meth:`Session.events`). No asyncio, no sockets, no clock of its own: a driver (the
 asyncio :class:`~gcu_async.client.GcuClient`, or a virtual-time test harness) does the I/O.
 
-The contract it keeps, with its assumptions, is in docs/client.md ("The session
+The contract it keeps, with its assumptions, is in docs/session-contract.md ("The session
 contract"); the rules behind it live in :mod:`~gcu_async.session.pacing` (when a packet may
 go), :mod:`~gcu_async.session.runs` (what a reply proves, when an opcode may start),
 :mod:`~gcu_async.session.control` (which control values go out valid),
@@ -77,7 +77,7 @@ MIN_WAKE = 1e-4
 
 
 class Session:
-    """One host's session with one GCU. See the module docstring and docs/client.md.
+    """One host's session with one GCU. See the module docstring and docs/session-contract.md.
 
     ``Session(config)`` takes a :class:`SessionConfig`; ``Session(**options)`` makes one from
     its fields (``Session(rate_hz=30, reorder_guard=0.015)``), which checks them all."""

@@ -12,13 +12,15 @@ DEFAULT_HEIGHT_M = 100.0
 
 
 def aircraft_yaw(raw: int) -> float:
-    """Host bytes 16–17 (U16, 0.01°, [0, 36000)) as the simulator uses them, in [0°, 360°).
+    """Host bytes 16–17 (U16, 0.01°, below a full turn) as the simulator uses them, a
+    heading in degrees from 0 up to (excluding) a full turn.
 
     Out-of-range values are flagged by the decoder and read as the host most likely meant
-    them (docs/protocol-notes.md §15 "Aircraft yaw outside [0, 36000)"; the rule of
-    :mod:`~gcu_async.protocol.headings`): 47536 … 65535 as a signed S16 (−180° … −0.01°,
-    what a host writing a signed ±18000 value sends for headings west of north), 36000 …
-    47535 as an angle past 360° (wrapped).
+    them (docs/protocol-notes.md §15, an aircraft yaw outside its range; the rule of
+    :mod:`~gcu_async.protocol.headings`): from the field's
+    :attr:`~gcu_async.protocol.headings.HeadingRule.signed_low` to the top of U16 as a signed
+    S16 (what a host writing a signed value of half a turn either way sends for headings west
+    of north), from a full turn up to there as an angle past a full turn (wrapped).
     """
     return AIRCRAFT_YAW.degrees(raw)
 

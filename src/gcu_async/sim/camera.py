@@ -91,23 +91,26 @@ class CameraState:
         )
 
     def set_digital_zoom(self, on: bool) -> None:
-        """0x76: digital zoom extends camera 1's range by the digital factor."""
+        """Digital zoom (``Opcode.DIGITAL_ZOOM``) extends camera 1's range by the digital factor."""
         self.digital_zoom = on
         factor = self.digital_zoom_factor if on else 1.0
         self.zoom[VISIBLE].set_maximum(self.optical_max * factor)
 
     def set_fill_light(self, brightness: int) -> None:
-        """0x80: turning the fill light on also turns night vision on; off leaves it."""
+        """Fill light (``Opcode.FILL_LIGHT``): turning it on also turns night vision on; off
+        leaves it."""
         self.fill_light = brightness
         if brightness > 0:
             self.night_vision = NightVisionMode.ON
 
     def cycle_pip(self, mode: int) -> None:
-        """0x74: mode 1–4, or 0 to step to the next mode."""
+        """Picture in picture (``Opcode.PICTURE_IN_PICTURE``): mode 1 to :data:`PIP_MODES`, or 0
+        to step to the next mode."""
         self.pip_mode = mode if mode else self.pip_mode % PIP_MODES + 1
 
     def cycle_palette(self, palette: int) -> None:
-        """0x2A: palette 1–10, or 0 to step to the next one."""
+        """Thermal palette (``Opcode.PALETTE``): palette 1 to :data:`PALETTES`, or 0 to step to
+        the next one."""
         self.palette = palette if palette else self.palette % PALETTES + 1
 
     def step(self, dt: float) -> None:

@@ -8,7 +8,8 @@ Interpretations the simulator makes:
 
 - a camera mask naming a camera the pod lacks fails (zoom: those cameras are the mask NN,
   the others still zoom); palette/thermal commands need camera 2 in the mask;
-- gaze (0x15, 0x16) fails when the host packet's INS data are invalid (byte 11 B0 = 0);
+- gaze (at coordinates or at the image centre) fails when the host packet's INS data are
+  invalid (byte 11 B0 = 0);
 - centre fails in the modes the spec says ignore it; click-to-pan fails while tracking;
 - tracking fails for an empty target box; an unknown opcode fails with 0x01;
 - a command whose parameters V2.0.6 does not allow (an :class:`AnomalousCommand`: out of

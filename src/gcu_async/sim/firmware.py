@@ -28,8 +28,10 @@ class Firmware:
     inferred: str = ""
     """What the evidence does not show and the simulator assumes."""
     signed_yaw: bool = False
-    """Camera absolute yaw (GCU bytes 22–23) sent as a signed S16 ±18000 (headings west of
-    north as 47536 … 65535) instead of V2.0.6's U16 [0, 36000)."""
+    """Camera absolute yaw (GCU bytes 22–23) sent as a signed S16 of half a turn either way
+    (headings west of north from the field's
+    :attr:`~gcu_async.protocol.headings.HeadingRule.signed_low` up) instead of V2.0.6's U16
+    from 0 up to a full turn."""
     versions: tuple[float, float] | None = None
     """(hardware, firmware) versions the sub frame reports; ``None``: the pod profile's."""
     gnss_fault: bool = False

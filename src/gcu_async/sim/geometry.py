@@ -22,7 +22,8 @@ class Sight(NamedTuple):
 
 
 def direction_to(origin: GeoPosition, target: GeoPosition) -> tuple[float, float]:
-    """(pitch, yaw) in degrees of the line from ``origin`` to ``target``; yaw in [0, 360)."""
+    """(pitch, yaw) in degrees of the line from ``origin`` to ``target``; yaw a compass heading
+    (:func:`~gcu_async.protocol.units.wrap_degrees_360`)."""
     north = (target.latitude - origin.latitude) * METRES_PER_DEGREE
     cos_lat = math.cos(math.radians(origin.latitude))
     d_lon = (target.longitude - origin.longitude + 180.0) % 360.0 - 180.0

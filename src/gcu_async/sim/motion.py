@@ -22,7 +22,7 @@ FPV            relative angle         relative angle         relative angle
 
 Rates integrate into setpoints; the motors then slew towards them at most ``max_rate`` °/s.
 Simulator assumptions: relative roll within ±45°, relative pitch within [−120°, +90°],
-Euler/absolute pitch setpoints within ±90°, yaw unlimited.
+Euler/absolute pitch setpoints within :data:`ABSOLUTE_PITCH_LIMITS`, yaw unlimited.
 """
 
 from __future__ import annotations
@@ -188,7 +188,7 @@ class Gimbal:
         return True
 
     def click_to_pan(self, point: ImagePoint, zoom: float) -> None:
-        """0x1A: bring ``point`` to the image centre; ends in pointing-lock."""
+        """Click to pan: bring ``point`` to the image centre; ends in pointing-lock."""
         d_pitch, d_yaw = image_offset(point.x, point.y, zoom)
         now = self.absolute()
         self.pan = (
@@ -198,7 +198,7 @@ class Gimbal:
         self.control_rates = (0.0, 0.0, 0.0)
 
     def start_track(self, box: ImageBox, zoom: float) -> bool:
-        """0x17 enter: track the target in ``box`` (fails for an empty box)."""
+        """Track (enter): track the target in ``box`` (fails for an empty box)."""
         if box.right <= box.left or box.bottom <= box.top:
             return False
         d_pitch, d_yaw = image_offset((box.left + box.right) / 2, (box.top + box.bottom) / 2,
@@ -216,12 +216,13 @@ class Gimbal:
         return True
 
     def stop_track(self) -> None:
-        """0x17 exit: back to the mode tracking started from."""
+        """Track (exit): back to the mode tracking started from."""
         if self.mode == Mode.TRACK:
             self.enter_mode(self.track_return)
 
     def gaze_at(self, target: GeoPosition | None) -> None:
-        """0x15 (``target`` given) / 0x16 (``None``: the ground point at the image centre)."""
+        """Gaze at coordinates (``target`` given) or gaze lock (``None``: the ground point at the
+        image centre)."""
         self.enter_mode(Mode.GAZE)
         self.gaze = target if target is not None else self.point_of_view()
 

@@ -18,8 +18,9 @@ DOCUMENT_VALUE = CameraMask.CAMERA_1
 
 
 def tolerated(command: Command) -> Command | None:
-    """The command the simulator executes for ``command``: photo (0x20), record (0x21) or
-    focus (0x26) with the single parameter byte 0x00 runs as with the document's 0x01;
+    """The command the simulator executes for ``command``: photo, record or focus
+    (:data:`~gcu_async.conformance.host_fields.FIXED_PARAMETER_OPCODES`) with the single
+    parameter byte 0x00 runs as with the document's 0x01;
     ``None`` for every other anomalous command (not executed)."""
     if (
         isinstance(command, AnomalousCommand)

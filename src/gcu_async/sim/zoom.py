@@ -48,8 +48,9 @@ class ZoomDrive:
         self.target = self.clamp(ratio)
 
     def zoom_to_fraction(self, fraction: float) -> None:
-        """0x25 positive values: fraction × maximum, never below the minimum (so with a 30×
-        camera 1 → 1×, 5000 → 15×, 10000 → 30×, as the spec's example says)."""
+        """Zoom to (``Opcode.ZOOM_TO``), positive values: fraction × maximum, never below the
+        minimum (so with a 30× camera 1 → 1×, 5000 → 15×, 10000 → 30×, as the spec's example
+        says)."""
         self.zoom_to(fraction * self.maximum)
 
     def set_maximum(self, maximum: float) -> None:

@@ -129,7 +129,7 @@ class Transport(OpenClose):
         """Optional, for a transport that may reorder: deliver, now, what it received and
         has not delivered yet, and say whether nothing that arrived before a point in time
         is still undelivered, so that whatever it delivers later arrived after that point
-        (the session's reorder proofs rely on it: docs/client.md, "The session contract",
+        (the session's reorder proofs rely on it: docs/session-contract.md, "Assumptions",
         A4).
 
         With ``due`` (seconds on :func:`time.monotonic`; the caller is a timer callback of

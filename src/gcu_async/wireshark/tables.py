@@ -42,7 +42,7 @@ from gcu_async.protocol.enums import (
 )
 from gcu_async.protocol.feedback import CALIBRATION_IN_PROGRESS, THERMAL_OPCODES, ZOOM_OPCODES
 from gcu_async.protocol.fields import WIRE_RANGES
-from gcu_async.protocol.headings import PAST_TURN_DETAIL, SIGNED_DETAIL
+from gcu_async.protocol.headings import PAST_TURN_DETAIL, SIGNED_DETAIL, TURN
 from gcu_async.protocol.opcodes import Opcode
 from gcu_async.protocol.pods import POD_NAMES
 
@@ -412,7 +412,7 @@ def _render(command_rows: tuple[WireRow, ...]) -> str:
         _set("THERMAL_OPCODES", frozenset(THERMAL_OPCODES), "These answer 0x02 on failure"),
         [f"local CALIBRATION_IN_PROGRESS = 0x{CALIBRATION_IN_PROGRESS:02X}",
          f"local PIP_MODE_MASK = 0x{PIP_MODE_MASK:02X}"],
-        ["-- Camera yaw of 36000 or more: the anomaly's detail by reading (protocol.headings)",
+        [f"-- Camera yaw of {TURN} or more: the anomaly's detail by reading (protocol.headings)",
          f"local YAW_SIGNED_DETAIL = {_lua_str(SIGNED_DETAIL)}",
          f"local YAW_PAST_TURN_DETAIL = {_lua_str(PAST_TURN_DETAIL)}"],
         enum_lines,
