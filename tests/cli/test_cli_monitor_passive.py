@@ -163,6 +163,7 @@ def test_a_gcu_answering_by_unicast_is_not_heard_and_the_app_loses_nothing(
         assert lines and all(
             line.startswith("link DOWN: no broadcast reply heard yet") for line in lines
         ), lines
+        assert "--reply-to broadcast" in lines[0], lines[0]  # says what to check
         assert rig.received() == app["sent"]
     finally:
         rig.sim.kill()

@@ -6,6 +6,8 @@ the library below found it. Through the entry point, in-process: nothing is open
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from gcu_async.cli import main
@@ -29,7 +31,8 @@ CASES = [
     (["send", "udp://127.0.0.1"],  # a command may take no argument: ask for none
      "gcu-async send: the following arguments are required: COMMAND (see gcu-async send"),
     (["decode", "--bogus"], "gcu-async decode: unrecognized arguments: --bogus"),
-    (["wireshark"], "gcu-async wireshark: one of the arguments"),
+    (["wireshark", "--install", "--print-folder"], "gcu-async wireshark: argument "),
+    (["sned", "udp://127.0.0.1"], "gcu-async: unknown command 'sned': did you mean 'send'?"),
 ]  # fmt: skip
 
 
@@ -74,3 +77,15 @@ def test_the_bridge_names_its_options(
     assert err.count("\n") == 1, err
     assert err.startswith(f"gcu-async mavlink-bridge: {option}: {parameter}"), err
     assert "system_id" not in err and "max_zoom" not in err and "video_url" not in err
+
+
+def test_wireshark_without_an_option_writes_the_dissector_and_prints_its_path(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The bare command does what its one-line help says first (``--print-path``)."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    assert status_of(["wireshark"]) == 0
+    out, err = capsys.readouterr()
+    path = Path(out.strip())
+    assert err == "" and path.is_relative_to(tmp_path) and path.suffix == ".lua"
+    assert "Proto(" in path.read_text(encoding="utf-8")

@@ -53,3 +53,16 @@ def test_each_class_sits_under_a_base_and_names_its_other_bases(page: str) -> No
         for other in bases:
             if other != parent:
                 assert f"also {other}" in rest or f"also a {other}" in rest, (page, name, other)
+
+
+def test_the_readmes_range_error_is_the_one_raised() -> None:
+    """The README quotes, word for word, what its example call raises."""
+    from gcu_async.client import GcuClient
+    from gcu_async.transport.memory import MemoryTransport
+
+    gcu = GcuClient(MemoryTransport.pair()[0])
+    with pytest.raises(errors.FieldRangeError) as raised:
+        gcu.set_angles(pitch=200)
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert "`gcu.set_angles(pitch=200)` raises" in text
+    assert f"`FieldRangeError: {raised.value}`" in text

@@ -189,6 +189,33 @@ def test_commands_of_unknown_outcome_explain_a_mode_and_a_ranging_change() -> No
     rig.check()
 
 
+@pytest.mark.parametrize("restarted", [False, True])
+def test_a_command_of_unknown_outcome_explains_only_its_own_effect(restarted: bool) -> None:
+    """Pointing lock goes out as the replies stop (outcome unknown). Without a restart the
+    GCU reports pointing lock: explained. With one, it reports its default mode, which the
+    command does not lead to: a restart, not explained away."""
+    rig = rig_with_state()
+    start = rig.now
+    rig.replies.blackouts.append((start, start + 15.0))
+    mode = rig.submit(PointingLock())
+    if restarted:
+        rig.at(start + 7.0, lambda: restart(rig))
+    rig.run_until(start + 15.0)
+    assert mode is not None and mode.state is TicketState.UNKNOWN
+    rig.run_while(lambda: rig.session.state is not SessionState.UP, 5.0)
+    rig.run_until(rig.now + 1.0)
+    status = rig.session.status
+    assert status is not None
+    if not restarted:
+        assert status.mode is Mode.POINTING_LOCK
+        assert of(rig, Restarted) == []
+    else:
+        assert status.mode is Mode.POINTING_FOLLOW
+        (event,) = of(rig, Restarted)
+        assert StateChange("mode", "EULER_CONTROL", "POINTING_FOLLOW") in event.changes
+    rig.check()
+
+
 def test_a_continuous_zoom_under_way_explains_its_change() -> None:
     rig = rig_with_state()
     ticket = rig.submit(ZoomIn())

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import difflib
+import re
 import sys
 from collections.abc import Sequence
 from typing import NoReturn
@@ -13,12 +15,21 @@ from gcu_async.cli._exit import EXIT_USAGE
 from gcu_async.cli._logging import VERBOSE_HELP, configure_logging
 from gcu_async.cli._parser import CliParser
 
+_INVALID_CHOICE = re.compile(r"argument COMMAND: invalid choice: '(?P<given>[^']*)'")
+
 
 class OneLineParser(CliParser):
     """A parser whose usage errors are one line on stderr, exit status 2 (docs/cli.md, "Exit
     status"); its sub-command parsers are of the same class."""
 
     def error(self, message: str) -> NoReturn:
+        match = _INVALID_CHOICE.match(message)
+        if match and self._subparsers is not None:
+            names = [n for a in self._subparsers._group_actions
+                     for n in getattr(a, "choices", None) or ()]  # fmt: skip
+            close = difflib.get_close_matches(match["given"], names, n=1)
+            if close:
+                message = f"unknown command {match['given']!r}: did you mean {close[0]!r}?"
         self.exit(EXIT_USAGE, f"{self.prog}: {message} (see {self.prog} --help)\n")
 
 

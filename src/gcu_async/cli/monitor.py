@@ -175,11 +175,17 @@ def json_line(link: LinkHealth, sample: TelemetrySample | None, *, warm: bool = 
     return json.dumps(obj)
 
 
+PASSIVE_HINT = ("a GCU replies to the subnet's broadcast address; gcu-async sim does with "
+                "--reply-to broadcast")  # fmt: skip
+"""Why a passive monitor may hear nothing: a GCU (or simulator) answering by unicast."""
+
+
 def down_line(link: LinkHealth, error: object = None, *, passive: bool = False) -> str:
     """The line printed for an interval without any reply (``error``: the transport's last
     one, e.g. an ICMP port unreachable)."""
     if link.last_reply_age is None:
-        age = "no broadcast reply heard yet" if passive else "no reply yet"
+        age = (f"no broadcast reply heard yet ({PASSIVE_HINT})" if passive
+               else "no reply yet")  # fmt: skip
     else:
         age = f"no reply for {link.last_reply_age:.1f} s"
     line = (f"link {'up' if link.up else 'DOWN'}: {age} | lost {link.lost_count} "

@@ -16,22 +16,23 @@ from gcu_async.wireshark import dissector_path, install, personal_plugin_folder
 def register(sub: Any) -> None:
     p = sub.add_parser(
         "wireshark",
-        help="write the Wireshark dissector and print its path, or install it",
+        help="write the Wireshark dissector and print its path (the default), or install it",
         description="The package ships a Wireshark dissector (xfgcu.lua) for the GCU protocol "
         "over UDP, TCP and the serial captures gcu_async writes; its tables (names, command "
         "parameters) are generated from the installed package when it is written. --install "
         "writes it to your personal Lua plugin folder (the one `tshark -G folders` reports, "
         "else ~/.local/lib/wireshark/plugins, or %APPDATA%\\Wireshark\\plugins on Windows); "
         "Wireshark loads it at its next start (or Analyze > Reload Lua Plugins). --print-path "
-        "writes it to your user cache ($XDG_CACHE_HOME/gcu_async, default .cache/gcu_async in "
-        "your home folder; %LOCALAPPDATA%\\gcu_async\\Cache on Windows) and prints its path; "
+        "(the default without an option) writes it to your user cache ($XDG_CACHE_HOME/gcu_async, "
+        "default .cache/gcu_async in your home folder; %LOCALAPPDATA%\\gcu_async\\Cache on "
+        "Windows) and prints its path; "
         "for one run: "
         "tshark -X lua_script:$(gcu-async wireshark --print-path) -r capture.pcapng",
     )
-    group = p.add_mutually_exclusive_group(required=True)
+    group = p.add_mutually_exclusive_group()
     group.add_argument("--print-path", action="store_true",
                        help="write the dissector to the user cache (or --cache-dir) and print "
-                       "its path")  # fmt: skip
+                       "its path (the default)")  # fmt: skip
     group.add_argument("--install", action="store_true",
                        help="write it to the personal Lua plugin folder")  # fmt: skip
     group.add_argument("--print-folder", action="store_true",
@@ -44,6 +45,8 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if not (args.install or args.print_folder):
+        args.print_path = True
     if args.dest is not None and not args.install:
         print("gcu-async wireshark: --dest: only with --install", file=sys.stderr)
         return 2

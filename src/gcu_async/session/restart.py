@@ -13,7 +13,9 @@ host did, or a change already under way, explains it:
   :data:`REPORT_SETTLE` seconds before, the last reply before the loss: it succeeded but
   its effect may not have been reported yet, or its outcome is ``UNKNOWN`` (every command
   in flight at the loss ends so: it may have executed after the last report, or from
-  packets still on their way);
+  packets still on their way). A command whose effect is known explains only that effect:
+  a mode command the mode it enters, ranging on/off that state; a mode command to Euler
+  control does not explain a GCU back in its default mode;
 - the zoom was moving: a continuous zoom (zoom in / out) was not stopped, a ``zoom_to``
   ratio had not been reached, or the reported zoom changed within :data:`REPORT_SETTLE`
   seconds before the last reply (all a ``zoom_to_fraction`` target can be judged by: the
@@ -29,10 +31,11 @@ by a full card, say) is reported as a restart.
 
 from __future__ import annotations
 
+from collections import deque
 from typing import NamedTuple
 
 from gcu_async.protocol.command_base import Command
-from gcu_async.protocol.commands import ZoomTo
+from gcu_async.protocol.commands import Ranging, ZoomTo
 from gcu_async.protocol.enums import CameraFlags, Mode, Opcode, PodStatus
 from gcu_async.protocol.gcu_frames import GCU_SUB_SCHEMA, GcuMainFrame, GcuSubFrame
 from gcu_async.protocol.host_frames import ControlValues
@@ -59,6 +62,8 @@ _ZOOM_STEP = 1
 """Raw zoom steps (0.1×) a report may differ by without counting as a change."""
 _FINISHED = frozenset({TicketState.SUCCEEDED, TicketState.UNKNOWN})
 """Final states of a command that may have acted on the GCU."""
+_ENDS_KEPT = 16
+"""Commands remembered per aspect (more than can end within :data:`REPORT_SETTLE`)."""
 
 
 class StateChange(NamedTuple):
@@ -110,13 +115,17 @@ class RestartWatch:
 
     def __init__(self) -> None:
         self._zoom_changed_at = -float("inf")
-        self._ended: dict[str, float] = {}
-        """Aspect → when a command acting on it last ended (succeeded or unknown)."""
+        self._ended: dict[str, deque[tuple[float, int | bool | None]]] = {
+            aspect: deque(maxlen=_ENDS_KEPT) for aspect in ACTS_ON}
+        """Aspect → (when, the value it leads to: None if not known) of the latest commands
+        acting on it that ended (succeeded or unknown)."""
         self._zoom_command: Command | None = None
         """The last zoom command that succeeded or may have executed."""
         self._last_mode_command: int | None = None
         self._before: Reported | None = None
         self._excused: frozenset[str] = frozenset()
+        self._explained: dict[str, frozenset[int | bool]] = {}
+        """Aspect → the values recent commands lead to (a change to one is no restart)."""
         self.pending = False
         """A loss happened and the first report after it has not been compared yet."""
         self.compared: Reported | None = None
@@ -154,7 +163,7 @@ class RestartWatch:
             return
         for aspect, opcodes in ACTS_ON.items():
             if opcode in opcodes:
-                self._ended[aspect] = now
+                self._ended[aspect].append((now, _leads_to(aspect, opcode, command)))
         if opcode in ACTS_ON["zoom"]:
             self._zoom_command = command
         if opcode in MODE_CHANGING:
@@ -169,7 +178,14 @@ class RestartWatch:
         before = self._before = Reported.of(main, sub)
         self.pending = True
         since = last_reply - REPORT_SETTLE
-        excused = {aspect for aspect, t in self._ended.items() if t >= since}
+        excused: set[str] = set()
+        self._explained = {}
+        for aspect, ends in self._ended.items():
+            values = {value for t, value in ends if t >= since}
+            if None in values:
+                excused.add(aspect)
+            elif values:
+                self._explained[aspect] = frozenset(v for v in values if v is not None)
         if self._zoom_moving(before, since):
             excused.add("zoom")
         if before.mode_raw == Mode.TRACK or self._last_mode_command in _LEAVES_BY_ITSELF:
@@ -203,8 +219,9 @@ class RestartWatch:
 
     def _changes(self, before: Reported, after: Reported) -> tuple[StateChange, ...]:
         changes = []
-        excused = self._excused
-        if "mode" not in excused and after.mode_raw != before.mode_raw:
+        excused, explained = self._excused, self._explained
+        if ("mode" not in excused and after.mode_raw != before.mode_raw
+                and after.mode_raw not in explained.get("mode", ())):  # fmt: skip
             changes.append(StateChange("mode", _mode(before.mode_raw), _mode(after.mode_raw)))
         if ("zoom" not in excused and before.zoom_raw is not None
                 and after.zoom_raw is not None
@@ -213,6 +230,17 @@ class RestartWatch:
         was, now = before.recording, after.recording
         if "recording" not in excused and was is not None and now is not None and now != was:
             changes.append(StateChange("recording", _on(was), _on(now)))
-        if "ranging" not in excused and after.ranging != before.ranging:
+        if ("ranging" not in excused and after.ranging != before.ranging
+                and after.ranging not in explained.get("ranging", ())):  # fmt: skip
             changes.append(StateChange("ranging", _on(before.ranging), _on(after.ranging)))
         return tuple(changes)
+
+
+def _leads_to(aspect: str, opcode: int, command: Command) -> int | bool | None:
+    """The value of ``aspect`` that ``command`` leads to, None if not known (a toggle, a
+    zoom, a command that changes the mode to one the pod picks)."""
+    if aspect == "mode" and opcode in REPORTED:
+        return int(REPORTED[opcode])
+    if aspect == "ranging" and isinstance(command, Ranging):
+        return command.enabled
+    return None
