@@ -54,6 +54,7 @@ import statistics
 import sys
 import tempfile
 import time
+from collections import deque
 from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import IO, Any
@@ -64,7 +65,11 @@ from bench_client import PERIOD, BareLoop, ClientLoop, FloorLoop
 
 from gcu_async.protocol import GCU_HEADER, HostPacket, NullCommand
 from gcu_async.protocol.aircraft import AircraftState
+from gcu_async.session import SessionConfig
+from gcu_async.session.pacing import MARGIN, WINDOW
 from gcu_async.sim import GcuSimulator, SimulatorModel
+from gcu_async.transport._datagram import MAX_PER_EVENT
+from gcu_async.transport.base import CLOCK_RESOLUTION
 
 MIN_RATE = 48.0
 """Packets per second a session must reach at the counting process to hold."""
@@ -84,7 +89,11 @@ FLOORS = {"client": "session-stub", "sim": "model-stub"}
 """Optional series (``--floor``), diagnostics: the client with its session cut down to the
 heartbeat schedule (the client benchmark's ``FloorLoop``: driver and UDP transport alone);
 the simulator whose model answers with the canned reply (endpoint and exchange alone)."""
-NAMES = {"gcu": "gcu_async client", "sim": "GcuSimulator", "bare": "bare asyncio loop",
+IDLE_BOUND = "idle-bound"
+"""Diagnostic series (``--floor``, client part): the bare loop plus the least an idle session
+must do (:class:`IdleBound`): an upper bound for an idle fast path."""
+NAMES = {"gcu": "gcu_async client", IDLE_BOUND: "bare + an idle session's least work",
+         "sim": "GcuSimulator", "bare": "bare asyncio loop",
          ENDPOINT: "bare, create_datagram_endpoint", "session-stub": "client, session stubbed",
          "model-stub": "GcuSimulator, model stubbed"}  # fmt: skip
 
@@ -200,10 +209,98 @@ class Fleet:
                                                   return_exceptions=True), 3 * WAIT)  # fmt: skip
 
 
+class IdleBound(BareLoop):
+    """Diagnostic, not a client: the bare loop plus the least an idle gcu_async session must
+    do per heartbeat and reply to keep every observable the same (an upper bound for an idle
+    fast path that bypasses the driver, the transport and the session). Per heartbeat: the
+    reply-arrival bound of the session contract's A4 (the socket read first when the reader
+    may have left datagrams), the clock, the silence check, the rate window, the slot, the
+    run and the counters. Per reply: ``recvfrom_into`` (the source is checked), the reader's
+    stamp, the compare with the last reply, the link-health stamps and the run's
+    identification; a socket read until empty unless a timer found it empty. Inlined, in
+    one class: no layers."""
+
+    def __init__(self, url: str, packet: bytes, reply: bytes) -> None:
+        super().__init__(url, packet, "recv_into")
+        self.reply = reply
+        self.view = memoryview(self._buffer)
+        self.unread_since: float | None = None
+        self.quiet = False
+        self.arrived_after = -math.inf
+        self.silent_at = math.inf
+        config = SessionConfig()
+        self.silence, self.reply_window = config.silence_timeout, config.reply_window
+        self.limit = math.floor(config.rate_hz) + 1
+        self.window: deque[float] = deque(maxlen=self.limit)
+        self.run_last_sent, self.run_stale_after = -math.inf, math.inf
+        self.run_packets = self.identified = self.unmatched = self.other = 0
+        self.last_reply = -math.inf
+        self.recent: deque[float] = deque(maxlen=1024)
+        self.remote = (self.dest[0], self.dest[1])
+
+    def _tick(self) -> None:
+        due = self._deadline
+        since = self.unread_since
+        if since is None or since <= due - CLOCK_RESOLUTION:
+            self.unread_since, self.quiet = None, True
+            self.arrived_after = due - CLOCK_RESOLUTION
+        elif self._drain(time.monotonic(), MAX_PER_EVENT):
+            self.arrived_after = time.monotonic()
+        now = time.monotonic()
+        if now >= self.silent_at:
+            self.other += 1
+        window = self.window
+        if len(window) == self.limit and window[0] + (WINDOW + MARGIN) > now:
+            self.other += 1
+        window.append(now)
+        self.run_last_sent = now
+        self.run_packets += 1
+        super()._tick()
+
+    def _read(self) -> None:
+        limit = 1 if self.quiet else MAX_PER_EVENT
+        self.quiet = False
+        self._drain(time.monotonic(), limit)
+
+    def _drain(self, start: float, limit: int) -> bool:
+        self.unread_since = start
+        sock = self._sock
+        assert sock is not None
+        recv, view, reply = sock.recvfrom_into, self.view, self.reply
+        for _ in range(limit):
+            try:
+                n, addr = recv(view)
+            except (BlockingIOError, InterruptedError):
+                self.unread_since = None
+                return True
+            if addr != self.remote or view[:n] != reply:
+                self.other += 1
+                continue
+            now = time.monotonic()
+            self.received += 1
+            self.last_reply = now
+            self.recent.append(now)
+            self.silent_at = math.nextafter(now + self.silence, math.inf)
+            earliest = self.arrived_after
+            if earliest > now:
+                earliest = now
+            if (earliest >= self.run_stale_after
+                    or self.run_last_sent <= earliest - self.reply_window):  # fmt: skip
+                self.unmatched += 1
+            else:
+                self.identified += 1
+        return False
+
+    def counts(self) -> tuple[int, int]:
+        """Packets sent and replies identified (a reply that was not is not counted)."""
+        return self.sent, self.identified
+
+
 async def open_clients(kind: str, n: int, url: str, ramp: float) -> Fleet:
     """Open ``n`` client sessions against ``url``, session i at ``i * ramp / n`` s (their 50 Hz
     phases spread over the period)."""
     packet = heartbeat()
+    reply = SimulatorModel().handle_bytes(packet) or b""
     loop = asyncio.get_running_loop()
     start = loop.time()
 
@@ -212,6 +309,8 @@ async def open_clients(kind: str, n: int, url: str, ramp: float) -> Fleet:
             return ClientLoop(url)
         if kind == FLOORS["client"]:
             return FloorLoop(url, packet)
+        if kind == IDLE_BOUND:
+            return IdleBound(url, packet, reply)
         return BareLoop(url, packet, "recv_into" if kind == "bare" else ENDPOINT)
 
     async def open_one(i: int) -> ClientLoop | BareLoop:
@@ -656,7 +755,8 @@ def spread(values: Sequence[float]) -> str:
 
 def series(part: str, args: argparse.Namespace) -> tuple[str, ...]:
     """The series of ``part``: the library's, the bare loop, the optional ones asked for."""
-    extra = ((ENDPOINT,) if args.endpoint else ()) + ((FLOORS[part],) if args.floor else ())
+    floors = (FLOORS[part], IDLE_BOUND) if part == "client" else (FLOORS[part],)
+    extra = ((ENDPOINT,) if args.endpoint else ()) + (floors if args.floor else ())
     return (*KINDS[part], *extra)
 
 
@@ -875,8 +975,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="also asyncio's stock datagram transport (create_datagram_endpoint)",
     )
     ap.add_argument("--floor", action="store_true",
-                    help="also the client with its session stubbed and the simulator with its"
-                         " model stubbed (diagnostics: the layers below)")  # fmt: skip
+                    help="also the client with its session stubbed, the bare loop plus an idle"
+                         " session's least work, and the simulator with its model stubbed"
+                         " (diagnostics: the layers below; the best an idle fast path can"
+                         " do)")  # fmt: skip
     ap.add_argument(
         "--no-pin",
         dest="pin",
@@ -937,6 +1039,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         except ValueError:
             ap.error("--profile: PART:KIND:N, e.g. client:gcu:100")
         kinds = (*KINDS.get(part, ()), ENDPOINT, FLOORS.get(part, ""))
+        kinds += (IDLE_BOUND,) if part == "client" else ()
         if part not in KINDS or kind not in kinds or n < 1:
             ap.error(f"--profile: PART client or sim, KIND one of {kinds}, N >= 1")
         return asyncio.run(profile(setup, part, kind, n))
