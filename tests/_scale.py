@@ -3,7 +3,7 @@
 
 ``make test`` runs every test at full size once, on the main interpreter; the fast tier on the
 other CPythons 3.10–3.13, and ``make check``, run at reduced size (.ci/pythons.py, Makefile).
-Reduced: the 100,000-command session contract runs 10,000 commands (2 shards instead of 8),
+Reduced: the 100,000-command session contract runs 5,000 commands (1 shard instead of 8),
 the 500-command bad-link test one seed instead of two, the UDP exactly-once test over real
 sockets 200 commands at the 10 ms hold instead of 500 at each of 5 and 10 ms, the boundary
 properties (arbitrary values accepted iff valid) a tenth of their examples, the deframer's

@@ -14,6 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from _scale import scaled
 from _sim_helpers import host_bytes
 from gcu_async import GcuClient
 from gcu_async.cli import main
@@ -178,7 +179,7 @@ def test_it_feeds_the_gcu_conformance_report() -> None:
     assert conformance.report().replies == 5
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=scaled(200, 25), deadline=None)
 @given(st.lists(st.floats(0.001, 3.0), min_size=1, max_size=40), st.floats(0.05, 2.0))
 def test_every_silence_longer_than_the_timeout_is_one_outage(gaps: list[float],
                                                              timeout: float) -> None:

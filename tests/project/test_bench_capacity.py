@@ -28,7 +28,8 @@ def test_quick_run_at_tiny_sizes(tmp_path: Path) -> None:
     assert data["failures"] == [], out
     series = {(e["part"], e["kind"]) for e in data["edges"]}
     assert series == {("client", "gcu"), ("client", "bare"), ("sim", "sim"), ("sim", "bare")}
-    assert {p["sessions"] for p in data["probes"]} <= {2, 4}, out
+    # from --start 2 up to --max 4, or down to 1 where a loaded machine fails the 2
+    assert {p["sessions"] for p in data["probes"]} <= {1, 2, 4}, out
     for probe in data["probes"]:
         # judged, and the counting process heard every one of the probe's sessions
         assert probe["reason"] == "", out

@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 import _z1pro
 from _protocol_strategies import frames
+from _scale import scaled
 from _sim_helpers import Rig
 from gcu_async.conformance import EXAMPLES, FEEDBACK_GRACE_S, MODE_SETTLE_S, GcuConformance
 from gcu_async.protocol import (
@@ -214,7 +215,7 @@ def test_undecodable_bytes_are_counted() -> None:
     assert c.report().undecodable == 1 and c.report().replies == 1
 
 
-@settings(suppress_health_check=[HealthCheck.too_slow], max_examples=50)
+@settings(suppress_health_check=[HealthCheck.too_slow], max_examples=scaled(50, 25))
 @given(st.lists(st.tuples(frames(GcuMainFrame), st.integers(0, 255),
                           st.one_of(st.none(), st.integers(0, 255))), max_size=60))  # fmt: skip
 def test_any_reply_stream_reports_in_bounded_memory(replies: list[Any]) -> None:

@@ -24,6 +24,7 @@ from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
 from _protocol_strategies import seal
+from _scale import scaled
 from _sim_helpers import host_bytes
 from gcu_async.protocol import (
     HOST_HEADER,
@@ -308,7 +309,7 @@ def run(steps: list[tuple[Any, ...]], stream: bool) -> tuple[Side, Side]:
     return fast, full
 
 
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=scaled(300, 30), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(steps=st.lists(STEPS, min_size=1, max_size=25), stream=st.booleans())
 def test_the_fast_path_answers_as_the_full_path(steps: list[tuple[Any, ...]],
                                                 stream: bool) -> None:  # fmt: skip
@@ -454,7 +455,7 @@ def _yaw_at_180(g: Gimbal) -> None:
 SETUPS = ["mode", "gaze lock", "gaze at", "track", "track far", "pan", "angles", "angles far"]
 
 
-@settings(max_examples=400, deadline=None)
+@settings(max_examples=scaled(400, 40), deadline=None)
 @example(Mode.GAZE, (0.0, 0.0, 0.0), POSITION, "mode", 0, "none", 1.0, 0.02)  # a point appears
 @example(Mode.GAZE, (0.0, 0.0, 0.0), POSITION, "gaze at", 0, "frozen here", 1.0, 0.02)  # aim
 @example(Mode.FPV, (0.0, 0.0, 0.0), None, "mode", 0, "yaw at 180", 1.0, 0.02)
