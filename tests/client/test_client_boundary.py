@@ -46,8 +46,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from _boundary import MESSAGE, case_id
-from _scale import FULL, scaled
 from gcu_async import GcuClient
 from gcu_async.client.connect import CLIENT_OPTIONS, connect
 from gcu_async.errors import CommandError, CommandFailed, FieldRangeError, WaitTimeout
@@ -79,6 +77,8 @@ from gcu_async.sim import GcuSimulator, SimulatorModel
 from gcu_async.sim.aircraft import ReceivedAircraft
 from gcu_async.transport.memory import MemoryTransport
 from gcu_async.transport.url import _SCHEMES
+from helpers.protocol.boundary import MESSAGE, case_id
+from helpers.scale import FULL, scaled
 
 pytestmark = pytest.mark.filterwarnings("ignore:rate_hz=")
 

@@ -28,10 +28,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from _boundary import MESSAGE, case_id
-from _catalogue_samples import required_samples
-from _protocol_strategies import FRAME_SCHEMAS, RAW_RANGES
-from _scale import scaled
 from gcu_async.errors import FieldRangeError
 from gcu_async.protocol import (
     COMMAND_TYPES,
@@ -103,6 +99,10 @@ from gcu_async.protocol.command_fields import (
 from gcu_async.protocol.enums import PIP_MODE_MASK
 from gcu_async.protocol.frame_schema import Code, Flags, Value
 from gcu_async.protocol.gpstime import GPS_EPOCH, gps_minus_utc
+from helpers.protocol.boundary import MESSAGE, case_id
+from helpers.protocol.catalogue_samples import required_samples
+from helpers.protocol.strategies import FRAME_SCHEMAS, RAW_RANGES
+from helpers.scale import scaled
 
 INF, NAN = math.inf, math.nan
 UTC = timezone.utc
@@ -976,7 +976,7 @@ def test_decoding_stays_liberal() -> None:
     raw = bytearray(host)
     raw[55:57] = (-5).to_bytes(2, "little", signed=True)  # gnss_week S16
     raw[11] = 0xFF  # reserved flag bits
-    from _protocol_strategies import seal
+    from helpers.protocol.strategies import seal
 
     packet = decode_host_packet(seal(raw[:2], bytes(raw[5:-2])))
     assert packet.sub.gnss_week == -5 and packet.main.flags_raw == 0xFF  # type: ignore[union-attr]

@@ -10,8 +10,6 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from _protocol_strategies import seal
-from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
 from gcu_async.errors import GcuError, ProtocolErrorReason, RemoteProtocolError
 from gcu_async.protocol import (
     COMMAND_TYPES,
@@ -33,6 +31,8 @@ from gcu_async.protocol import (
     decode_host_packet,
     decode_packet,
 )
+from helpers.protocol.strategies import seal
+from helpers.protocol.vectors import GCU_EXAMPLE, HOST_EXAMPLE
 
 xmodem = crcmod.predefined.mkCrcFun("xmodem")
 

@@ -17,8 +17,6 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from _protocol_strategies import seal
-from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
 from gcu_async.errors import FieldRangeError, ProtocolErrorReason, RemoteProtocolError
 from gcu_async.protocol import (
     COMMAND_TYPES,
@@ -53,6 +51,8 @@ from gcu_async.session.session import Session
 from gcu_async.sim import ManualClock, SimulatorModel
 from gcu_async.sim.aircraft import aircraft_yaw
 from gcu_async.sim.tolerance import tolerated
+from helpers.protocol.strategies import seal
+from helpers.protocol.vectors import GCU_EXAMPLE, HOST_EXAMPLE
 
 MAIN_AND_SUB = HOST_EXAMPLE[5:69]
 """Bytes 5–68 of the document's host example: INS valid, a sub frame."""

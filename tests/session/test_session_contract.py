@@ -23,10 +23,10 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, seed, settings
 from hypothesis import strategies as st
 
-from _scale import FULL, scaled
-from _vtime import Direction, Fate, Rig, tagged_commands
 from gcu_async.protocol import HostPacket
 from gcu_async.session import Session, SessionState, TicketState
+from helpers.scale import FULL, scaled
+from helpers.session.vtime import Direction, Fate, Rig, tagged_commands
 
 GUARD = 0.015
 

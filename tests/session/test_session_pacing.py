@@ -18,11 +18,11 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from _vloop import OVERHEAD, LoopRig, regular
-from _vtime import tagged_commands
 from gcu_async.session import Session
 from gcu_async.session.pacing import MARGIN
 from gcu_async.session.session import MIN_WAKE
+from helpers.session.vloop import OVERHEAD, LoopRig, regular
+from helpers.session.vtime import tagged_commands
 
 GUARD = 0.015
 

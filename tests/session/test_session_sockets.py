@@ -15,10 +15,6 @@ from typing import Any
 
 import pytest
 
-from _fault_proxy import DelayNullRequests, DropFirstReplyOfEachCommand, FaultProxy
-from _scale import FULL, scaled
-from _sim_process import SimProcess
-from _vtime import tagged_commands
 from gcu_async import (
     CommandError,
     CommandLinkLost,
@@ -29,6 +25,10 @@ from gcu_async import (
 )
 from gcu_async.protocol import Command, HostPacket, Mode, Opcode, ZoomTo, decode_host_packet
 from gcu_async.sim import GcuSimulator, SimulatorModel
+from helpers.scale import FULL, scaled
+from helpers.session.vtime import tagged_commands
+from helpers.sim.process import SimProcess
+from helpers.transport.fault_proxy import DelayNullRequests, DropFirstReplyOfEachCommand, FaultProxy
 
 
 def key(command: Command) -> tuple[str, str]:

@@ -6,11 +6,11 @@ import asyncio
 
 import pytest
 
-from _sim_helpers import host_bytes
 from gcu_async.errors import LinkLost
 from gcu_async.protocol import Deframer, Opcode, TakePhoto, decode_gcu_packet
 from gcu_async.sim import FaultConfig, FaultPlan, GcuSimulator
 from gcu_async.transport import LinkEvent, LinkEventKind, MemoryTransport
+from helpers.sim.support import host_bytes
 
 
 async def test_memory_link_answers_like_the_gcu() -> None:

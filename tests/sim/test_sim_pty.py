@@ -7,9 +7,9 @@ import sys
 
 import pytest
 
-from _sim_helpers import FAMILIES, FdPeer, host_bytes
 from gcu_async.protocol import Opcode, TakePhoto, ZoomIn
 from gcu_async.sim import GcuSimulator
+from helpers.sim.support import FAMILIES, FdPeer, host_bytes
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="pseudo-terminals are POSIX")
 

@@ -11,10 +11,10 @@ import time
 
 import pytest
 
-from _sim_helpers import FdPeer, StreamPeer, UdpPeer, eventually, tag, tagged
 from gcu_async.protocol import Opcode, TakePhoto, decode_gcu_packet
 from gcu_async.sim import FaultConfig, FaultPlan, GcuSimulator, ManualClock, StallSwitch
 from gcu_async.sim.stall import POLL_SECONDS
+from helpers.sim.support import FdPeer, StreamPeer, UdpPeer, eventually, tag, tagged
 
 
 def manual_sim(**kw: object) -> tuple[GcuSimulator, ManualClock]:

@@ -7,9 +7,9 @@ import asyncio
 
 import pytest
 
-from _sim_helpers import FAMILIES, StreamPeer, host_bytes
 from gcu_async.protocol import Opcode, TakePhoto
 from gcu_async.sim import GcuSimulator
+from helpers.sim.support import FAMILIES, StreamPeer, host_bytes
 
 
 async def test_every_command_family_over_tcp() -> None:

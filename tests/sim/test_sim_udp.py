@@ -8,7 +8,6 @@ from typing import Any
 
 import pytest
 
-from _sim_helpers import FAMILIES, UdpPeer, host_bytes, sub_of
 from gcu_async.protocol import (
     ControlValues,
     Mode,
@@ -20,6 +19,7 @@ from gcu_async.protocol import (
     ZoomIn,
 )
 from gcu_async.sim import GcuSimulator, ManualClock, SimulatorModel
+from helpers.sim.support import FAMILIES, UdpPeer, host_bytes, sub_of
 
 
 @pytest.fixture(autouse=True, params=["add_reader", "fallback"])
