@@ -1,6 +1,6 @@
 """The client over bad links, against the simulator: loss, corruption, duplication,
 reordering, TCP connection kills, silence. (Bad arguments, which must never be sent: the
-misuse catalogue in test_client_boundary.py.)"""
+misuse cases in test_client_boundary.py.)"""
 
 from __future__ import annotations
 
