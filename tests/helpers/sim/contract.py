@@ -1,10 +1,11 @@
 """The simulator-server contract (docs/simulator.md, "Endpoints" and "Silence and stall"),
 written once: :class:`ServerContract` holds what every endpoint of :class:`GcuSimulator` shows
-a host — every command answered with its status, the same-opcode rule, junk discarded,
-silence, stall —, :class:`StreamServerContract` adds what the byte-stream endpoints (TCP, a
-pty, the in-memory link) show: any chunking. Each endpoint's test file subclasses one with a
-``serve`` fixture (:data:`Serve`: a simulator in, a :class:`Host` on its endpoint out) and
-keeps only what is its own, as the transports do with tests/helpers/transport/contract.py.
+a host (every command answered with its status, the same-opcode rule, junk discarded,
+silence, stall, a capture of the exchange); :class:`StreamServerContract` adds what the
+byte-stream endpoints (TCP, a pty, the in-memory link) show: any chunking. Each endpoint's
+test file subclasses one with a ``serve`` fixture (:data:`Serve`: a simulator in, a
+:class:`Host` on its endpoint out) and keeps only what is its own, as the transports do with
+tests/helpers/transport/contract.py.
 """
 
 from __future__ import annotations
@@ -13,8 +14,12 @@ import asyncio
 import contextlib
 from collections.abc import AsyncIterator, Callable
 from contextlib import AbstractAsyncContextManager
-from typing import Protocol
+from pathlib import Path
+from typing import Any, Protocol
 
+import pytest
+
+from gcu_async.cli.decode import decode_capture
 from gcu_async.protocol import (
     Deframer,
     GcuPacket,
@@ -22,7 +27,9 @@ from gcu_async.protocol import (
     Opcode,
     Palette,
     TakePhoto,
+    ZoomIn,
     decode_gcu_packet,
+    decode_host_packet,
 )
 from gcu_async.sim import GcuSimulator, ManualClock, SimulatorModel
 from gcu_async.sim.stall import POLL_SECONDS
@@ -258,6 +265,24 @@ class ServerContract:
         assert sim.model.executions[Opcode.TAKE_PHOTO] == (n + 1) // 2
         assert not sim.stalled
         assert sim.stalls.count == 1
+
+
+    async def test_a_capture_records_every_request_and_reply_in_order(
+        self, serve: Serve, tmp_path: Path
+    ) -> None:
+        pytest.importorskip("dpkt", reason="the capture extra")
+        path = tmp_path / "sim.pcapng"
+        sim = GcuSimulator(capture=path)
+        exchanged: list[dict[str, Any]] = []
+        async with serve(sim) as host:
+            for command in (None, TakePhoto(), ZoomIn(), None):
+                data = host_bytes(command)
+                reply = await request(host, data)
+                exchanged += [decode_host_packet(data).as_dict(), reply.as_dict()]
+        assert sim.capture is not None and not sim.capture.active  # closed with the endpoint
+        records = decode_capture(path.read_bytes())
+        assert [{k: v for k, v in r.items() if k != "capture"} for r in records] == exchanged
+        assert len({r["capture"]["link"] for r in records}) == 1
 
 
 class StreamServerContract(ServerContract):
