@@ -29,7 +29,7 @@ unexport PYTHONDONTWRITEBYTECODE
 # tier (real time, processes, ...) with JOBS pytest-xdist workers while the fast tier
 # (sans-I/O, in-memory, virtual time) runs in one process, then the tests marked `alone` one
 # at a time. Every other version runs the fast tier in its own .venv-3.X at reduced size
-# (tests/_tiers.py, tests/_scale.py). `make test PYTHONS=` runs the main venv only.
+# (tests/helpers/tiers.py, tests/helpers/scale.py). `make test PYTHONS=` runs the main venv only.
 PYTHONS ?= 3.10 3.11 3.12 3.13
 JOBS ?= 4
 

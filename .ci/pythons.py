@@ -3,12 +3,12 @@
     python .ci/pythons.py --main-venv .venv --versions "3.10 3.11 3.12 3.13" [-- PYTEST ARGS]
 
 The main venv (the one that lints and builds the docs) runs every test at full size
-(``GCU_TEST_SIZE=full``): the full tier (every kind but ``fast``; tests/_tiers.py) and the
+(``GCU_TEST_SIZE=full``): the full tier (every kind but ``fast``; tests/helpers/tiers.py) and the
 ``heavy`` fast tests in parallel (pytest-xdist, ``--jobs`` workers) in the background, while the
 rest of the fast tier (sans-I/O, in-memory, virtual time) runs in one process, then every other
 version found runs the fast tier in its own venv, ``.venv-3.X`` (created, or refreshed when
 pyproject.toml or the package version changed), at reduced size (``GCU_TEST_SIZE=reduced``, see
-tests/_scale.py); last, with nothing else running, the ``alone`` tests one at a time.
+tests/helpers/scale.py); last, with nothing else running, the ``alone`` tests one at a time.
 An interpreter is looked for in pyenv's versions (``pyenv root``, else ``$PYENV_ROOT`` or
 ``.pyenv`` in the home directory), then as ``python3.X`` on PATH. At the end it prints which
 versions ran (which tier, how they did) and which were missing. Exit status: 0 if every run

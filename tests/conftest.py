@@ -1,4 +1,4 @@
-"""Shared pytest configuration: test tiers (tests/_tiers.py) and Hypothesis profiles.
+"""Shared pytest configuration: test tiers (tests/helpers/tiers.py) and Hypothesis profiles.
 
 Every collected test gets exactly one kind marker (``fast``, ``realtime``, ``subprocess``,
 ``netns``, ``browser``, ``tshark``, ``sitl``) and, if it cannot share the machine, ``alone``:
@@ -8,7 +8,7 @@ Every collected test gets exactly one kind marker (``fast``, ``realtime``, ``sub
 reproducible and never flakes on a lucky draw; ``dev`` (the default) explores new examples
 on every run and remembers failures in the local example database. ``thorough`` is for an
 occasional long local run: ``HYPOTHESIS_PROFILE=thorough pytest tests``. With
-``GCU_TEST_SIZE=reduced`` (tests/_scale.py) the chosen profile runs 25 examples per test.
+``GCU_TEST_SIZE=reduced`` (tests/helpers/scale.py) the chosen profile runs 25 examples per test.
 """
 
 from __future__ import annotations
@@ -19,8 +19,8 @@ import os
 import pytest
 from hypothesis import HealthCheck, settings
 
-from _scale import FULL
-from _tiers import ALONE, DEFAULT, FAST, HEAVY, KINDS, MARKERS, TIERS, kinds_of
+from helpers.scale import FULL
+from helpers.tiers import ALONE, DEFAULT, FAST, HEAVY, KINDS, MARKERS, TIERS, kinds_of
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -78,7 +78,7 @@ settings.register_profile("thorough", max_examples=2000, deadline=None)
 _profile = os.environ.get("HYPOTHESIS_PROFILE")
 if _profile is None:
     _profile = "ci" if os.environ.get("CI", "").strip().lower() == "true" else "dev"
-if not FULL:  # a reduced-size run (tests/_scale.py): fewer examples, same profile otherwise
+if not FULL:  # a reduced-size run (tests/helpers/scale.py): fewer examples, same profile otherwise
     settings.register_profile(f"{_profile}-reduced", settings.get_profile(_profile),
                               max_examples=25)  # fmt: skip
     _profile = f"{_profile}-reduced"

@@ -1,12 +1,12 @@
-"""The bridge rig's simulator plays every firmware where tests/_firmwares.py says so."""
+"""The bridge rig's simulator plays every firmware where tests/helpers/sim/firmwares.py says so."""
 
 from __future__ import annotations
 
 import pytest
 
-import _bridge_rig
-from _firmwares import parametrize
 from gcu_async.sim import DEFAULT_FIRMWARE
+from helpers.bridge import rig as rig_module
+from helpers.sim.firmwares import parametrize
 
 
 def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
@@ -15,7 +15,7 @@ def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
 
 @pytest.fixture(autouse=True)
 def rig_firmware(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> str:
-    """The firmware :func:`_bridge_rig.bridge_rig` starts its simulator with."""
+    """The firmware :func:`helpers.bridge.rig.bridge_rig` starts its simulator with."""
     firmware = str(getattr(request, "param", DEFAULT_FIRMWARE))
-    monkeypatch.setattr(_bridge_rig, "FIRMWARE", firmware)
+    monkeypatch.setattr(rig_module, "FIRMWARE", firmware)
     return firmware

@@ -2,7 +2,8 @@
 
 Real loopback sockets, a pymavlink ground station, the simulator in its own process
 recording every execution and the time of every host packet it handles
-(tests/_bridge_sim_process.py), and floods from another process (tests/_mavlink_flood.py) into a
+(tests/helpers/bridge/sim_process.py), and floods from another process
+(tests/helpers/bridge/mavlink_flood.py) into a
 ``udpin:`` link. A seeded generator builds schedules of
 back-to-back commands that differ only in their parameters, retransmissions with rising
 ``confirmation``, stops; every command comes from its own (system, component), so each
@@ -37,14 +38,14 @@ from pathlib import Path
 
 import pytest
 
-from _bridge_rig import AUTOPILOT, CAMERA, GCS, GIMBAL, Peer
-from _link_rig import RATE_HIGH, RATE_LOW
 from gcu_async.bridge import CameraConfig, MavlinkBridge, admission
 from gcu_async.bridge._mavlink import mavlink
 from gcu_async.bridge.commands import CANCELLED
 from gcu_async.client.connect import connect
 from gcu_async.protocol import TakePhoto, ZoomIn, ZoomOut, ZoomStop, ZoomTo
 from gcu_async.sim import ExecutionRecord
+from helpers.bridge.link_rig import RATE_HIGH, RATE_LOW
+from helpers.bridge.rig import AUTOPILOT, CAMERA, GCS, GIMBAL, Peer
 
 ZOOM = mavlink.MAV_CMD_SET_CAMERA_ZOOM
 PHOTO = mavlink.MAV_CMD_IMAGE_START_CAPTURE
@@ -54,8 +55,8 @@ ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
 IN_PROGRESS = mavlink.MAV_RESULT_IN_PROGRESS
 REJECTED = mavlink.MAV_RESULT_TEMPORARILY_REJECTED
 FAILED = mavlink.MAV_RESULT_FAILED
-FLOOD = Path(__file__).parent.parent / "_mavlink_flood.py"
-SIM = Path(__file__).parent.parent / "_bridge_sim_process.py"
+FLOOD = Path(__file__).parents[1] / "helpers" / "bridge" / "mavlink_flood.py"
+SIM = Path(__file__).parents[1] / "helpers" / "bridge" / "sim_process.py"
 ENV = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
 RSS_GROWTH_MIB = 30.0
 THREAD_GROWTH = 2
@@ -67,8 +68,8 @@ def rss_mib() -> float:
 
 
 class SimProcess:
-    """The simulator in its own process (tests/_bridge_sim_process.py): the bridge's load does not
-    delay when it receives the host packets it counts."""
+    """The simulator in its own process (tests/helpers/bridge/sim_process.py): the bridge's load
+    does not delay when it receives the host packets it counts."""
 
     def __init__(self, proc: asyncio.subprocess.Process, url: str) -> None:
         self.proc = proc

@@ -10,9 +10,9 @@ import random
 
 import pytest
 
-from _bridge_rig import CAMERA, GIMBAL, HOME_MSL, SYSTEM, bridge_rig
 from gcu_async.bridge._mavlink import mavlink
 from gcu_async.protocol.enums import Mode
+from helpers.bridge.rig import CAMERA, GIMBAL, HOME_MSL, SYSTEM, bridge_rig
 
 ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
 EARTH = mavlink.GIMBAL_DEVICE_FLAGS_YAW_IN_EARTH_FRAME
@@ -194,10 +194,10 @@ async def test_autopilot_state_for_gimbal_device_feeds_attitude_and_velocity() -
 
 
 async def test_a_gcu_that_answers_late_is_picked_up(caplog: pytest.LogCaptureFixture) -> None:
-    from _bridge_rig import GCS, Peer
     from gcu_async.bridge import MavlinkBridge
     from gcu_async.client.connect import connect
     from gcu_async.sim import GcuSimulator
+    from helpers.bridge.rig import GCS, Peer
 
     sim = GcuSimulator()
     gcs = Peer(*GCS)

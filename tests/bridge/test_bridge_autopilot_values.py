@@ -15,10 +15,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from _scale import scaled
 from gcu_async.bridge import MavlinkBridge
 from gcu_async.bridge._mavlink import mavlink
 from gcu_async.client.connect import connect
+from helpers.scale import scaled
 
 KINDS = ["ATTITUDE", "GLOBAL_POSITION_INT", "LOCAL_POSITION_NED", "GPS_RAW_INT",
          "SYSTEM_TIME", "HOME_POSITION", "AUTOPILOT_STATE_FOR_GIMBAL_DEVICE"]  # fmt: skip

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import math
 
-from _bridge_rig import CAMERA, GCS, bridge_rig
 from gcu_async.bridge._mavlink import mavlink
 from gcu_async.protocol.enums import Mode, Opcode
+from helpers.bridge.rig import CAMERA, GCS, bridge_rig
 
 ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
 UNSUPPORTED = mavlink.MAV_RESULT_UNSUPPORTED

@@ -10,10 +10,10 @@ import time
 
 import pytest
 
-from _bridge_rig import GIMBAL, Peer
-from _sim_process import CLI, SimProcess
 from gcu_async.bridge._mavlink import mavlink
 from gcu_async.cli.mavlink_bridge import default_video_url
+from helpers.bridge.rig import GIMBAL, Peer
+from helpers.sim.process import CLI, SimProcess
 
 
 def wait_for(peer: Peer, kind: str, pred, timeout: float = 10.0):  # type: ignore[no-untyped-def]

@@ -14,11 +14,11 @@ from typing import Any
 
 import pytest
 
-from _bridge_rig import CAMERA, GIMBAL, Rig, bridge_rig
 from gcu_async.bridge import admission
 from gcu_async.bridge._mavlink import mavlink
 from gcu_async.bridge.commands import CANCELLED
 from gcu_async.protocol import Focus, TakePhoto, ZoomIn, ZoomStop, ZoomTo
+from helpers.bridge.rig import CAMERA, GIMBAL, Rig, bridge_rig
 
 ZOOM = mavlink.MAV_CMD_SET_CAMERA_ZOOM
 CONTINUOUS = mavlink.ZOOM_TYPE_CONTINUOUS

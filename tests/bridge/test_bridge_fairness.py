@@ -3,7 +3,7 @@ station that heartbeats keeps its share of the command budget while another proc
 the same ``udpin:`` port — the flood a field report measured (5,000 commands/s, each from its own
 system/component ids), a flood that heartbeats too, a flood with the station's own ids,
 floods from many addresses and on many links. Real loopback sockets, pymavlink on both
-sides, the flood in a process of its own (tests/_mavlink_flood.py)."""
+sides, the flood in a process of its own (tests/helpers/bridge/mavlink_flood.py)."""
 
 from __future__ import annotations
 
@@ -16,12 +16,12 @@ from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import Any
 
-from _bridge_rig import CAMERA, Peer, Rig, bridge_rig
 from gcu_async.bridge._mavlink import mavlink
+from helpers.bridge.rig import CAMERA, Peer, Rig, bridge_rig
 
 PHOTO = mavlink.MAV_CMD_IMAGE_START_CAPTURE
 ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
-FLOOD = Path(__file__).parent.parent / "_mavlink_flood.py"
+FLOOD = Path(__file__).parents[1] / "helpers" / "bridge" / "mavlink_flood.py"
 STATION = (250, mavlink.MAV_COMP_ID_MISSIONPLANNER)
 ANSWER_WITHIN = 5.0
 """Seconds within which the station's photo must be answered (the issue: never)."""

@@ -14,7 +14,6 @@ from typing import Any
 
 import pytest
 
-from _bridge_rig import CAMERA, GCS, GIMBAL, NAN, Peer, Rig, bridge_rig
 from gcu_async.bridge import MavlinkBridge, admission
 from gcu_async.bridge._mavlink import mavlink
 from gcu_async.client.connect import connect
@@ -22,6 +21,7 @@ from gcu_async.protocol.commands import GazeAtCoordinates, PointingFollow, TakeP
 from gcu_async.protocol.enums import Mode
 from gcu_async.protocol.host_frames import ControlValues
 from gcu_async.sim import GcuSimulator, SimulatorModel
+from helpers.bridge.rig import CAMERA, GCS, GIMBAL, NAN, Peer, Rig, bridge_rig
 
 ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
 REJECTED = mavlink.MAV_RESULT_TEMPORARILY_REJECTED

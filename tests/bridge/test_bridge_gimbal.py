@@ -7,10 +7,10 @@ import math
 
 import pytest
 
-from _bridge_rig import GCS, GIMBAL, NAN, SYSTEM, bridge_rig
 from gcu_async.bridge._mavlink import mavlink
 from gcu_async.bridge.geometry import euler_from_quaternion
 from gcu_async.protocol.enums import Mode
+from helpers.bridge.rig import GCS, GIMBAL, NAN, SYSTEM, bridge_rig
 
 ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
 

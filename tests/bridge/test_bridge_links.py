@@ -17,13 +17,14 @@ from typing import Any
 
 import pytest
 
-from _bridge_rig import CAMERA, GIMBAL, SYSTEM
-from _link_rig import free_port, link_rig, rss_mib, thread_count
 from gcu_async.bridge._mavlink import mavlink, mavutil
+from helpers.bridge.link_rig import free_port, link_rig, rss_mib, thread_count
+from helpers.bridge.rig import CAMERA, GIMBAL, SYSTEM
 
 REQUEST = mavlink.MAV_CMD_REQUEST_MESSAGE
 INFO = mavlink.MAVLINK_MSG_ID_CAMERA_INFORMATION
-FLOOD = os.path.join(os.path.dirname(os.path.dirname(__file__)), "_udp_flood.py")
+FLOOD = os.path.join(os.path.dirname(os.path.dirname(__file__)), "helpers", "bridge",
+                     "udp_flood.py")  # fmt: skip
 
 
 class MavPeer:

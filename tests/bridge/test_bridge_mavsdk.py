@@ -14,11 +14,11 @@ from typing import Any
 
 import pytest
 
-from _bridge_rig import AUTOPILOT, Peer, Rig
 from gcu_async.bridge import CameraConfig, MavlinkBridge
 from gcu_async.client.connect import connect
 from gcu_async.protocol.enums import Mode, Opcode
 from gcu_async.sim import GcuSimulator
+from helpers.bridge.rig import AUTOPILOT, Peer, Rig
 
 try:
     from mavsdk import ComponentType

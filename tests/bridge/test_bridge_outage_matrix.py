@@ -1,5 +1,5 @@
 """The bridge through GCU outages over real parts (docs/mavlink-bridge.md, "Robustness"): the
-GCU is a simulator process (tests/_outage_rig.py) on UDP, TCP and a pty behind a symlink,
+GCU is a simulator process (tests/helpers/sim/outage_rig.py) on UDP, TCP and a pty behind a symlink,
 power-cycled while the bridge runs with a pymavlink ground station; outages of 2 s on each
 transport, and 30 s and 120 s on each, all six at once (the suite's wall time grows by one
 outage).
@@ -24,12 +24,12 @@ from typing import Any
 
 import pytest
 
-from _bridge_rig import CAMERA, GCS, GIMBAL, SYSTEM, Peer
-from _outage_rig import SCHEMES, OutageRig
 from gcu_async import connect
 from gcu_async.bridge import CameraConfig, MavlinkBridge
 from gcu_async.bridge._mavlink import mavlink
 from gcu_async.transport import LinkEvent, LinkEventKind
+from helpers.bridge.rig import CAMERA, GCS, GIMBAL, SYSTEM, Peer
+from helpers.sim.outage_rig import SCHEMES, OutageRig
 
 pytestmark = pytest.mark.subprocess
 

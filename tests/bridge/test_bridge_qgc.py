@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from _bridge_rig import bridge_rig
 from gcu_async.bridge._mavlink import mavlink
+from helpers.bridge.rig import bridge_rig
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "qgroundcontrol.md"
 ROW = re.compile(r"^\|(?P<what>[^|]+)\|\s*`(?P<sends>[^`]+)`\s*\|\s*(?P<to>\d+)\s*\|"

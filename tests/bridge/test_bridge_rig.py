@@ -1,4 +1,4 @@
-"""The bridge rigs' pymavlink peers (tests/_bridge_rig.py) each own their port."""
+"""The bridge rigs' pymavlink peers (tests/helpers/bridge/rig.py) each own their port."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import socket
 
 import pytest
 
-from _bridge_rig import AUTOPILOT, GCS, Peer
+from helpers.bridge.rig import AUTOPILOT, GCS, Peer
 
 
 def test_a_peer_port_is_taken_by_no_other_socket() -> None:

@@ -11,10 +11,10 @@ from typing import Any
 
 import pytest
 
-from _bridge_rig import bridge_rig
 from gcu_async.bridge._mavlink import mavlink
 from gcu_async.protocol.units import wrap_degrees_180
 from gcu_async.sim import firmware_for
+from helpers.bridge.rig import bridge_rig
 
 EARTH = mavlink.GIMBAL_DEVICE_FLAGS_YAW_IN_EARTH_FRAME
 AIRCRAFT_YAW = 30.0

@@ -418,7 +418,7 @@ def test_full_stream_over_the_wire_into_a_host_packet() -> None:
 
 
 # -- optional dependency ---------------------------------------------------------------------
-@pytest.mark.subprocess  # a fresh interpreter (tests/_tiers.py)
+@pytest.mark.subprocess  # a fresh interpreter (tests/helpers/tiers.py)
 def test_gcu_async_imports_without_pymavlink() -> None:
     code = (
         "import sys\n"

@@ -8,10 +8,10 @@ import struct
 
 import pytest
 
-from _vectors import HOST_EXAMPLE
 from gcu_async.capture import CaptureError
 from gcu_async.capture.blocks import MAX_BLOCK, MAX_PACKET, Packet, Source, packets
 from gcu_async.capture.synth import udp_packet
+from helpers.protocol.vectors import HOST_EXAMPLE
 
 IP = udp_packet(("127.0.0.1", 1), ("127.0.0.2", 2), HOST_EXAMPLE)
 

@@ -28,13 +28,13 @@ from pathlib import Path
 
 import pytest
 
-from _tshark import DUMPCAP, TCPDUMP, dissect, needs_tshark
-from _xfgcu_compare import compare_capture
-from _xfgcu_corpus import corpus, corrupt
 from gcu_async.cli.decode import decode_capture
 from gcu_async.client.connect import connect
 from gcu_async.protocol import GCU_HEADER, HOST_HEADER
 from gcu_async.sim import GcuSimulator
+from helpers.wireshark.tshark import DUMPCAP, TCPDUMP, dissect, needs_tshark
+from helpers.wireshark.xfgcu_compare import compare_capture
+from helpers.wireshark.xfgcu_corpus import corpus, corrupt
 
 pytestmark = [needs_tshark, pytest.mark.filterwarnings("ignore:rate_hz=")]
 RUN_SECONDS = 4.0

@@ -21,9 +21,6 @@ from typing import Any
 
 import pytest
 
-from _sim_process import CLI, SimProcess
-from _tshark import dissect, needs_tshark
-from _xfgcu_compare import compare_capture
 from gcu_async import GcuClient
 from gcu_async.capture import CaptureUnavailable, PacketCapture
 from gcu_async.cli.decode import decode_capture
@@ -33,6 +30,9 @@ from gcu_async.sim import GcuSimulator
 from gcu_async.transport.serial import SerialTransport
 from gcu_async.transport.tap import CapturingTransport
 from gcu_async.wireshark import dissector_path
+from helpers.sim.process import CLI, SimProcess
+from helpers.wireshark.tshark import dissect, needs_tshark
+from helpers.wireshark.xfgcu_compare import compare_capture
 
 WAIT = 10.0
 

@@ -21,8 +21,8 @@ from typing import Any
 
 import pytest
 
-from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
 from gcu_async.capture.synth import udp_packet
+from helpers.protocol.vectors import GCU_EXAMPLE, HOST_EXAMPLE
 
 PEAK_MIB = 100
 GIB = 1 << 30

@@ -8,9 +8,9 @@ import itertools
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from _scale import scaled
 from gcu_async.capture.reader import Record
 from gcu_async.capture.reassembly import Reassembler
+from helpers.scale import scaled
 
 
 @st.composite

@@ -7,11 +7,11 @@ import itertools
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from _scale import scaled
-from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
 from gcu_async.capture.scan import PacketScanner
 from gcu_async.protocol import GCU_HEADER, HOST_HEADER
 from gcu_async.protocol.deframer import Deframer
+from helpers.protocol.vectors import GCU_EXAMPLE, HOST_EXAMPLE
+from helpers.scale import scaled
 
 FALSE_HEADERS = [b"\x8a\x5e\x49\x00", b"\xa8\xe5\x05\x00", GCU_HEADER, HOST_HEADER]
 pieces = st.sampled_from(

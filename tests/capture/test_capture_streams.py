@@ -22,12 +22,12 @@ import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from _scale import scaled
-from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
-from _xfgcu_corpus import corpus, write_capture
 from gcu_async.capture.synth import TcpFlow, udp_packet
 from gcu_async.cli import main
 from gcu_async.cli.decode import decode_capture
+from helpers.protocol.vectors import GCU_EXAMPLE, HOST_EXAMPLE
+from helpers.scale import scaled
+from helpers.wireshark.xfgcu_corpus import corpus, write_capture
 
 HOST, GCU = ("127.0.0.1", 40000), ("127.0.0.2", 2337)
 RAW_IP = 101

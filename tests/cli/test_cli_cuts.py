@@ -15,12 +15,12 @@ from typing import Any
 
 import pytest
 
-from _sim_process import CLI, SimProcess
 from gcu_async import GcuSubFrame
 from gcu_async.cli import build_parser, main
 from gcu_async.cli.send import resolve
 from gcu_async.cli.send_commands import COMMANDS, parse_cameras
 from gcu_async.protocol import CameraMask
+from helpers.sim.process import CLI, SimProcess
 
 DEAD = "udp://127.0.0.1:9?local_port=0"  # discard port: nothing answers
 
@@ -81,7 +81,7 @@ def test_every_command_help_is_its_own(name: str, capsys: pytest.CaptureFixture[
 
 
 # -- 2. --timeout applies to every command ---------------------------------------------------
-@pytest.mark.alone  # a bound on the wall clock, interpreter start-up included (tests/_tiers.py)
+@pytest.mark.alone  # a bound on the wall clock, interpreter start-up included (helpers/tiers.py)
 @pytest.mark.parametrize("before", [False, True], ids=["after", "before"])
 def test_calibrate_obeys_timeout(sim: SimProcess, before: bool) -> None:
     """The simulator calibrates for 3 s: with ``--timeout 1`` the command gives up after
@@ -105,7 +105,7 @@ def test_calibrate_without_timeout_waits_for_the_calibration(sim: SimProcess) ->
     assert json.loads(done.stdout)["command"] == "CALIBRATION"
 
 
-@pytest.mark.alone  # a bound on the wall clock, interpreter start-up included (tests/_tiers.py)
+@pytest.mark.alone  # a bound on the wall clock, interpreter start-up included (helpers/tiers.py)
 def test_timeout_bounds_every_other_command_too() -> None:
     t0 = time.monotonic()
     done = cli("send", DEAD, "zoom-to", "4", "--timeout", "0.4")

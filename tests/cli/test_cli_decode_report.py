@@ -14,10 +14,10 @@ from typing import Any
 
 import pytest
 
-import _z1pro
 from gcu_async.capture import PacketCapture
 from gcu_async.protocol import HostMainFrame, HostPacket, NullCommand, TakePhoto
 from gcu_async.protocol.headings import PAST_TURN_DETAIL, SIGNED_DETAIL
+from helpers.protocol import z1pro
 
 DECODE = [sys.executable, "-m", "gcu_async", "decode"]
 HOST, GCU = ("127.0.0.1", 40000), ("127.0.0.1", 2337)
@@ -35,10 +35,10 @@ def session() -> list[bytes]:
     along the logged moves (signed west of north), one value neither reading explains."""
     host_null = HostPacket(HostMainFrame.build(subframe_request=1), None, NullCommand()).encode()
     photo = HostPacket(HostMainFrame.build(subframe_request=1), None, TakePhoto()).encode()
-    packets = [photo, _z1pro.reply(0, 8852, opcode=0x20, status=0)]
-    for rel0, yaw0, rel1, yaw1 in _z1pro.MOVES:
-        packets += [host_null, _z1pro.reply(rel0, yaw0), host_null, _z1pro.reply(rel1, yaw1)]
-    packets += [host_null, _z1pro.reply(0, 40000)]
+    packets = [photo, z1pro.reply(0, 8852, opcode=0x20, status=0)]
+    for rel0, yaw0, rel1, yaw1 in z1pro.MOVES:
+        packets += [host_null, z1pro.reply(rel0, yaw0), host_null, z1pro.reply(rel1, yaw1)]
+    packets += [host_null, z1pro.reply(0, 40000)]
     return packets
 
 
@@ -47,7 +47,7 @@ def test_the_heading_in_the_json_and_each_kind_of_anomaly_once(tmp_path: Path) -
     objs, stderr = decode(b"".join(packets).hex())
     replies = [o for o in objs if o["direction"] == "gcu_to_host"]
     signed = [o for o in replies if o["main"]["attitude_raw"][2] >= 47536]
-    assert len(replies) == 2 + 4 * len(_z1pro.MOVES) // 2 and len(signed) > 10
+    assert len(replies) == 2 + 4 * len(z1pro.MOVES) // 2 and len(signed) > 10
     for o in replies:
         raw = o["main"]["attitude_raw"][2]
         yaw = o["main"]["attitude_deg"]["yaw"]

@@ -9,7 +9,7 @@ import subprocess
 
 import pytest
 
-from _sim_process import CLI, SimProcess
+from helpers.sim.process import CLI, SimProcess
 
 DEAD = "udp://127.0.0.1:9?local_port=0"  # discard port: nothing answers
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from _sim_process import CLI, SimProcess
+from helpers.sim.process import CLI, SimProcess
 
 TURNED = ("enter-angle-control", "0", "0", "-140")
 """The camera 140° left of the aircraft (facing north): a heading of 220°, west of north."""

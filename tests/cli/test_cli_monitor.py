@@ -13,7 +13,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from _sim_process import CLI, SimProcess
+from helpers.sim.process import CLI, SimProcess
 
 
 def read_lines(proc: subprocess.Popen[str], n: int, timeout: float) -> list[str]:

@@ -26,8 +26,8 @@ from typing import Any
 
 import pytest
 
-from _app_client import app_argv
-from _sim_process import CLI, SimProcess
+from helpers.client.app_client import app_argv
+from helpers.sim.process import CLI, SimProcess
 
 pytestmark = [
     pytest.mark.skipif(not sys.platform.startswith("linux"),

@@ -10,11 +10,11 @@ import math
 
 import pytest
 
-from _catalogue_samples import sample
 from gcu_async.cli import build_parser
 from gcu_async.cli.send import resolve
 from gcu_async.cli.send_commands import COMMANDS, AircraftFix
 from gcu_async.protocol.catalogue import CATALOGUE, Kind, Parameter
+from helpers.protocol.catalogue_samples import sample
 
 URL = "udp://127.0.0.1:9"
 AIRCRAFT = "-33.85,-151.2,-5,-90"

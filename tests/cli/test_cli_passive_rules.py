@@ -14,8 +14,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from _scale import scaled
-from _sim_helpers import host_bytes
 from gcu_async import GcuClient
 from gcu_async.cli import main
 from gcu_async.cli.passive import (
@@ -27,6 +25,8 @@ from gcu_async.cli.passive import (
 from gcu_async.conformance import GcuConformance
 from gcu_async.protocol import GcuSubFrame, TakePhoto, decode_gcu_packet
 from gcu_async.sim import ManualClock, SimulatorModel
+from helpers.scale import scaled
+from helpers.sim.support import host_bytes
 
 LINUX = sys.platform.startswith("linux")
 TEST_NETS = ("192.0.2.1", "198.51.100.1", "203.0.113.1")

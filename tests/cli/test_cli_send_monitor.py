@@ -13,11 +13,11 @@ from collections.abc import Iterator
 
 import pytest
 
-from _catalogue_samples import required_samples
 from gcu_async import Mode
 from gcu_async.protocol.catalogue import CATALOGUE
 from gcu_async.protocol.pods import supports
 from gcu_async.sim import DEFAULT_POD
+from helpers.protocol.catalogue_samples import required_samples
 
 CLI = [sys.executable, "-m", "gcu_async.cli"]
 

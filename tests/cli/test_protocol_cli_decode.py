@@ -18,8 +18,6 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from _scale import scaled
-from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
 from gcu_async.cli import decode as decode_cli
 from gcu_async.protocol import (
     Feedback,
@@ -31,6 +29,8 @@ from gcu_async.protocol import (
     Palette,
     ZoomTo,
 )
+from helpers.protocol.vectors import GCU_EXAMPLE, HOST_EXAMPLE
+from helpers.scale import scaled
 
 
 def _entry_point() -> list[str]:
@@ -256,7 +256,7 @@ def test_anomalous_packets_decode_flagged_and_exit_0() -> None:
 
 
 def _seal_host(head: bytes) -> bytes:
-    from _protocol_strategies import seal
+    from helpers.protocol.strategies import seal
 
     return seal(head[:2], head[5:])
 

@@ -14,7 +14,6 @@ from typing import Any
 
 import pytest
 
-from _catalogue_samples import required_samples
 from gcu_async import CommandFailed, GcuClient, LinkLost, Mode
 from gcu_async.protocol import (
     CameraFlags,
@@ -26,6 +25,7 @@ from gcu_async.protocol import (
 from gcu_async.protocol.catalogue import CATALOGUE, CatalogueEntry
 from gcu_async.protocol.pods import supports
 from gcu_async.pytest_plugin import TRANSPORTS, SimHandle
+from helpers.protocol.catalogue_samples import required_samples
 
 
 @pytest.fixture(params=TRANSPORTS)

@@ -1,9 +1,9 @@
-"""The client's API boundary: a generated misuse catalogue over every public entry point.
+"""The client's API boundary: generated misuse cases over every public entry point.
 
 Every parameter of every public method, setter, constructor option and ``connect()`` option
 of the client layer is described once in ``PARAMS``: its kind, the name errors must use (the
-parameter name as the caller spelled it), its documented range. From that table the
-catalogue generates wrong-type values (``True`` where a number is meant, ``1.0`` for an int,
+parameter name as the caller spelled it), its documented range. From that table come
+wrong-type values (``True`` where a number is meant, ``1.0`` for an int,
 ``"1"``, ``"false"``, ``None``, ``b""``, ``[]``, ``object()``, complex, Decimal, ...) and
 out-of-range values (NaN, ±inf, ±1e30, ±10**40, ±10**400, one step outside each bound).
 Each case runs against a fresh simulator over the in-memory transport and must
@@ -15,13 +15,13 @@ Each case runs against a fresh simulator over the in-memory transport and must
 - send nothing and change nothing: ``session.stats.submitted``, the GCU's ``executions``
   and ``execution_log``, ``gcu.control`` and ``gcu.aircraft`` are unchanged, and the next
   command is the only thing the GCU executes;
-- leave the session working (a command succeeds; :func:`test_whole_catalogue_on_one_session`
+- leave the session working (a command succeeds; :func:`test_every_misuse_case_on_one_session`
   also keeps the heartbeat running afterwards and checks the link stays up).
 
 The positive side: documented boundary values are accepted and, where cheap, the GCU
 received exactly that value (its execution log, or the host packet that carried it). A
 hypothesis test throws arbitrary values of arbitrary types at every scalar parameter and
-checks accepted ⇔ valid. ``test_catalogue_covers_*`` fail when a public parameter has no
+checks accepted ⇔ valid. ``test_misuse_cases_cover_*`` fail when a public parameter has no
 entry.
 """
 
@@ -46,8 +46,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from _boundary import MESSAGE, case_id
-from _scale import FULL, scaled
 from gcu_async import GcuClient
 from gcu_async.client.connect import CLIENT_OPTIONS, connect
 from gcu_async.errors import CommandError, CommandFailed, FieldRangeError, WaitTimeout
@@ -79,6 +77,8 @@ from gcu_async.sim import GcuSimulator, SimulatorModel
 from gcu_async.sim.aircraft import ReceivedAircraft
 from gcu_async.transport.memory import MemoryTransport
 from gcu_async.transport.url import _SCHEMES
+from helpers.protocol.boundary import MESSAGE, case_id
+from helpers.scale import FULL, scaled
 
 pytestmark = pytest.mark.filterwarnings("ignore:rate_hz=")
 
@@ -793,7 +793,7 @@ def misuse(p: P) -> list[Case]:
     return cases
 
 
-CATALOGUE = [c for p in PARAMS for c in misuse(p)]
+MISUSE_CASES = [c for p in PARAMS for c in misuse(p)]
 POSITIVE = [(p, v) for p in PARAMS for v in p.valid]
 
 
@@ -894,12 +894,12 @@ async def run_case(rig: Rig, case: Case) -> None:
 
 STRIDE = 1 if FULL else 3
 """Each case on a client of its own: all at full size, every third at reduced size (every
-case still runs at every size on one session: test_whole_catalogue_on_one_session)."""
+case still runs at every size on one session: test_every_misuse_case_on_one_session)."""
 
 
 @pytest.mark.parametrize(
     "case",
-    [pytest.param(c, id=_id(c.p, c.value)) for c in CATALOGUE[::STRIDE]],
+    [pytest.param(c, id=_id(c.p, c.value)) for c in MISUSE_CASES[::STRIDE]],
 )
 async def test_misuse_is_rejected_naming_the_parameter(rig: Rig, case: Case) -> None:
     await run_case(rig, case)
@@ -926,21 +926,21 @@ async def test_boundary_values_are_accepted(rig: Rig, p: P, value: Any) -> None:
     assert back == expected, (p.owner, p.param, value, back)
 
 
-def test_catalogue_size() -> None:
-    kinds = Counter(c.expect.__name__ for c in CATALOGUE)
+def test_misuse_case_count() -> None:
+    kinds = Counter(c.expect.__name__ for c in MISUSE_CASES)
     owners = {p.owner for p in PARAMS}
-    print(f"\nclient misuse catalogue: {len(CATALOGUE)} cases over {len(PARAMS)} parameters "
+    print(f"\nclient misuse: {len(MISUSE_CASES)} cases over {len(PARAMS)} parameters "
           f"of {len(owners)} entry points ({dict(kinds)}); "
           f"{len(POSITIVE)} boundary values accepted")  # fmt: skip
-    assert len(CATALOGUE) >= 1500
+    assert len(MISUSE_CASES) >= 1500
     assert len(PARAMS) >= 150
     assert len(POSITIVE) >= 250
 
 
-# --- the whole catalogue on one session: nothing accumulates, the link stays up ----------------
-async def test_whole_catalogue_on_one_session() -> None:
+# --- every misuse case on one session: nothing accumulates, the link stays up -----------------
+async def test_every_misuse_case_on_one_session() -> None:
     # grouped by set-up (each runs once); a command every 100 cases
-    cases = sorted(CATALOGUE, key=lambda c: getattr(c.p.setup, "__name__", ""))
+    cases = sorted(MISUSE_CASES, key=lambda c: getattr(c.p.setup, "__name__", ""))
     setup: Setup | None = None
     async with open_rig() as rig:
         for i, case in enumerate(cases):
@@ -1162,7 +1162,7 @@ async def test_unsubscribing_twice_is_harmless(rig: Rig) -> None:
         unsubscribe()
 
 
-# --- the catalogue covers the whole public API ----------------------------------------------------
+# --- the misuse cases cover the whole public API -------------------------------------------------
 def _covered(owner: str) -> set[str]:
     return {p.param.split(".")[0].split(" ")[0] for p in PARAMS if p.owner == owner}
 
@@ -1174,14 +1174,14 @@ PUBLIC_METHODS = sorted(
 
 
 @pytest.mark.parametrize("name", PUBLIC_METHODS)
-def test_catalogue_covers_every_method_parameter(name: str) -> None:
+def test_misuse_cases_cover_every_method_parameter(name: str) -> None:
     params = set(inspect.signature(getattr(GcuClient, name)).parameters) - {"self"}
     if not params:
         assert name in NO_ARGUMENTS, f"{name} takes no arguments: test it there"
     assert params <= _covered(name), params - _covered(name)
 
 
-def test_catalogue_covers_the_constructor_and_connect() -> None:
+def test_misuse_cases_cover_the_constructor_and_connect() -> None:
     params = set(inspect.signature(GcuClient).parameters)
     assert params <= _covered("GcuClient"), params - _covered("GcuClient")
     options = set(CLIENT_OPTIONS) | {"url"}
@@ -1196,6 +1196,6 @@ def test_catalogue_covers_the_constructor_and_connect() -> None:
     ("enter_euler_control", "yaw", 1e30), ("set_control", "control", ControlValues(99999, 0, 0)),
     ("set_aircraft", "state", None), ("connect", "version", True),
 ])  # fmt: skip
-def test_catalogue_holds_the_reported_cases(owner: str, param: str, value: Any) -> None:
+def test_misuse_cases_hold_the_reported_cases(owner: str, param: str, value: Any) -> None:
     assert any(c.p.owner == owner and c.p.param == param and type(c.value) is type(value)
-               and c.value == value for c in CATALOGUE)  # fmt: skip
+               and c.value == value for c in MISUSE_CASES)  # fmt: skip

@@ -24,8 +24,6 @@ from typing import Any
 
 import pytest
 
-import _client_methods
-from _catalogue_samples import required_samples
 from gcu_async import GcuClient, GcuSubFrame
 from gcu_async.cli.send_commands import COMMANDS
 from gcu_async.errors import CommandLinkLost, FieldRangeError
@@ -38,6 +36,8 @@ from gcu_async.protocol.host_frames import ControlValues
 from gcu_async.protocol.units import Attitude, ImageBox, ImagePoint
 from gcu_async.session import Session
 from gcu_async.transport.memory import MemoryTransport
+from helpers.client import methods as client_methods
+from helpers.protocol.catalogue_samples import required_samples
 
 IDS = [e.method for e in CATALOGUE]
 def good(entry: CatalogueEntry) -> dict[str, Any]:
@@ -87,7 +87,7 @@ async def through_client(entry: CatalogueEntry, **kwargs: Any) -> tuple[type[Bas
 
 # -- one client method per entry, one line each -------------------------------------------
 def test_every_entry_has_exactly_one_client_method_sending_it() -> None:
-    sent = _client_methods.sent_names()
+    sent = client_methods.sent_names()
     assert set(sent) == set(BY_METHOD)
     for method, names in sent.items():
         expected = method if method in MAKERS else BY_METHOD[method].command.__name__
@@ -105,10 +105,10 @@ def test_the_method_is_one_line_of_delegation(entry: CatalogueEntry) -> None:
 
 def test_the_one_line_check_can_fail() -> None:
     """A method that does more than delegate is caught: execute names no command."""
-    assert "execute" not in _client_methods.sent_names()
-    assert _client_methods.SENDS.findall("self._build(builder.zoom_to, ratio=ratio)") == [
+    assert "execute" not in client_methods.sent_names()
+    assert client_methods.SENDS.findall("self._build(builder.zoom_to, ratio=ratio)") == [
         "zoom_to"]
-    assert _client_methods.SENDS.findall("self._run(c.TakePhoto(cameras=cameras))") == [
+    assert client_methods.SENDS.findall("self._run(c.TakePhoto(cameras=cameras))") == [
         "TakePhoto"]
 
 

@@ -1,6 +1,6 @@
 """The outage matrix over real parts (docs/client.md, "Lifecycle" and "GCU restarts"): a
-simulator process (tests/_outage_rig.py) on UDP, TCP and a pty behind a symlink (the serial
-device keeps its name across the simulator's restarts, as a USB adapter's udev name does),
+simulator process (tests/helpers/sim/outage_rig.py) on UDP, TCP and a pty behind a symlink (the
+serial device keeps its name across the simulator's restarts, as a USB adapter's udev name does),
 stopped and restarted while the client runs, or silenced; outages of 2 s, 30 s and 120 s.
 
 For each: the client recovers by itself within :data:`RECOVERY` seconds of the GCU's return
@@ -24,10 +24,10 @@ from typing import Any
 
 import pytest
 
-from _outage_rig import SCHEMES, OutageRig
 from gcu_async import GcuClient, Mode, connect
 from gcu_async.client import ClientState
 from gcu_async.transport import LinkEvent, LinkEventKind
+from helpers.sim.outage_rig import SCHEMES, OutageRig
 
 pytestmark = pytest.mark.subprocess
 

@@ -1,8 +1,8 @@
 """Outages of any length, GCU restarts, starting before the GCU, giving up (docs/client.md,
 "Lifecycle" and "GCU restarts"): the whole client — driver, session, waits — against the
-simulator in memory, in virtual time (tests/_vclock.py), so an hour-long outage takes a
-second. tests/client/test_client_outage_matrix.py shows the same over real sockets, a pty
-and a simulator process.
+simulator in memory, in virtual time (tests/helpers/transport/vclock.py), so an hour-long
+outage takes a second. tests/client/test_client_outage_matrix.py shows the same over real
+sockets, a pty and a simulator process.
 
 An outage is either silent (the GCU stops answering: UDP's case) or dropped (the link itself
 goes, as a TCP connection or a serial device does, and comes back); a restart is a dropped
@@ -18,13 +18,13 @@ from typing import Any
 
 import pytest
 
-from _scale import FULL
-from _vclock import LoopClock, run
 from gcu_async import CommandLinkLost, GcuClient, LinkLost, Mode, Outcome
 from gcu_async.client import ClientState
 from gcu_async.protocol import Opcode
 from gcu_async.sim import GcuSimulator, SimulatorModel
 from gcu_async.transport import LinkEvent, LinkEventKind, MemoryTransport, Transport
+from helpers.scale import FULL
+from helpers.transport.vclock import LoopClock, run
 
 K = LinkEventKind
 OUTAGES = (2.0, 30.0, 120.0, 3600.0) if FULL else (2.0, 30.0, 120.0)

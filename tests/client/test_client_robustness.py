@@ -1,6 +1,6 @@
 """The client over bad links, against the simulator: loss, corruption, duplication,
 reordering, TCP connection kills, silence. (Bad arguments, which must never be sent: the
-misuse catalogue in test_client_boundary.py.)"""
+misuse cases in test_client_boundary.py.)"""
 
 from __future__ import annotations
 
@@ -13,10 +13,10 @@ from typing import Any
 
 import pytest
 
-from _scale import FULL
 from gcu_async import GcuClient, LinkLost, Opcode
 from gcu_async.pytest_plugin import SimHandle
 from gcu_async.sim import FaultConfig, FaultPlan
+from helpers.scale import FULL
 
 Step = tuple[Opcode, Callable[[GcuClient], Awaitable[Any]]]
 STEPS: list[Step] = [
@@ -53,7 +53,7 @@ def client(gcu_sim: SimHandle, rate_hz: float = 200.0, **options: Any) -> GcuCli
         return gcu_sim.client(rate_hz=rate_hz, **options)
 
 
-@pytest.mark.parametrize("seed", [11, 29] if FULL else [11])  # see tests/_scale.py
+@pytest.mark.parametrize("seed", [11, 29] if FULL else [11])  # see tests/helpers/scale.py
 async def test_500_commands_over_a_bad_link_run_exactly_once(gcu_sim: SimHandle, seed: int) -> None:
     gcu_sim.set_faults(bad_link(seed))
     model = gcu_sim.simulator.model

@@ -9,7 +9,6 @@ from collections.abc import AsyncIterator
 
 import pytest
 
-from _fake_gcu import FakeGcu, succeed
 from gcu_async import (
     CommandFailed,
     CommandTimeout,
@@ -27,6 +26,7 @@ from gcu_async.protocol import (
     TakePhoto,
     command_code,
 )
+from helpers.session.fake_gcu import FakeGcu, succeed
 
 
 @pytest.fixture

@@ -9,8 +9,6 @@ import subprocess
 
 import pytest
 
-from _protocol_strategies import seal
-from _sim_process import CLI, SimProcess
 from gcu_async import GcuClient
 from gcu_async.client.wirelog import describe_gcu, describe_host
 from gcu_async.protocol import (
@@ -26,6 +24,8 @@ from gcu_async.protocol import (
     ZoomTo,
 )
 from gcu_async.pytest_plugin import SimHandle
+from helpers.protocol.strategies import seal
+from helpers.sim.process import CLI, SimProcess
 
 
 def test_describe_host_names_the_command_its_parameters_and_the_flags() -> None:

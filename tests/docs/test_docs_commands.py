@@ -19,12 +19,12 @@ from typing import Any, NamedTuple
 
 import pytest
 
-import _client_methods
-from _catalogue_samples import sample
 from gcu_async import GcuClient
 from gcu_async.protocol import command_code
 from gcu_async.protocol.builder import build
 from gcu_async.protocol.catalogue import CATALOGUE
+from helpers.client import methods as client_methods
+from helpers.protocol.catalogue_samples import sample
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "docs" / "_ext"))
@@ -65,7 +65,7 @@ ROWS = table_rows(committed(CLIENT_DOC, "commands"))
 
 
 def command_methods() -> set[str]:
-    return _client_methods.command_methods()
+    return client_methods.command_methods()
 
 
 def test_table_was_found() -> None:

@@ -1,10 +1,10 @@
-"""This folder's simulators play every firmware where tests/_firmwares.py says so."""
+"""This folder's simulators play every firmware where tests/helpers/sim/firmwares.py says so."""
 
 from __future__ import annotations
 
 import pytest
 
-from _firmwares import parametrize
+from helpers.sim.firmwares import parametrize
 
 
 def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:

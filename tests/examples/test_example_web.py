@@ -17,21 +17,21 @@ from typing import Any
 
 import pytest
 
-from _catalogue_samples import required_samples
-from _web_deps import require_web
 from gcu_async import GcuClient, Opcode
 from gcu_async.client import ClientState
 from gcu_async.protocol.catalogue import CATALOGUE
 from gcu_async.protocol.pods import supports
 from gcu_async.pytest_plugin import SimHandle
 from gcu_async.sim import DEFAULT_POD, GcuSimulator
+from helpers.examples.web_deps import require_web
+from helpers.protocol.catalogue_samples import required_samples
 
 require_web()
 from websockets.asyncio.client import ClientConnection  # noqa: E402
 from websockets.asyncio.client import connect as ws_connect  # noqa: E402
 from websockets.exceptions import ConnectionClosed  # noqa: E402
 
-from _web_example import (  # noqa: E402
+from helpers.examples.web import (  # noqa: E402
     Web,
     aircraft_heading,
     angle_near,

@@ -26,13 +26,13 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from _web_deps import require_web
+from helpers.examples.web_deps import require_web
 
 require_web()
 import httpx  # noqa: E402
 
-from _web_example import Web, running_web  # noqa: E402
 from gcu_async.sim import GcuSimulator  # noqa: E402
+from helpers.examples.web import Web, running_web  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 START_TIMEOUT = 15.0

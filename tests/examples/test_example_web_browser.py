@@ -16,13 +16,13 @@ from typing import Any
 
 import pytest
 
-from _web_deps import require_browser
 from gcu_async.pytest_plugin import SimHandle
 from gcu_async.sim import GcuSimulator
+from helpers.examples.web_deps import require_browser
 
 async_api = require_browser()
 
-from _web_example import (  # noqa: E402
+from helpers.examples.web import (  # noqa: E402
     CHROMIUM,
     CHROMIUM_ARGS,
     Web,

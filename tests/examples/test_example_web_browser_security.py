@@ -19,8 +19,8 @@ from typing import Any
 
 import pytest
 
-from _web_deps import require_browser
 from gcu_async.pytest_plugin import SimHandle
+from helpers.examples.web_deps import require_browser
 
 async_api = require_browser()
 
@@ -28,7 +28,7 @@ from starlette.applications import Starlette  # noqa: E402
 from starlette.responses import HTMLResponse  # noqa: E402
 from starlette.routing import Route  # noqa: E402
 
-from _web_example import CHROMIUM, CHROMIUM_ARGS, Web, running_web, serve  # noqa: E402
+from helpers.examples.web import CHROMIUM, CHROMIUM_ARGS, Web, running_web, serve  # noqa: E402
 
 WAIT_MS = 10_000
 REBOUND = "rebind.example"

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from _web_deps import require_web
+from helpers.examples.web_deps import require_web
 
 require_web()
 import httpx  # noqa: E402

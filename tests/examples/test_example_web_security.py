@@ -14,15 +14,15 @@ from typing import Any
 
 import pytest
 
-from _web_deps import require_web
 from gcu_async.pytest_plugin import SimHandle
+from helpers.examples.web_deps import require_web
 
 require_web()
 from websockets.asyncio.client import connect as ws_connect  # noqa: E402
 from websockets.exceptions import InvalidStatus  # noqa: E402
 from websockets.typing import Origin, Subprotocol  # noqa: E402
 
-from _web_example import Web, next_message, running_web  # noqa: E402
+from helpers.examples.web import Web, next_message, running_web  # noqa: E402
 
 TOKEN = "test-token-0123456789abcdef"
 JSON = {"content-type": "application/json"}

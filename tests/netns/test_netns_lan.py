@@ -1,4 +1,4 @@
-"""The namespace fixture itself (``_netns.Lan``): it leaves nothing behind, even when
+"""The namespace fixture itself (``helpers.netns.lan.Lan``): it leaves nothing behind, even when
 creating the LAN fails halfway, and its processes really run on separate hosts."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from _netns import GCU_ADDRESS, HOST_ADDRESS, Lan, ip, namespaces, unavailable
+from helpers.netns.lan import GCU_ADDRESS, HOST_ADDRESS, Lan, ip, namespaces, unavailable
 
 needs_netns = pytest.mark.skipif(unavailable() is not None, reason=str(unavailable()))
 

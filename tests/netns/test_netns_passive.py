@@ -1,5 +1,5 @@
 """``gcu-async monitor --passive`` in the real UDP topology, across two hosts (network
-namespaces, see ``_netns``): the simulator on host A replies like a real GCU, to
+namespaces, see ``helpers.netns.lan``): the simulator on host A replies like a real GCU, to
 10.213.0.255:2338; on host B an application and the passive monitor share port 2338, each
 with the transport's defaults (``udp://10.213.0.1``). The monitor finds the broadcast
 address itself (host B's interface 10.213.0.2/24), shows the application's session, and
@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from _app_client import app_argv
-from _netns import BROADCAST, CLI, GCU_ADDRESS, Lan, lan_fixture, line, stop
+from helpers.client.app_client import app_argv
+from helpers.netns.lan import BROADCAST, CLI, GCU_ADDRESS, Lan, lan_fixture, line, stop
 
 GCU_URL = f"udp://{GCU_ADDRESS}"  # port 2337, listen on 2338: the defaults
 

@@ -1,6 +1,6 @@
 """Sharing the host port 2338 between processes (the app and ``gcu-async monitor``).
 
-First what Linux itself does, measured across two hosts (network namespaces, ``_netns``):
+First what Linux itself does, measured across two hosts (network namespaces, ``helpers.netns.lan``):
 with SO_REUSEADDR or SO_REUSEPORT on every socket bound to 0.0.0.0:2338, a datagram to the
 subnet's broadcast address reaches every socket, a unicast datagram exactly one; without
 either option the second bind fails. Then what the transport does: SO_REUSEPORT on a fixed
@@ -18,12 +18,20 @@ from collections.abc import Iterator
 
 import pytest
 
-from _netns import BROADCAST, GCU_ADDRESS, HOST_ADDRESS, SNIFFER, Lan, collect, lan_fixture
 from gcu_async import GcuClient
 from gcu_async.errors import LinkLost
 from gcu_async.protocol import Opcode
 from gcu_async.sim import GcuSimulator
 from gcu_async.transport import UdpTransport, open_transport
+from helpers.netns.lan import (
+    BROADCAST,
+    GCU_ADDRESS,
+    HOST_ADDRESS,
+    SNIFFER,
+    Lan,
+    collect,
+    lan_fixture,
+)
 
 LINUX = sys.platform.startswith("linux")
 N = 20  # datagrams of each kind

@@ -1,4 +1,4 @@
-"""TCP across two hosts (network namespaces, see ``_netns``): the simulator is the TCP
+"""TCP across two hosts (network namespaces, see ``helpers.netns.lan``): the simulator is the TCP
 server on host A (10.213.0.1:2332), ``gcu-async send`` and ``monitor`` connect from host B.
 """
 
@@ -9,7 +9,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from _netns import GCU_ADDRESS, HOST_ADDRESS, Lan, lan_fixture, stop
+from helpers.netns.lan import GCU_ADDRESS, HOST_ADDRESS, Lan, lan_fixture, stop
 
 GCU_URL = f"tcp://{GCU_ADDRESS}"  # port 2332
 

@@ -1,4 +1,4 @@
-"""The real UDP topology, across two hosts (network namespaces, see ``_netns``).
+"""The real UDP topology, across two hosts (network namespaces, see ``helpers.netns.lan``).
 
 The simulator runs on host A like a real GCU: it receives on 10.213.0.1:2337 and replies
 from port 2337 to the subnet's broadcast address, 10.213.0.255, port 2338. The client runs
@@ -16,7 +16,9 @@ from typing import Any
 
 import pytest
 
-from _netns import (
+from gcu_async.protocol import ExecutionStatus, Opcode, decode_gcu_packet
+from gcu_async.sim.udp import interface_broadcast
+from helpers.netns.lan import (
     BROADCAST,
     CLI,
     GCU_ADDRESS,
@@ -27,8 +29,6 @@ from _netns import (
     line,
     stop,
 )
-from gcu_async.protocol import ExecutionStatus, Opcode, decode_gcu_packet
-from gcu_async.sim.udp import interface_broadcast
 
 GCU_URL = f"udp://{GCU_ADDRESS}"  # port 2337, listen on 2338: the defaults
 

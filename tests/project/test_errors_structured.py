@@ -51,7 +51,7 @@ def test_no_module_tells_errors_apart_by_their_message() -> None:
 
 def test_the_simulator_counts_envelope_errors_by_reason() -> None:
     """``handle_bytes`` sorts what it cannot decode by ``exc.reason``."""
-    from _sim_helpers import host_bytes
+    from helpers.sim.support import host_bytes
 
     model = SimulatorModel(clock=ManualClock())
     good = host_bytes()

@@ -18,7 +18,6 @@ from typing import Any
 
 import pytest
 
-from _transport_recorder import Recorder
 from gcu_async.sim import ManualClock, parse_listen_url
 from gcu_async.sim.stall import POLL_SECONDS, StallSwitch, TransportReading
 from gcu_async.transport import SerialTransport, UdpTransport, open_transport
@@ -26,6 +25,7 @@ from gcu_async.transport._datagram import DrainingDatagramTransport
 from gcu_async.transport.base import LinkEventKind
 from gcu_async.transport.udp import ignore_icmp_connreset
 from gcu_async.transport.url import serial_device
+from helpers.transport.recorder import Recorder
 
 ROOT = Path(__file__).resolve().parents[2]
 LOOP = "127.0.0.1"

@@ -130,7 +130,8 @@ def test_only_ci_may_name_the_optional_test_peer() -> None:
 
 def test_no_tracked_file_refers_outside_the_repository() -> None:
     files = tracked_files()
-    assert "tests/_vectors.py" in files and len(files) > 50  # the scan really covers the tree
+    # the scan really covers the tree
+    assert "tests/helpers/protocol/vectors.py" in files and len(files) > 50
     findings: list[Finding] = []
     scanned = 0
     for name in files:
@@ -152,8 +153,10 @@ def test_no_tracked_file_refers_outside_the_repository() -> None:
 @pytest.mark.parametrize(
     ("path", "text"),
     [
-        ("tests/_vectors.py", 'SPEC = Path(__file__).resolve().parents[2] / "elsewhere" / "spec"'),
-        ("tests/_vectors.py", "SPEC = Path(__file__).parent.parent.parent / 'elsewhere'"),
+        ("tests/helpers/protocol/vectors.py",
+         'SPEC = Path(__file__).resolve().parents[4] / "elsewhere" / "spec"'),
+        ("tests/helpers/protocol/vectors.py",
+         "SPEC = Path(__file__).parent.parent.parent.parent.parent / 'elsewhere'"),
         ("src/gcu_async/x.py", "open('../elsewhere/spec/gcu-example.hex')"),
         ("Makefile", "\tcp ../elsewhere/spec/*.hex tests/data"),
         ("docs/index.md", "[the spec](../../elsewhere/spec/doc.md)"),

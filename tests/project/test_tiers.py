@@ -1,5 +1,5 @@
-"""The test tiers (tests/_tiers.py): every test file has a declared kind, no test runs nowhere,
-and ``make test``'s phases select every collected test exactly once."""
+"""The test tiers (tests/helpers/tiers.py): every test file has a declared kind, no test runs
+nowhere, and ``make test``'s phases select every collected test exactly once."""
 
 from __future__ import annotations
 
@@ -11,13 +11,15 @@ from pathlib import Path
 
 import pytest
 
-from _tiers import ALONE, DEFAULT, FAST, HEAVY, KINDS, MARKERS, SLOW_KINDS, TIERS, kinds_of
+from helpers.tiers import ALONE, DEFAULT, FAST, HEAVY, KINDS, MARKERS, SLOW_KINDS, TIERS, kinds_of
 
 TESTS = Path(__file__).resolve().parent.parent
 LAYERS = ("protocol", "session", "transport", "client", "sim", "cli", "bridge", "capture",
           "wireshark", "examples", "netns", "sitl", "docs", "project")  # fmt: skip
 """The folders of tests/, one per layer of the architecture (CONTRIBUTING.md, "Where a test
-goes"); the shared modules (``_*.py``), conftest.py and data/ stay at the top."""
+goes"); beside them only conftest.py, data/ and the helpers package."""
+TOP = {"conftest.py", "data", "helpers"}
+"""What tests/ holds besides the layer folders (CONTRIBUTING.md, "Helpers")."""
 
 
 def _by_name(tests: Path) -> tuple[dict[str, Path], list[str]]:
@@ -36,6 +38,11 @@ def _misplaced(tests: Path) -> list[str]:
 
 def test_each_test_file_name_is_used_once() -> None:
     assert _by_name(TESTS)[1] == [], "test file names used in more than one folder"
+
+
+def test_the_top_of_tests_holds_only_the_layers_and_the_helpers() -> None:
+    top = {p.name for p in TESTS.iterdir() if p.name != "__pycache__" and p.name[0] != "."}
+    assert top - set(LAYERS) == TOP, "shared modules go in tests/helpers (CONTRIBUTING.md)"
 
 
 def test_every_test_file_is_in_its_layer_folder() -> None:
@@ -60,7 +67,7 @@ def test_every_test_file_has_a_tier_and_every_entry_a_file() -> None:
     files = set(paths)
     declared = {name for name in files if name in TIERS or _module_marks_a_kind(paths[name])}
     assert files - declared == set(), (
-        "test files without a tier: add each to TIERS in tests/_tiers.py (or give it a "
+        "test files without a tier: add each to TIERS in tests/helpers/tiers.py (or give it a "
         "module-level pytestmark with one of " + ", ".join(KINDS) + ")"
     )
     assert set(TIERS) - files == set(), "TIERS names files that do not exist"

@@ -22,8 +22,6 @@ from typing import Any
 
 import pytest
 
-import _client_methods
-from _catalogue_samples import required_samples
 from gcu_async import GcuClient
 from gcu_async.errors import FieldRangeError
 from gcu_async.protocol import (
@@ -46,6 +44,8 @@ from gcu_async.protocol.catalogue import (
     Parameter,
     StatusRule,
 )
+from helpers.client import methods as client_methods
+from helpers.protocol.catalogue_samples import required_samples
 
 VERBS = frozenset({
     "enter", "set", "take", "toggle", "start", "stop", "zoom", "focus", "calibrate", "centre",
@@ -59,7 +59,7 @@ LEADING_ONLY = frozenset({"enter", "set", "start", "stop", "toggle"})
 
 def command_methods() -> set[str]:
     """The client's public command methods (``execute`` takes any command: not one)."""
-    return _client_methods.command_methods()
+    return client_methods.command_methods()
 
 
 def camel(name: str) -> str:

@@ -12,10 +12,6 @@ from typing import Any
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import _z1pro
-from _protocol_strategies import frames
-from _scale import scaled
-from _sim_helpers import Rig
 from gcu_async.conformance import EXAMPLES, FEEDBACK_GRACE_S, MODE_SETTLE_S, GcuConformance
 from gcu_async.protocol import (
     AngleControl,
@@ -29,6 +25,10 @@ from gcu_async.protocol import (
     TakePhoto,
 )
 from gcu_async.protocol.host_frames import ControlValues
+from helpers.protocol import z1pro
+from helpers.protocol.strategies import frames
+from helpers.scale import scaled
+from helpers.sim.support import Rig
 
 HZ = 50.0
 
@@ -37,9 +37,9 @@ def z1pro_session() -> GcuConformance:
     """The logged moves as replies 0.5 s apart (no host packets)."""
     c = GcuConformance()
     t = 0.0
-    for rel0, yaw0, rel1, yaw1 in _z1pro.MOVES:
+    for rel0, yaw0, rel1, yaw1 in z1pro.MOVES:
         for rel, yaw in ((rel0, yaw0), (rel1, yaw1)):
-            c.add(_z1pro.reply(rel, yaw), t)
+            c.add(z1pro.reply(rel, yaw), t)
             t += 0.5
     return c
 
@@ -49,7 +49,7 @@ def test_the_z1pro_signed_yaw_is_named_once_with_its_spread() -> None:
     assert report.keys == ("main.yaw_raw.signed",)
     d = report.get("main.yaw_raw.signed")
     assert d is not None and d.total == report.replies == 48
-    assert d.count == sum((y >= 47536) for m in _z1pro.MOVES for y in (m[1], m[3]))
+    assert d.count == sum((y >= 47536) for m in z1pro.MOVES for y in (m[1], m[3]))
     assert "no camera yaw in the U16-only band 18000…35999" in d.diagnosis
     assert "18000-35999: 0" in d.diagnosis and "47536-65535" in d.diagnosis
     assert 0 < len(d.examples) <= EXAMPLES
@@ -96,7 +96,7 @@ def test_the_simulator_playing_the_document_conforms() -> None:
 
 
 def _host(command: Any, control: ControlValues | None) -> bytes:
-    from _sim_helpers import host_bytes
+    from helpers.sim.support import host_bytes
 
     return host_bytes(command, control=control, attitude=None)
 
@@ -197,7 +197,7 @@ def test_an_opcode_again_after_null_packets_is_seen() -> None:
 def test_without_times_nothing_is_timed() -> None:
     c = GcuConformance()
     c.host_sent(Opcode.TAKE_PHOTO)
-    c.add(_z1pro.reply(0, 51552, opcode=Opcode.TAKE_PHOTO, status=0))
+    c.add(z1pro.reply(0, 51552, opcode=Opcode.TAKE_PHOTO, status=0))
     report = c.report()
     assert report.duration is None and report.rate == 0.0
     assert "no times given: feedback latency not measured" in report.text()
@@ -209,7 +209,7 @@ def test_without_times_nothing_is_timed() -> None:
 
 def test_undecodable_bytes_are_counted() -> None:
     c = GcuConformance()
-    good = _z1pro.reply(0, 0)
+    good = z1pro.reply(0, 0)
     c.add(good[:-1] + bytes([good[-1] ^ 1]), 0.0)
     c.add(good, 0.1)
     assert c.report().undecodable == 1 and c.report().replies == 1

@@ -12,8 +12,6 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from _protocol_strategies import seal
-from _scale import scaled
 from gcu_async import connect
 from gcu_async.conformance import GAP_S, HostConformance, yaw_reading
 from gcu_async.protocol import (
@@ -30,6 +28,8 @@ from gcu_async.protocol import (
 )
 from gcu_async.protocol.packets import HOST_HEADER
 from gcu_async.sim import GcuSimulator
+from helpers.protocol.strategies import seal
+from helpers.scale import scaled
 
 LAT0, LON0, ALT0 = 35.0, 139.0, 100.0
 M_PER_DEG = math.pi / 180 * 6_371_000.0

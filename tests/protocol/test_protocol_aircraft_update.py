@@ -16,10 +16,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from _scale import scaled
 from gcu_async import GcuClient
 from gcu_async.protocol.aircraft import AIRCRAFT_UPDATE_FIELDS, aircraft_update
 from gcu_async.transport.memory import MemoryTransport
+from helpers.scale import scaled
 
 REALS: list[Any] = [
     -1e30, -2147483.649, -2147483.648, -360.0, -327.69, -327.68, -327.675, -180.0000001,

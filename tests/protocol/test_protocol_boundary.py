@@ -1,16 +1,16 @@
-"""The API boundary of the protocol layer: a generated misuse catalogue.
+"""The API boundary of the protocol layer: generated misuse cases.
 
 Every parameter of every public constructor, builder and function users build protocol values
 with is described once in ``PARAMS`` (kind, field name in errors, allowed range, wire step).
-From that table the catalogue generates, per parameter, wrong-type values (``True`` where an
+From that table come, per parameter, wrong-type values (``True`` where an
 int is meant, ``1.0``, ``"1"``, ``None``, ``b""``, ``[]``, ``object()``, ...) and out-of-range
 values (NaN, ±inf, ±1e30, ±10**40, one wire step outside each bound). Each case must raise
 ``TypeError`` or ``ValueError`` (never OverflowError, AttributeError, struct.error, ...) whose
 message names the field; range errors must be :class:`FieldRangeError` naming the allowed
 range and the value. The positive side: every boundary value is accepted and reads back
 exactly after a codec round trip. A hypothesis test throws arbitrary values of arbitrary
-types at every scalar parameter and checks accepted ⇔ valid. ``test_catalogue_covers_*``
-fail when a public parameter has no entry, so the catalogue grows with the API.
+types at every scalar parameter and checks accepted ⇔ valid. ``test_misuse_cases_cover_*``
+fail when a public parameter has no entry, so the cases grow with the API.
 """
 
 from __future__ import annotations
@@ -28,10 +28,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from _boundary import MESSAGE, case_id
-from _catalogue_samples import required_samples
-from _protocol_strategies import FRAME_SCHEMAS, RAW_RANGES
-from _scale import scaled
 from gcu_async.errors import FieldRangeError
 from gcu_async.protocol import (
     COMMAND_TYPES,
@@ -85,7 +81,7 @@ from gcu_async.protocol import (
     wrap_degrees_180,
     wrap_degrees_360,
 )
-from gcu_async.protocol.catalogue import CATALOGUE as COMMAND_CATALOGUE
+from gcu_async.protocol.catalogue import CATALOGUE
 from gcu_async.protocol.command_decode import MAX_PARAMS
 from gcu_async.protocol.command_fields import (
     ZOOM_FRACTION,
@@ -103,6 +99,10 @@ from gcu_async.protocol.command_fields import (
 from gcu_async.protocol.enums import PIP_MODE_MASK
 from gcu_async.protocol.frame_schema import Code, Flags, Value
 from gcu_async.protocol.gpstime import GPS_EPOCH, gps_minus_utc
+from helpers.protocol.boundary import MESSAGE, case_id
+from helpers.protocol.catalogue_samples import required_samples
+from helpers.protocol.strategies import FRAME_SCHEMAS, RAW_RANGES
+from helpers.scale import scaled
 
 INF, NAN = math.inf, math.nan
 UTC = timezone.utc
@@ -156,14 +156,14 @@ def _gcu_rt(main: GcuMainFrame, sub: GcuSubFrame | None = None) -> Any:
 
 # --- the table ---------------------------------------------------------------------------------
 PARAMS: list[P] = []
-REQUIRED: dict[type[Command], dict[str, Any]] = {
-    cls: {f.name: required_samples(e)[f.name] for e in COMMAND_CATALOGUE if e.command is cls
+REQUIRED_SAMPLES: dict[type[Command], dict[str, Any]] = {
+    cls: {f.name: required_samples(e)[f.name] for e in CATALOGUE if e.command is cls
           for f in dataclasses.fields(cls) if f.name in required_samples(e)}
     for cls in COMMAND_TYPES.values()
 }  # fmt: skip
 """In-range values of the attributes without a default (from the catalogue's samples)."""
-REQUIRED[COMMAND_TYPES[Opcode.CLICK_TO_PAN]] = {"point": ImagePoint(0.5, 0.5)}
-REQUIRED[COMMAND_TYPES[Opcode.ZOOM_TO]] = {"ratio": 2.0}
+REQUIRED_SAMPLES[COMMAND_TYPES[Opcode.CLICK_TO_PAN]] = {"point": ImagePoint(0.5, 0.5)}
+REQUIRED_SAMPLES[COMMAND_TYPES[Opcode.ZOOM_TO]] = {"ratio": 2.0}
 TUPLE_BASE: dict[type[Any], tuple[float, ...]] = {
     ImageBox: (0.0, 0.0, 1.0, 1.0),
     ImagePoint: (0.5, 0.5),
@@ -196,7 +196,7 @@ def add(*params: P) -> None:
 
 
 def add_command(cls: type[Command], param: str, kind: str, **kw: Any) -> None:
-    base = kw.pop("base", REQUIRED.get(cls, {}))
+    base = kw.pop("base", REQUIRED_SAMPLES.get(cls, {}))
     add(P(cls.__name__, param, kw.pop("field", param),
           lambda v, cls=cls, param=param: cls(**{**base, param: v}), kind,
           read=lambda c, param=param: getattr(_cmd_rt(c), param), **kw))  # fmt: skip
@@ -204,7 +204,7 @@ def add_command(cls: type[Command], param: str, kind: str, **kw: Any) -> None:
 
 def add_command_tuple(cls: type[Command], param: str, tcls: type[Any], step: float,
                       low: float = 0.0, high: float = 1.0) -> None:  # fmt: skip
-    base = REQUIRED.get(cls, {})
+    base = REQUIRED_SAMPLES.get(cls, {})
     add(P(cls.__name__, param, param, lambda v, cls=cls: cls(**{**base, param: v}), "tuple",
           valid=(TUPLE_BASE[tcls], tcls(*TUPLE_BASE[tcls])), wrong=_tuple_wrong(tcls),
           read=lambda c: tuple(getattr(_cmd_rt(c), param))))  # fmt: skip
@@ -689,7 +689,7 @@ def misuse(p: P) -> list[Case]:
     return cases
 
 
-CATALOGUE = [c for p in PARAMS for c in misuse(p)]
+MISUSE_CASES = [c for p in PARAMS for c in misuse(p)]
 POSITIVE = [(p, v) for p in PARAMS for v in p.valid]
 
 
@@ -736,7 +736,7 @@ def _check_error(case: Case, err: BaseException) -> None:
     assert any(s in msg for s in _shown(v)) or p.kind in ("part", "bytes"), msg
 
 
-@pytest.mark.parametrize("case", CATALOGUE, ids=[_id(c.p, c.value) for c in CATALOGUE])
+@pytest.mark.parametrize("case", MISUSE_CASES, ids=[_id(c.p, c.value) for c in MISUSE_CASES])
 def test_misuse_is_rejected_naming_the_field(case: Case) -> None:
     with pytest.raises(Exception) as info:  # noqa: PT011 - the type is checked below
         case.p.call(case.value)
@@ -759,26 +759,26 @@ def test_boundary_values_are_accepted_and_round_trip(p: P, value: Any) -> None:
     assert type(back) is not bool or type(value) is bool  # no int read back as a bool
 
 
-def test_catalogue_size() -> None:
+def test_misuse_case_count() -> None:
     kinds: dict[str, int] = {}
-    for c in CATALOGUE:
+    for c in MISUSE_CASES:
         key = c.expect.__name__
         kinds[key] = kinds.get(key, 0) + 1
-    print(f"\nmisuse catalogue: {len(CATALOGUE)} cases over {len(PARAMS)} parameters "
+    print(f"\nprotocol misuse: {len(MISUSE_CASES)} cases over {len(PARAMS)} parameters "
           f"({kinds}); {len(POSITIVE)} boundary values accepted")  # fmt: skip
     assert len(PARAMS) >= 200
-    assert len(CATALOGUE) >= 2500
+    assert len(MISUSE_CASES) >= 2500
     assert len(POSITIVE) >= 350
 
 
-# --- the catalogue covers the whole public API ---------------------------------------------------
+# --- the misuse cases cover the whole public API ------------------------------------------------
 def _covered(owner: str) -> set[str]:
     return {p.param.split(".")[0].split(" ")[0] for p in PARAMS if p.owner == owner}
 
 
 @pytest.mark.parametrize("cls", [*COMMAND_TYPES.values(), UnknownCommand],
                          ids=lambda c: c.__name__)  # fmt: skip
-def test_catalogue_covers_every_command_field(cls: type[Command]) -> None:
+def test_misuse_cases_cover_every_command_field(cls: type[Command]) -> None:
     assert {f.name for f in dataclasses.fields(cls)} <= _covered(cls.__name__)
 
 
@@ -819,7 +819,7 @@ def test_catalogue_covers_every_command_field(cls: type[Command]) -> None:
     ],
     ids=lambda x: x if isinstance(x, str) else "",
 )
-def test_catalogue_covers_every_builder_parameter(owner: str, func: Callable[..., Any]) -> None:
+def test_misuse_cases_cover_every_builder_parameter(owner: str, func: Callable[..., Any]) -> None:
     names = {n for n in inspect.signature(func).parameters if n not in ("self", "cls", "field")}
     aliases = {"ControlValues.check": {"value"}, "Feedback(raw).encode": {"opcode", "status"}}
     covered = _covered(owner) | ({"zoom"} if owner == "ControlValues.rates" else set())
@@ -831,7 +831,7 @@ def test_catalogue_covers_every_builder_parameter(owner: str, func: Callable[...
 
 
 @pytest.mark.parametrize("cls", list(RAW_RANGES), ids=lambda c: c.__name__)
-def test_catalogue_covers_every_raw_frame_field(cls: type[Any]) -> None:
+def test_misuse_cases_cover_every_raw_frame_field(cls: type[Any]) -> None:
     assert set(cls._fields) == _covered(f"{cls.__name__}(raw).encode")
 
 
@@ -976,7 +976,7 @@ def test_decoding_stays_liberal() -> None:
     raw = bytearray(host)
     raw[55:57] = (-5).to_bytes(2, "little", signed=True)  # gnss_week S16
     raw[11] = 0xFF  # reserved flag bits
-    from _protocol_strategies import seal
+    from helpers.protocol.strategies import seal
 
     packet = decode_host_packet(seal(raw[:2], bytes(raw[5:-2])))
     assert packet.sub.gnss_week == -5 and packet.main.flags_raw == 0xFF  # type: ignore[union-attr]

@@ -8,9 +8,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from _protocol_strategies import gcu_packets, host_packets
-from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
 from gcu_async.protocol import GcuPacket, HostPacket, crc16_xmodem
+from helpers.protocol.strategies import gcu_packets, host_packets
+from helpers.protocol.vectors import GCU_EXAMPLE, HOST_EXAMPLE
 
 xmodem = crcmod.predefined.mkCrcFun("xmodem")
 

@@ -16,8 +16,6 @@ from typing import Any
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from _protocol_strategies import gcu_packets, host_packets
-from _scale import scaled
 from gcu_async.errors import RemoteProtocolError
 from gcu_async.protocol import (
     Feedback,
@@ -35,6 +33,8 @@ from gcu_async.protocol import (
 from gcu_async.protocol.gcu_frames import GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA
 from gcu_async.protocol.host_frames import HOST_MAIN_SCHEMA, HOST_SUB_SCHEMA
 from gcu_async.protocol.packets import GCU_HEADER, HOST_HEADER, _check_envelope
+from helpers.protocol.strategies import gcu_packets, host_packets
+from helpers.scale import scaled
 
 # --- the old decoders, as they were -------------------------------------------------------
 # Their logic is the old one; the frames' formats come from the schemas (so a field added

@@ -1,7 +1,8 @@
 """Malformed packets (too short, bad header, length or CRC) raise RemoteProtocolError naming
 the problem, with its reason as data; anything else decodes (liberal receive: unexpected
-versions, status bytes and parameters are flagged, tests/protocol/test_protocol_liberal.py); unknown
-opcodes and sub frames are kept byte for byte; an all-zero sub frame is "none"."""
+versions, status bytes and parameter lengths are flagged here, out-of-range parameter values in
+tests/protocol/test_protocol_liberal.py's one table); unknown opcodes and sub frames are kept
+byte for byte; an all-zero sub frame is "none"."""
 
 from __future__ import annotations
 
@@ -10,8 +11,6 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from _protocol_strategies import seal
-from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
 from gcu_async.errors import GcuError, ProtocolErrorReason, RemoteProtocolError
 from gcu_async.protocol import (
     COMMAND_TYPES,
@@ -33,6 +32,8 @@ from gcu_async.protocol import (
     decode_host_packet,
     decode_packet,
 )
+from helpers.protocol.strategies import seal
+from helpers.protocol.vectors import GCU_EXAMPLE, HOST_EXAMPLE
 
 xmodem = crcmod.predefined.mkCrcFun("xmodem")
 
@@ -155,57 +156,6 @@ def test_wrong_parameter_length_for_known_opcode(cls: type) -> None:
         assert (anomaly.field, anomaly.value, anomaly.low, anomaly.high) == ("params", n, size,
                                                                              size)  # fmt: skip
         assert decoded.command.raw is None  # type: ignore[attr-defined]
-
-
-@pytest.mark.parametrize(
-    ("opcode", "params", "flagged"),
-    [
-        (0x08, b"\x0f", [("offset_hours", 15, -12, 14)]),  # time zone 15
-        (0x08, b"\xf3", [("offset_hours", -13, -12, 14)]),
-        (0x06, b"\x02", [("coordinates", 2, 0, 1)]),
-        (0x07, b"\x02", [("enabled", 2, 0, 1)]),
-        (0x17, b"\x01\x02" + bytes(8), [("enter", 2, 0, 1)]),
-        (0x17, b"\x01\x01" + (5000).to_bytes(2, "little") * 2 + bytes(4),
-         [("box.right", 0, 5000, 10000), ("box.bottom", 0, 5000, 10000)]),
-        (0x17, b"\x01\x01" + bytes(4) + (10001).to_bytes(2, "little") * 2,
-         [("box.right", 10001, 0, 10000), ("box.bottom", 10001, 0, 10000)]),
-        (0x1A, b"\x01" + (10001).to_bytes(2, "little") + bytes(2), [("point.x", 10001, 0, 10000)]),
-        (0x20, b"\x00", [("cameras", 0, 1, 255)]),
-        (0x25, b"\x01\x00\x00", [("raw_value", 0, -32768, 10000)]),
-        (0x25, b"\x01" + (-9).to_bytes(2, "little", signed=True),
-         [("raw_value", -9, -32768, 10000)]),
-        (0x25, b"\x00" + (10001).to_bytes(2, "little"),
-         [("cameras", 0, 1, 255), ("raw_value", 10001, -32768, 10000)]),
-        (0x2A, b"\x02\x0b", [("palette", 11, 0, 10)]),  # palette 11
-        (0x2B, b"\x01\x03", [("mode", 3, 0, 2)]),
-        (0x31, b"\x02\x01" + (10).to_bytes(2, "little") + (20).to_bytes(2, "little"),
-         [("low", 20, -32768, 10)]),
-        (0x32, b"\x02\x05" + bytes(4), [("enabled", 5, 0, 1)]),
-        (0x33, b"\x02\x01" + (20000).to_bytes(2, "little") + bytes(2),
-         [("point.x", 20000, 0, 10000)]),
-        (0x73, b"\x02", [("enabled", 2, 0, 1)]),
-        (0x74, b"\x05", [("mode", 5, 0, 4)]),  # PiP 5
-        (0x81, b"\x01", [("enabled", 1, 0, 2)]),  # ranging: only 0x00 or 0x02
-        (0x15, (1_800_000_001).to_bytes(4, "little") + (-900_000_001).to_bytes(4, "little",
-                                                                               signed=True)
-         + bytes(4), [("longitude", 1_800_000_001, -1_800_000_000, 1_800_000_000),
-                      ("latitude", -900_000_001, -900_000_000, 900_000_000)]),
-    ],
-)  # fmt: skip
-def test_parameter_value_out_of_range_on_the_wire(
-    opcode: int, params: bytes, flagged: list[tuple[str, int, int, int]]
-) -> None:
-    """Each out-of-range field is listed (all of them, not only the first), raw value and
-    raw range; the bytes are kept."""
-    packet = decode_host_packet(_host_with(opcode, params))
-    command = decode_command(opcode, params)
-    assert packet.command == command
-    assert isinstance(command, AnomalousCommand)
-    assert (command.code, command.params) == (opcode, params)
-    assert command.raw == COMMAND_TYPES[opcode].LAYOUT.unpack(params)
-    got = [(a.field, a.value, a.low, a.high) for a in command.anomalies]
-    assert got == flagged
-    assert packet.anomalies == command.anomalies
 
 
 def test_known_parameter_bytes_decode() -> None:

@@ -25,8 +25,6 @@ import pytest
 from hypothesis import event, given, reject
 from hypothesis import strategies as st
 
-from _protocol_strategies import gcu_packets, host_packets, seal
-from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
 from gcu_async.protocol import (
     GCU_HEADER,
     HOST_HEADER,
@@ -42,6 +40,8 @@ from gcu_async.protocol import (
 )
 from gcu_async.protocol.deframer import GCU_MAX_LENGTH, HOST_MAX_LENGTH
 from gcu_async.protocol.packets import BASE_LENGTH, MAX_LENGTH
+from helpers.protocol.strategies import gcu_packets, host_packets, seal
+from helpers.protocol.vectors import GCU_EXAMPLE, HOST_EXAMPLE
 
 VECTORS = {"gcu": (GCU_HEADER, GCU_EXAMPLE), "host": (HOST_HEADER, HOST_EXAMPLE)}
 

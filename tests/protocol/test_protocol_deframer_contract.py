@@ -21,8 +21,6 @@ import pytest
 from hypothesis import event, given, settings
 from hypothesis import strategies as st
 
-from _protocol_strategies import gcu_packets, host_main_frames, host_packets, seal
-from _scale import scaled
 from gcu_async.protocol import (
     COMMAND_TYPES,
     GCU_HEADER,
@@ -35,6 +33,8 @@ from gcu_async.protocol import (
     UnknownCommand,
 )
 from gcu_async.protocol.deframer import GCU_MAX_LENGTH, HOST_MAX_LENGTH
+from helpers.protocol.strategies import gcu_packets, host_main_frames, host_packets, seal
+from helpers.scale import scaled
 
 BASE = 72
 _xmodem = crcmod.predefined.mkCrcFun("xmodem")  # independent of the library's CRC

@@ -19,9 +19,9 @@ from typing import Any
 import pytest
 from hypothesis import given
 
-from _protocol_strategies import gcu_packets, host_packets
 from gcu_async.protocol import gcu_frames, host_frames, packets
 from gcu_async.protocol.frame_schema import FrameSchema, Value
+from helpers.protocol.strategies import gcu_packets, host_packets
 
 TOOL = Path(__file__).resolve().parents[2] / "tools" / "gen_frames.py"
 

@@ -20,8 +20,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from _protocol_strategies import FRAME_SCHEMAS
-from _scale import scaled
 from gcu_async.errors import FieldRangeError
 from gcu_async.protocol import (
     GcuMainFrame,
@@ -34,6 +32,8 @@ from gcu_async.protocol import (
 )
 from gcu_async.protocol.fields import WireField
 from gcu_async.protocol.frame_schema import FrameSchema, Value
+from helpers.protocol.strategies import FRAME_SCHEMAS
+from helpers.scale import scaled
 
 SPANS = {HostMainFrame: (5, 36), HostSubFrame: (38, 68), GcuMainFrame: (5, 36),
          GcuSubFrame: (38, 68)}  # fmt: skip

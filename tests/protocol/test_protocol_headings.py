@@ -8,9 +8,6 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from _protocol_strategies import seal
-from _scale import FULL
-from _z1pro import MOVE_AGREEMENT_DEG, MOVES, YAW_BANDS, main_frame, reply
 from gcu_async.errors import FieldRangeError
 from gcu_async.protocol import GcuMainFrame, GcuPacket, decode_gcu_packet
 from gcu_async.protocol.gcu_frames import CAMERA_YAW
@@ -18,6 +15,9 @@ from gcu_async.protocol.headings import PAST_TURN_DETAIL, SIGNED_DETAIL, Heading
 from gcu_async.protocol.host_frames import AIRCRAFT_YAW
 from gcu_async.protocol.packets import GCU_HEADER
 from gcu_async.protocol.units import wrap_degrees_180
+from helpers.protocol.strategies import seal
+from helpers.protocol.z1pro import MOVE_AGREEMENT_DEG, MOVES, YAW_BANDS, main_frame, reply
+from helpers.scale import FULL
 
 
 def expected_heading(raw: int) -> float:

@@ -4,7 +4,7 @@ A CRC-valid packet whose main or sub frame holds a value outside the range V2.0.
 (a miss distance of 2000, a camera yaw of 360°, an aircraft pitch of 95°, a reserved flag bit,
 a GNSS millisecond past the week) decodes with the raw value kept and one anomaly per field,
 in wire order; the strict side (``validate()``, ``encode()``) raises the same error for the
-same value. The oracle is the independent range table of ``_protocol_strategies``.
+same value. The oracle is the independent range table of ``helpers.protocol.strategies``.
 """
 
 from __future__ import annotations
@@ -17,7 +17,6 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from _protocol_strategies import RAW_RANGES, seal
 from gcu_async.errors import FieldRangeError
 from gcu_async.protocol import (
     GCU_HEADER,
@@ -31,6 +30,7 @@ from gcu_async.protocol import (
     decode_packet,
 )
 from gcu_async.protocol.headings import PAST_TURN_DETAIL
+from helpers.protocol.strategies import RAW_RANGES, seal
 
 HOST_FLAG_BITS = 0x05
 """Byte 11's defined bits (control valid, INS valid): the rest are reserved."""
@@ -100,7 +100,7 @@ def test_the_issue_style_examples_keep_their_values() -> None:
     ]
 
 
-@pytest.mark.subprocess  # a fresh interpreter (tests/_tiers.py)
+@pytest.mark.subprocess  # a fresh interpreter (tests/helpers/tiers.py)
 def test_decode_shows_frame_anomalies_and_exits_0() -> None:
     raw = bytearray(GcuPacket(GcuMainFrame()).encode())
     raw[10:12] = (-1001).to_bytes(2, "little", signed=True)  # miss distance y

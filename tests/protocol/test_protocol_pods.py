@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import pytest
 
-from _vectors import pod_models, pod_support
 from gcu_async.protocol import (
     POD_NAMES,
     Opcode,
@@ -17,6 +16,7 @@ from gcu_async.protocol import (
     supports,
 )
 from gcu_async.protocol.pods import MATRIX_COMMANDS, SUPPORT
+from helpers.protocol.vectors import pod_models, pod_support
 
 THERMAL_ONLY = {
     Opcode.AREA_TEMPERATURE,

@@ -13,7 +13,6 @@ from typing import Any, NamedTuple
 
 import pytest
 
-from _protocol_strategies import RAW_RANGES
 from gcu_async.errors import FieldRangeError, LocalProtocolError
 from gcu_async.protocol import (
     COMMAND_TYPES,
@@ -46,6 +45,7 @@ from gcu_async.protocol import (
     UnknownSubFrame,
     ZoomTo,
 )
+from helpers.protocol.strategies import RAW_RANGES
 
 INF, NAN = math.inf, math.nan
 S16, S32 = (-32768, 32767), (-(2**31), 2**31 - 1)

@@ -11,21 +11,6 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from _protocol_strategies import (
-    COMMAND_STRATEGIES,
-    VERSIONS,
-    commands,
-    feedbacks,
-    gcu_main_frames,
-    gcu_packets,
-    gcu_sub_frames,
-    gcu_subs,
-    host_main_frames,
-    host_packets,
-    host_sub_frames,
-    host_subs,
-    unknown_sub_frames,
-)
 from gcu_async.protocol import (
     COMMAND_TYPES,
     AnomalousCommand,
@@ -51,6 +36,21 @@ from gcu_async.protocol import (
 )
 from gcu_async.protocol.catalogue import CATALOGUE
 from gcu_async.protocol.gcu_frames import GCU_SUB_SCHEMA
+from helpers.protocol.strategies import (
+    COMMAND_STRATEGIES,
+    VERSIONS,
+    commands,
+    feedbacks,
+    gcu_main_frames,
+    gcu_packets,
+    gcu_sub_frames,
+    gcu_subs,
+    host_main_frames,
+    host_packets,
+    host_sub_frames,
+    host_subs,
+    unknown_sub_frames,
+)
 
 ALL_COMMAND_CLASSES = [*dict.fromkeys(e.command for e in CATALOGUE), NullCommand, UnknownCommand]
 """The command classes of the catalogue (a command a method sends: a new catalogue entry

@@ -142,18 +142,18 @@ def test_a_schema_that_misses_an_attribute_is_refused() -> None:
 
 
 def test_every_command_family_runs_on_the_simulator() -> None:
-    """tests/_sim_helpers.FAMILIES (the simulator's command sequence, with the status each
+    """helpers.sim.support.FAMILIES (the simulator's command sequence, with the status each
     answers) lists every command: a command added to the schema needs its row there."""
-    from _sim_helpers import FAMILIES
+    from helpers.sim.support import FAMILIES
 
     listed = {type(command) for command, _ in FAMILIES}
-    assert listed == set(CLASSES) - {c.NullCommand}, "add the command to _sim_helpers.FAMILIES"
+    assert listed == set(CLASSES) - {c.NullCommand}, "add it to helpers.sim.support.FAMILIES"
 
 
 def test_the_simulator_keeps_the_last_accepted_command_of_each_opcode() -> None:
-    from _sim_helpers import FAMILIES, host_bytes
     from gcu_async.protocol.packets import decode_gcu_packet
     from gcu_async.sim import SimulatorModel
+    from helpers.sim.support import FAMILIES, host_bytes
 
     model = SimulatorModel()
     accepted: dict[int, Command] = {}

@@ -8,7 +8,6 @@ from datetime import datetime, timedelta, timezone
 
 import pytest
 
-from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
 from gcu_async.protocol import (
     ControlValues,
     ExecutionStatus,
@@ -31,6 +30,7 @@ from gcu_async.protocol import (
     decode_packet,
     pod_name,
 )
+from helpers.protocol.vectors import GCU_EXAMPLE, HOST_EXAMPLE
 
 
 def test_vector_files_have_declared_lengths() -> None:

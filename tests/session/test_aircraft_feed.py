@@ -15,7 +15,6 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from _vtime import Rig
 from gcu_async.errors import FieldRangeError
 from gcu_async.protocol import (
     AircraftState,
@@ -27,6 +26,7 @@ from gcu_async.protocol import (
 )
 from gcu_async.protocol.host_frames import MS_PER_WEEK
 from gcu_async.session import Session, TicketState
+from helpers.session.vtime import Rig
 
 ATT = (1.5, -2.0, 350.0)
 ACC = (0.12, -0.25, 0.5)

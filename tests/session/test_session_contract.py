@@ -23,10 +23,10 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, seed, settings
 from hypothesis import strategies as st
 
-from _scale import FULL, scaled
-from _vtime import Direction, Fate, Rig, tagged_commands
 from gcu_async.protocol import HostPacket
 from gcu_async.session import Session, SessionState, TicketState
+from helpers.scale import FULL, scaled
+from helpers.session.vtime import Direction, Fate, Rig, tagged_commands
 
 GUARD = 0.015
 
@@ -237,7 +237,7 @@ def test_exactly_once_truthful_outcomes_rate_and_control_under_bounded_reorderin
 
     contract()
     # what the property executed: 100,000 commands over all shards at full size (5,000
-    # reduced, GCU_TEST_SIZE=reduced, see tests/_scale.py), mostly successes, and every
+    # reduced, GCU_TEST_SIZE=reduced, see tests/helpers/scale.py), mostly successes, and every
     # outcome exercised, not only the happy ones
     print(f"\ncontract shard {shard}: {dict(totals)}")
     assert totals["commands"] >= EXAMPLES // SHARDS * COMMANDS_PER_EXAMPLE
@@ -247,7 +247,7 @@ def test_exactly_once_truthful_outcomes_rate_and_control_under_bounded_reorderin
 
 # -- the boundary of the contract -----------------------------------------------------------
 def _expect_violation(strategy: st.SearchStrategy[Scenario], examples: int) -> str:
-    # shrinking the counterexample is most of the time: full size only (tests/_scale.py)
+    # shrinking the counterexample is most of the time: full size only (tests/helpers/scale.py)
     @settings(max_examples=examples, deadline=None, database=None, derandomize=True,
               phases=[Phase.generate, Phase.shrink] if FULL else [Phase.generate],
               report_multiple_bugs=False,

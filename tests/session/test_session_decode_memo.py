@@ -10,10 +10,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from _protocol_strategies import gcu_packets
 from gcu_async.protocol import GcuMainFrame, GcuPacket
 from gcu_async.session import Session, TelemetrySample
 from gcu_async.session import session as session_module
+from helpers.protocol.strategies import gcu_packets
 
 pytestmark = pytest.mark.fast
 

@@ -19,11 +19,11 @@ from typing import Any
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from _scale import scaled
-from _vtime import Direction, Rig, tagged_commands
 from gcu_async.protocol import Record, TakePhoto
 from gcu_async.session import LinkDown, Session, SessionState, TicketDone
 from gcu_async.session.session import MIN_WAKE
+from helpers.scale import scaled
+from helpers.session.vtime import Direction, Rig, tagged_commands
 
 Action = tuple[str, float]
 

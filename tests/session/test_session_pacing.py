@@ -1,5 +1,5 @@
 """The heartbeat on a late event loop (docs/session-contract.md, "Guarantees", G4 and G6), in
-virtual time on a modelled asyncio loop (tests/_vloop.py): the session and the simulator's
+virtual time on a modelled asyncio loop (tests/helpers/session/vloop.py): the session and the simulator's
 GCU model, the loop's iterations as the schedule says.
 
 The old pacer restarted the slot phase at any packet a whole period late: on a loop whose
@@ -18,11 +18,11 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from _vloop import OVERHEAD, LoopRig, regular
-from _vtime import tagged_commands
 from gcu_async.session import Session
 from gcu_async.session.pacing import MARGIN
 from gcu_async.session.session import MIN_WAKE
+from helpers.session.vloop import OVERHEAD, LoopRig, regular
+from helpers.session.vtime import tagged_commands
 
 GUARD = 0.015
 

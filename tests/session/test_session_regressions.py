@@ -9,7 +9,6 @@ from collections import Counter
 
 import pytest
 
-from _vtime import Direction, Fate, Rig, tagged_commands
 from gcu_async.errors import CommandTimeout, Outcome
 from gcu_async.protocol import (
     ControlValues,
@@ -23,6 +22,7 @@ from gcu_async.protocol import (
     ZoomTo,
 )
 from gcu_async.session import Session, SessionState, TicketState
+from helpers.session.vtime import Direction, Fate, Rig, tagged_commands
 
 GUARD = 0.015
 

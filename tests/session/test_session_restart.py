@@ -10,7 +10,6 @@ from typing import Any
 
 import pytest
 
-from _vtime import Rig
 from gcu_async.protocol import (
     ControlValues,
     EulerControl,
@@ -33,6 +32,7 @@ from gcu_async.session import (
     TicketState,
 )
 from gcu_async.sim import SimulatorModel
+from helpers.session.vtime import Rig
 
 OUTAGES = (2.0, 30.0, 120.0)
 EULER = EulerControl()

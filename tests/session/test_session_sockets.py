@@ -15,10 +15,6 @@ from typing import Any
 
 import pytest
 
-from _fault_proxy import DelayNullRequests, DropFirstReplyOfEachCommand, FaultProxy
-from _scale import FULL, scaled
-from _sim_process import SimProcess
-from _vtime import tagged_commands
 from gcu_async import (
     CommandError,
     CommandLinkLost,
@@ -29,6 +25,10 @@ from gcu_async import (
 )
 from gcu_async.protocol import Command, HostPacket, Mode, Opcode, ZoomTo, decode_host_packet
 from gcu_async.sim import GcuSimulator, SimulatorModel
+from helpers.scale import FULL, scaled
+from helpers.session.vtime import tagged_commands
+from helpers.sim.process import SimProcess
+from helpers.transport.fault_proxy import DelayNullRequests, DropFirstReplyOfEachCommand, FaultProxy
 
 
 def key(command: Command) -> tuple[str, str]:
@@ -77,7 +77,7 @@ async def test_udp_loss_corruption_duplication_and_reordering_below_the_guard() 
     """30 % loss, 5 % corruption, 5 % duplication each way, 20 % of packets held 5 or 10 ms
     (below the 15 ms guard): 500 commands per hold, half of them repeating one opcode (each
     needs a proven null separation). 0 executed twice, 0 false outcomes. A reduced-size run
-    (tests/_scale.py): the 10 ms hold only, 200 commands.
+    (tests/helpers/scale.py): the 10 ms hold only, 200 commands.
 
     The hold is a timer in another Python process, so the delay a packet really gets is the
     hold plus that process's event-loop latency (reading the datagram, firing the timer),

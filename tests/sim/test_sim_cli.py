@@ -16,12 +16,12 @@ from pathlib import Path
 
 import pytest
 
-from _sim_helpers import host_bytes
 from gcu_async.cli import main
 from gcu_async.cli._exit import EXIT_INTERRUPTED
 from gcu_async.errors import RemoteProtocolError
 from gcu_async.protocol import Deframer, GcuPacket, Opcode, Palette, TakePhoto, decode_gcu_packet
 from gcu_async.sim import parse_listen_url
+from helpers.sim.support import host_bytes
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals and ptys")
 tty = pytest.importorskip("tty", reason="POSIX signals and ptys")

@@ -12,8 +12,8 @@ import socket
 import time
 from pathlib import Path
 
-from _sim_process import SimProcess
-from _sitl_ardupilot import load_conversation
+from helpers.sim.process import SimProcess
+from helpers.sitl.ardupilot import load_conversation
 
 DATA = Path(__file__).parent.parent / "data" / "ardupilot-4.7.0-sitl.gcuconv.gz"
 

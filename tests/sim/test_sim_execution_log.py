@@ -7,7 +7,6 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from _sim_helpers import Rig, host_bytes
 from gcu_async.protocol import (
     Calibration,
     Command,
@@ -21,6 +20,7 @@ from gcu_async.protocol import (
     decode_gcu_packet,
 )
 from gcu_async.sim import ExecutionRecord, SimulatorModel
+from helpers.sim.support import Rig, host_bytes
 
 
 def test_off_by_default_the_counter_still_counts() -> None:

@@ -23,9 +23,6 @@ import pytest
 from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
-from _protocol_strategies import seal
-from _scale import scaled
-from _sim_helpers import host_bytes
 from gcu_async.protocol import (
     HOST_HEADER,
     AngleControl,
@@ -63,6 +60,9 @@ from gcu_async.sim import FaultConfig, FaultPlan, GcuSimulator, ManualClock, Sim
 from gcu_async.sim.aircraft import ReceivedAircraft
 from gcu_async.sim.exchange import Exchange
 from gcu_async.sim.motion import REL, Gimbal, Setpoint
+from helpers.protocol.strategies import seal
+from helpers.scale import scaled
+from helpers.sim.support import host_bytes
 
 
 class _Timer:

@@ -17,10 +17,10 @@ from typing import Any
 from hypothesis import given
 from hypothesis import strategies as st
 
-from _sim_helpers import host_bytes
 from gcu_async.protocol import decode_gcu_packet
 from gcu_async.sim import FaultConfig, FaultPlan, GcuSimulator
 from gcu_async.sim.exchange import Exchange
+from helpers.sim.support import host_bytes
 
 EPS = 1e-9
 

@@ -6,10 +6,10 @@ import asyncio
 
 import pytest
 
-from _sim_helpers import UdpPeer, host_bytes
 from gcu_async.errors import RemoteProtocolError
 from gcu_async.protocol import decode_gcu_packet
 from gcu_async.sim import FaultConfig, FaultInjector, FaultPlan, GcuSimulator
+from helpers.sim.support import UdpPeer, host_bytes
 
 
 def decisions(config: FaultConfig, n: int = 200) -> list[object]:

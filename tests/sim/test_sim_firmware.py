@@ -11,8 +11,6 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-import _z1pro
-from _sim_helpers import Rig, sub_of
 from gcu_async.protocol import AngleControl, Centre, FaultFlags, GcuPacket, HostSubFrame
 from gcu_async.protocol.host_frames import ControlValues
 from gcu_async.sim import (
@@ -23,6 +21,8 @@ from gcu_async.sim import (
     SimulatorModel,
     firmware_for,
 )
+from helpers.protocol import z1pro
+from helpers.sim.support import Rig, sub_of
 
 
 def turned(rig: Rig, yaw: float, seconds: float = 3.0) -> GcuPacket:
@@ -60,12 +60,12 @@ def test_z1pro_sends_the_logged_values() -> None:
     rig.attitude = None  # the logged host sent no aircraft data
     reply = turned(rig, -140.0)
     sub = sub_of(reply)
-    assert reply.version == _z1pro.VERSION
+    assert reply.version == z1pro.VERSION
     for name in ("hardware_version_raw", "firmware_version_raw", "pod_code", "fault_raw",
                  "camera1_zoom_raw", "camera2_zoom_raw", "thermal_flags_raw",
                  "target_distance_raw"):  # fmt: skip
-        assert getattr(sub, name) == _z1pro.SUB[name], name
-    assert reply.main.mode_raw == _z1pro.MAIN["mode_raw"]
+        assert getattr(sub, name) == z1pro.SUB[name], name
+    assert reply.main.mode_raw == z1pro.MAIN["mode_raw"]
     assert reply.main.yaw_raw == 51536  # −140.00° as a signed S16
     assert reply.main.attitude.yaw == 220.0
     assert [a.field for a in reply.anomalies] == ["yaw_raw"]
@@ -73,7 +73,7 @@ def test_z1pro_sends_the_logged_values() -> None:
 
 
 def _host_null() -> bytes:
-    from _sim_helpers import host_bytes
+    from helpers.sim.support import host_bytes
 
     return host_bytes()
 
@@ -135,15 +135,15 @@ def test_a_firmware_changes_the_encoding_not_the_meaning(yaw: float, pitch: floa
         rig.control = ControlValues.angles(0.0, pitch, yaw)
         rig.command(AngleControl())
         replies.append(rig.run(1.0))
-    document, z1pro = (r.main for r in replies)
-    assert document.attitude == z1pro.attitude
-    assert document.relative_angles == z1pro.relative_angles
-    assert 0.0 <= z1pro.attitude.yaw < 360.0
+    document, z1pro_frame = (r.main for r in replies)
+    assert document.attitude == z1pro_frame.attitude
+    assert document.relative_angles == z1pro_frame.relative_angles
+    assert 0.0 <= z1pro_frame.attitude.yaw < 360.0
     assert document.yaw_raw < 36000
-    signed = z1pro.yaw_raw - 65536 if z1pro.yaw_raw >= 32768 else z1pro.yaw_raw
+    signed = z1pro_frame.yaw_raw - 65536 if z1pro_frame.yaw_raw >= 32768 else z1pro_frame.yaw_raw
     assert -18000 <= signed < 18000
     assert signed % 36000 == document.yaw_raw
-    assert document._replace(yaw_raw=0) == z1pro._replace(yaw_raw=0)
+    assert document._replace(yaw_raw=0) == z1pro_frame._replace(yaw_raw=0)
 
 
 @pytest.mark.subprocess

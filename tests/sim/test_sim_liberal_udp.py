@@ -11,10 +11,10 @@ import asyncio
 
 import pytest
 
-from _protocol_strategies import seal
-from _sim_helpers import UdpPeer, host_bytes
 from gcu_async.protocol import HOST_HEADER, ExecutionStatus, decode_gcu_packet
 from gcu_async.sim import GcuSimulator
+from helpers.protocol.strategies import seal
+from helpers.sim.support import UdpPeer, host_bytes
 
 ODD = [  # (opcode, parameter bytes, version): each CRC-valid, each unexpected
     (0x08, b"\x0f", 2),  # time zone +15

@@ -1,4 +1,5 @@
-"""The simulator on an in-memory link (what the client's unit tests use)."""
+"""The simulator on an in-memory link (what the client's unit tests use): the server contract
+(tests/helpers/sim/contract.py, chunking included) and what is the link's own."""
 
 from __future__ import annotations
 
@@ -6,28 +7,32 @@ import asyncio
 
 import pytest
 
-from _sim_helpers import host_bytes
 from gcu_async.errors import LinkLost
-from gcu_async.protocol import Deframer, Opcode, TakePhoto, decode_gcu_packet
+from gcu_async.protocol import Deframer
 from gcu_async.sim import FaultConfig, FaultPlan, GcuSimulator
 from gcu_async.transport import LinkEvent, LinkEventKind, MemoryTransport
+from helpers.sim.contract import Serve, StreamServerContract, on_memory
+from helpers.sim.support import host_bytes
 
 
-async def test_memory_link_answers_like_the_gcu() -> None:
-    sim = GcuSimulator()
-    received: asyncio.Queue[bytes] = asyncio.Queue()
-    async with sim.serve_memory() as server:
+@pytest.mark.realtime  # the contract's waits are on the real clock
+class TestMemoryServer(StreamServerContract):
+    stall_packets = 5
+    os_buffered = False  # no OS buffer: the simulator holds what arrives during a stall
+
+    @pytest.fixture
+    def serve(self) -> Serve:
+        return on_memory
+
+
+async def test_the_memory_link_is_the_clients_transport() -> None:
+    async with GcuSimulator().serve_memory() as server:
         transport = server.transport
         assert isinstance(transport, MemoryTransport)
-        transport.set_handlers(received.put_nowait)
+        assert not transport.connected  # not yet opened: the client opens it
         await transport.open()
         assert transport.connected
-        transport.send(host_bytes(TakePhoto())[:30])
-        transport.send(host_bytes(TakePhoto())[30:])  # any chunking
-        reply = decode_gcu_packet(await asyncio.wait_for(received.get(), 1.0))
-        assert (reply.feedback.opcode, reply.feedback.status) == (Opcode.TAKE_PHOTO, 0)
         await transport.close()
-    assert sim.model.executions[Opcode.TAKE_PHOTO] == 1
 
 
 async def test_closing_the_simulator_loses_the_link() -> None:

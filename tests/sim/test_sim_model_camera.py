@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import pytest
 
-from _sim_helpers import Rig, sub_of
 from gcu_async.protocol import (
     AreaTemperature,
     CameraFlags,
@@ -36,6 +35,7 @@ from gcu_async.protocol import (
     ZoomStop,
     ZoomTo,
 )
+from helpers.sim.support import Rig, sub_of
 
 A = pytest.approx
 

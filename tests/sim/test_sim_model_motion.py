@@ -7,7 +7,6 @@ import math
 
 import pytest
 
-from _sim_helpers import Rig
 from gcu_async.protocol import (
     AngleControl,
     Centre,
@@ -29,6 +28,7 @@ from gcu_async.protocol import (
     ZoomTo,
 )
 from gcu_async.protocol.units import wrap_degrees_180
+from helpers.sim.support import Rig
 
 A = pytest.approx
 

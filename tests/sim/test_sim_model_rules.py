@@ -6,7 +6,6 @@ import struct
 
 import pytest
 
-from _sim_helpers import FAMILIES, Rig, host_bytes, sub_of
 from gcu_async.protocol import (
     Calibration,
     Command,
@@ -21,6 +20,7 @@ from gcu_async.protocol import (
     decode_gcu_packet,
 )
 from gcu_async.sim import SimulatorModel
+from helpers.sim.support import FAMILIES, Rig, host_bytes, sub_of
 
 
 @pytest.mark.parametrize(("command", "status"), FAMILIES, ids=lambda v: repr(v)[:40])

@@ -1,4 +1,6 @@
-"""The simulator on a real pseudo-terminal pair, and on a serial device path."""
+"""The simulator on a real pseudo-terminal pair: the server contract
+(tests/helpers/sim/contract.py, chunking included) and what is a pty's own; and on a serial
+device path."""
 
 from __future__ import annotations
 
@@ -7,42 +9,26 @@ import sys
 
 import pytest
 
-from _sim_helpers import FAMILIES, FdPeer, host_bytes
 from gcu_async.protocol import Opcode, TakePhoto, ZoomIn
 from gcu_async.sim import GcuSimulator
+from helpers.sim.contract import Serve, StreamServerContract, on_pty
+from helpers.sim.support import FdPeer, host_bytes
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="pseudo-terminals are POSIX")
 
 
-async def test_every_command_family_over_a_pty() -> None:
-    sim = GcuSimulator()
-    async with sim.serve_pty() as server:
+class TestPtyServer(StreamServerContract):
+    stall_packets = 10  # 720 bytes: well inside a pty's buffer
+
+    @pytest.fixture
+    def serve(self) -> Serve:
+        return on_pty
+
+
+async def test_the_pty_is_a_device_path_and_its_url() -> None:
+    async with GcuSimulator().serve_pty() as server:
         assert server.device_path.startswith("/dev/")
         assert server.url == f"serial://{server.device_path}"
-        peer = FdPeer.open_path(server.device_path)
-        try:
-            for command, status in FAMILIES:
-                await peer.request(host_bytes())
-                reply = await peer.request(host_bytes(command))
-                assert (reply.feedback.opcode, reply.feedback.status) == (command.opcode, status)
-        finally:
-            peer.close()
-
-
-async def test_garbage_and_chunks_over_a_pty() -> None:
-    sim = GcuSimulator()
-    async with sim.serve_pty() as server:
-        peer = FdPeer.open_path(server.device_path)
-        try:
-            data = b"\x00\xff garbage \xa8\xe5\x48" + host_bytes(TakePhoto())
-            for i in range(0, len(data), 7):
-                peer.send(data[i : i + 7])
-            assert (await peer.reply()).feedback.opcode == Opcode.TAKE_PHOTO
-            assert peer.queue.empty()
-        finally:
-            peer.close()
-    assert sim.model.stats.answered == 1
-    assert sim.model.stats.bytes_discarded >= 11
 
 
 async def test_a_client_can_close_and_reopen_the_pty() -> None:

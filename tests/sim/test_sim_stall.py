@@ -1,121 +1,25 @@
 """Stalls: the simulator stops reading its sockets / pty, the OS buffers what the host sends,
-and when the stall ends every buffered packet is answered, in order. Real sockets on
+and when the stall ends every buffered packet is answered, in order — on every endpoint, in
+the server contract (tests/helpers/sim/contract.py); here the rest. Real sockets on
 127.0.0.1; the stall is timed on a ManualClock, so no assertion depends on the machine's
 speed (the stall ends within POLL_SECONDS of the clock passing its end)."""
 
 from __future__ import annotations
 
 import asyncio
-import sys
 import time
 
 import pytest
 
-from _sim_helpers import FdPeer, StreamPeer, UdpPeer, eventually, tag, tagged
-from gcu_async.protocol import Opcode, TakePhoto, decode_gcu_packet
+from gcu_async.protocol import decode_gcu_packet
 from gcu_async.sim import FaultConfig, FaultPlan, GcuSimulator, ManualClock, StallSwitch
 from gcu_async.sim.stall import POLL_SECONDS
+from helpers.sim.support import StreamPeer, UdpPeer, eventually, tag, tagged
 
 
 def manual_sim(**kw: object) -> tuple[GcuSimulator, ManualClock]:
     clock = ManualClock()
     return GcuSimulator(clock=clock, **kw), clock  # type: ignore[arg-type]
-
-
-async def test_tcp_packets_written_during_a_stall_are_answered_in_order_after_it() -> None:
-    sim, clock = manual_sim()
-    async with sim.serve_tcp(port=0) as server:
-        peer = await StreamPeer.connect(server.address)
-        try:
-            await peer.request(tagged(0))
-            sim.stall(5.0)
-            assert sim.stalled
-            n = 30
-            for i in range(1, n + 1):  # every other packet a photo, so each one executes
-                peer.writer.write(tagged(i, TakePhoto() if i % 2 else None))
-            await asyncio.wait_for(peer.writer.drain(), 2.0)
-            with pytest.raises(asyncio.TimeoutError):
-                await peer.reply(timeout=0.3)
-            # the kernel holds the bytes: nothing reached the simulator
-            assert sim.model.stats.received == 1
-            assert sim.stats.held_while_stalled == 0
-            clock.advance(5.0)
-            replies = [await peer.reply(timeout=2.0) for _ in range(n)]
-        finally:
-            await peer.close()
-    assert [tag(r) for r in replies] == list(range(1, n + 1))
-    assert [r.feedback.opcode for r in replies] == [
-        Opcode.TAKE_PHOTO if i % 2 else Opcode.NULL for i in range(1, n + 1)
-    ]
-    assert sim.model.executions[Opcode.TAKE_PHOTO] == n // 2
-    assert not sim.stalled
-    assert sim.stalls.count == 1
-
-
-async def test_udp_datagrams_sent_during_a_stall_are_queued_by_the_kernel_and_answered() -> None:
-    sim, clock = manual_sim()
-    peer = await UdpPeer.open()
-    try:
-        async with sim.serve_udp(port=0) as server:
-            await peer.request(tagged(0), server.address)
-            sim.stall(2.0)
-            n = 40  # far below what a default receive buffer holds (256 measured)
-            for i in range(1, n + 1):
-                peer.send(tagged(i), server.address)
-            assert await peer.nothing(0.3)
-            assert sim.model.stats.received == 1
-            assert sim.stats.held_while_stalled == 0  # the server stopped reading
-            clock.advance(1.0)
-            assert await peer.nothing(3 * POLL_SECONDS)  # half way: still stalled
-            clock.advance(1.0)
-            replies = [decode_gcu_packet((await peer.receive(2.0))[0]) for _ in range(n)]
-            assert await peer.nothing(0.1)
-    finally:
-        await peer.close()
-    assert len(replies) == n
-    assert [tag(r) for r in replies] == list(range(1, n + 1))  # loopback keeps the order
-
-
-async def test_pty_bytes_written_during_a_stall_are_answered_after_it() -> None:
-    if sys.platform == "win32":  # pragma: no cover
-        pytest.skip("POSIX pseudo-terminals")
-    sim, clock = manual_sim()
-    async with sim.serve_pty() as server:
-        peer = FdPeer.open_path(server.device_path)
-        try:
-            await peer.request(tagged(0))
-            sim.stall(1.0)
-            n = 10  # 720 bytes: well inside a pty's buffer
-            for i in range(1, n + 1):
-                peer.send(tagged(i))
-            with pytest.raises(asyncio.TimeoutError):
-                await peer.reply(timeout=0.3)
-            assert sim.model.stats.received == 1
-            assert sim.stats.held_while_stalled == 0  # the terminal holds the bytes
-            clock.advance(1.0)
-            replies = [await peer.reply(timeout=2.0) for _ in range(n)]
-        finally:
-            peer.close()
-    assert [tag(r) for r in replies] == list(range(1, n + 1))
-
-
-async def test_memory_link_has_no_os_buffer_the_exchange_holds_the_packets() -> None:
-    sim, clock = manual_sim()
-    received: asyncio.Queue[bytes] = asyncio.Queue()
-    async with sim.serve_memory() as server:
-        transport = server.transport
-        transport.set_handlers(received.put_nowait)
-        await transport.open()
-        sim.stall(1.0)
-        for i in range(5):
-            transport.send(tagged(i))
-        await eventually(lambda: sim.stats.held_while_stalled == 5)
-        assert received.empty()
-        clock.advance(1.0)
-        replies = [decode_gcu_packet(await asyncio.wait_for(received.get(), 2.0))
-                   for _ in range(5)]  # fmt: skip
-        await transport.close()
-    assert [tag(r) for r in replies] == list(range(5))
 
 
 async def test_a_real_time_stall_lasts_at_least_its_duration() -> None:

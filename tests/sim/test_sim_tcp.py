@@ -1,4 +1,5 @@
-"""The simulator as a TCP server on 127.0.0.1 (ephemeral ports): clients in turn, chunking,
+"""The simulator as a TCP server on 127.0.0.1 (ephemeral ports): the server contract
+(tests/helpers/sim/contract.py, chunking included), and what is TCP's own: clients in turn,
 killing the connection, clean shutdown."""
 
 from __future__ import annotations
@@ -7,22 +8,18 @@ import asyncio
 
 import pytest
 
-from _sim_helpers import FAMILIES, StreamPeer, host_bytes
 from gcu_async.protocol import Opcode, TakePhoto
 from gcu_async.sim import GcuSimulator
+from helpers.sim.contract import Serve, StreamServerContract, on_tcp
+from helpers.sim.support import StreamPeer, host_bytes
 
 
-async def test_every_command_family_over_tcp() -> None:
-    sim = GcuSimulator()
-    async with sim.serve_tcp(port=0) as server:
-        peer = await StreamPeer.connect(server.address)
-        try:
-            for command, status in FAMILIES:
-                await peer.request(host_bytes())
-                reply = await peer.request(host_bytes(command))
-                assert (reply.feedback.opcode, reply.feedback.status) == (command.opcode, status)
-        finally:
-            await peer.close()
+class TestTcpServer(StreamServerContract):
+    stall_packets = 30
+
+    @pytest.fixture
+    def serve(self) -> Serve:
+        return on_tcp
 
 
 async def test_several_clients_in_turn() -> None:
@@ -51,24 +48,6 @@ async def test_a_second_client_waits_until_the_first_leaves() -> None:
         assert reply.feedback.opcode == Opcode.TAKE_PHOTO
         await second.close()
         assert server.clients_served == 2
-
-
-async def test_packets_split_into_single_bytes_and_glued_together() -> None:
-    sim = GcuSimulator()
-    async with sim.serve_tcp(port=0) as server:
-        peer = await StreamPeer.connect(server.address)
-        try:
-            for byte in host_bytes(TakePhoto()):
-                peer.writer.write(bytes([byte]))
-                await peer.writer.drain()
-            assert (await peer.reply()).feedback.opcode == Opcode.TAKE_PHOTO
-            peer.writer.write(b"noise" + host_bytes() + host_bytes(TakePhoto()) + b"\xa8")
-            assert (await peer.reply()).feedback.opcode == 0
-            assert (await peer.reply()).feedback.opcode == Opcode.TAKE_PHOTO
-        finally:
-            await peer.close()
-    assert sim.model.executions[Opcode.TAKE_PHOTO] == 2
-    assert sim.model.stats.bytes_discarded >= 6  # the noise and the dangling header byte
 
 
 async def test_kill_connection_resets_the_client_and_serves_the_next() -> None:

@@ -10,11 +10,11 @@ import logging
 
 import pytest
 
-from _protocol_strategies import seal
-from _sim_helpers import host_bytes
 from gcu_async.protocol import HOST_HEADER, ExecutionStatus, Opcode, decode_gcu_packet
 from gcu_async.sim import ManualClock, SimulatorModel
 from gcu_async.sim.aircraft import aircraft_yaw
+from helpers.protocol.strategies import seal
+from helpers.sim.support import host_bytes
 
 
 def with_command(opcode: int, params: bytes, yaw_raw: int | None = None) -> bytes:

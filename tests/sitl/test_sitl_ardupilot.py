@@ -18,7 +18,9 @@ from pathlib import Path
 
 import pytest
 
-from _sitl_ardupilot import (
+from gcu_async.conformance import HostConformance
+from gcu_async.protocol import AnomalousCommand, Opcode, command_code
+from helpers.sitl.ardupilot import (
     ANGLE_TOLERANCE,
     HEADER,
     Session,
@@ -26,8 +28,6 @@ from _sitl_ardupilot import (
     save_conversation,
     wrap180,
 )
-from gcu_async.conformance import HostConformance
-from gcu_async.protocol import AnomalousCommand, Opcode, command_code
 
 ENV = "GCU_ARDUPILOT_SITL"
 ARDUPILOT_DEVIATIONS = (

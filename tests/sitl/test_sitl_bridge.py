@@ -24,7 +24,9 @@ from typing import Any
 
 import pytest
 
-from _sitl_ardupilot import (
+from gcu_async.protocol import decode_host_packet
+from gcu_async.protocol.host_frames import HostSubFrame
+from helpers.sitl.ardupilot import (
     HOME,
     Driver,
     RecordingModel,
@@ -34,8 +36,6 @@ from _sitl_ardupilot import (
     free_block,
     wrap180,
 )
-from gcu_async.protocol import decode_host_packet
-from gcu_async.protocol.host_frames import HostSubFrame
 
 ENV = "GCU_ARDUPILOT_SITL"
 STREAMS = {"MAV2_EXTRA1": 20, "MAV2_POSITION": 10, "MAV2_EXT_STAT": 5, "MAV2_EXTRA3": 5}

@@ -17,9 +17,9 @@ from pathlib import Path
 
 import pytest
 
-from _sitl_ardupilot import load_conversation, wrap180
 from gcu_async.protocol import Opcode, command_code, decode_gcu_packet
 from gcu_async.sim import ManualClock, SimulatorModel
+from helpers.sitl.ardupilot import load_conversation, wrap180
 from test_sitl_ardupilot import ARDUPILOT_DEVIATIONS
 
 DATA = Path(__file__).parent.parent / "data" / "ardupilot-4.7.0-sitl.gcuconv.gz"

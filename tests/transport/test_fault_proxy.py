@@ -1,5 +1,5 @@
-"""The fault-injecting UDP proxy (tests/_fault_proxy.py) between a raw UDP host socket and
-the real simulator on 127.0.0.1; its policies also on their own, adversarially."""
+"""The fault-injecting UDP proxy (tests/helpers/transport/fault_proxy.py) between a raw UDP host
+socket and the real simulator on 127.0.0.1; its policies also on their own, adversarially."""
 
 from __future__ import annotations
 
@@ -13,19 +13,6 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from _fault_proxy import (
-    DROP,
-    FORWARD,
-    Datagram,
-    DelayNullRequests,
-    DropFirstReplyOfEachCommand,
-    Fate,
-    FaultProxy,
-    RandomFaults,
-    delayed,
-    duplicated,
-)
-from _sim_helpers import UdpPeer, eventually, tag, tagged
 from gcu_async.protocol import (
     Command,
     Feedback,
@@ -40,6 +27,19 @@ from gcu_async.protocol import (
     decode_gcu_packet,
 )
 from gcu_async.sim import GcuSimulator, SimulatorModel
+from helpers.sim.support import UdpPeer, eventually, tag, tagged
+from helpers.transport.fault_proxy import (
+    DROP,
+    FORWARD,
+    Datagram,
+    DelayNullRequests,
+    DropFirstReplyOfEachCommand,
+    Fate,
+    FaultProxy,
+    RandomFaults,
+    delayed,
+    duplicated,
+)
 
 
 @pytest.fixture

@@ -1,4 +1,4 @@
-"""MemoryTransport: the transport contract (tests/_transport_contract.py), and the base's
+"""MemoryTransport: the transport contract (tests/helpers/transport/contract.py), and the base's
 defaults: datagram, reset, sends_dropped."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ from collections.abc import AsyncIterator
 
 import pytest
 
-from _transport_contract import TO_PEER, Link, TransportContract
-from _transport_recorder import Recorder
 from gcu_async.transport import MemoryTransport
+from helpers.transport.contract import TO_PEER, Link, TransportContract
+from helpers.transport.recorder import Recorder
 
 
 async def test_reset_is_a_no_op_nothing_is_queued() -> None:

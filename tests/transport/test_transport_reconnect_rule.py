@@ -1,5 +1,6 @@
 """How long a transport keeps restoring a lost link (docs/transports.md, "Reconnecting"), in
-virtual time (tests/_vclock.py): by default until it is closed, whatever the outage — 2 s,
+virtual time (tests/helpers/transport/vclock.py): by default until it is closed, whatever the
+outage — 2 s,
 2 minutes, six hours —, with attempts at most ``cap`` apart, so the link is back within ``cap``
 of the peer's return; ``max_attempts`` / ``max_total`` make it give up (``GAVE_UP``), and
 so does ``reconnect=False``, at once. The same schedule code (``retry``, ``Reopener``) runs
@@ -17,12 +18,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from _scale import scaled
-from _vclock import run
 from gcu_async.errors import LinkLost
 from gcu_async.transport._reopen import Reopener
 from gcu_async.transport.backoff import Backoff, retry
 from gcu_async.transport.base import LinkEvent, LinkEventKind
+from helpers.scale import scaled
+from helpers.transport.vclock import run
 
 OUTAGES = (2.0, 30.0, 120.0, 21600.0)
 

@@ -15,7 +15,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from _transport_contract import (
+from gcu_async.errors import LinkLost
+from gcu_async.transport import BAUDRATES, Backoff, LinkEventKind, SerialTransport
+from helpers.transport.contract import (
     FROM_PEER,
     TO_PEER,
     Link,
@@ -23,9 +25,7 @@ from _transport_contract import (
     packet,
     send_whole_or_drop,
 )
-from _transport_recorder import Recorder, open_fds, other_tasks
-from gcu_async.errors import LinkLost
-from gcu_async.transport import BAUDRATES, Backoff, LinkEventKind, SerialTransport
+from helpers.transport.recorder import Recorder, open_fds, other_tasks
 
 _PTY_ONLY = "the serial transport is tested on a pseudo-terminal: POSIX only (not Windows)"
 if sys.platform == "win32" or not hasattr(os, "openpty"):

@@ -11,10 +11,10 @@ from typing import Any
 
 import pytest
 
-from _transport_contract import FROM_PEER, TO_PEER, Link, TransportContract
-from _transport_recorder import Recorder, other_tasks
 from gcu_async.errors import LinkLost
 from gcu_async.transport import Backoff, LinkEventKind, TcpTransport
+from helpers.transport.contract import FROM_PEER, TO_PEER, Link, TransportContract
+from helpers.transport.recorder import Recorder, other_tasks
 
 LOOP = "127.0.0.1"
 

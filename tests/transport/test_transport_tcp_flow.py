@@ -13,10 +13,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from _transport_contract import packet, send_whole_or_drop
-from _transport_recorder import Recorder, other_tasks
 from gcu_async.errors import LinkLost
 from gcu_async.transport import Backoff, LinkEventKind, TcpTransport
+from helpers.transport.contract import packet, send_whole_or_drop
+from helpers.transport.recorder import Recorder, other_tasks
 
 LOOP = "127.0.0.1"
 FAST = Backoff(base=0.01, factor=2.0, cap=0.05, max_attempts=50)

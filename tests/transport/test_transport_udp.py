@@ -10,11 +10,11 @@ from typing import Any, cast
 
 import pytest
 
-from _transport_contract import FROM_PEER, TO_PEER, Link, TransportContract
-from _transport_recorder import Recorder
 from gcu_async.errors import LinkLost
 from gcu_async.transport import LinkEventKind, UdpTransport
 from gcu_async.transport.udp import is_broadcast_address
+from helpers.transport.contract import FROM_PEER, TO_PEER, Link, TransportContract
+from helpers.transport.recorder import Recorder
 
 LOOP = "127.0.0.1"
 

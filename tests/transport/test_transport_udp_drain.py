@@ -22,8 +22,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import gcu_async.transport._datagram as datagram_module
-from _transport_recorder import Recorder
 from gcu_async.transport import LinkEventKind, UdpTransport
+from helpers.transport.recorder import Recorder
 
 LOOP = "127.0.0.1"
 MAX_UDP_PAYLOAD = 65507  # IPv4

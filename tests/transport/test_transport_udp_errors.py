@@ -15,7 +15,6 @@ import time
 
 import pytest
 
-from _sim_helpers import host_bytes
 from gcu_async import connect
 from gcu_async.sim import GcuSimulator
 from gcu_async.transport import _datagram
@@ -23,6 +22,7 @@ from gcu_async.transport._datagram import DrainingDatagramTransport, queued_erro
 from gcu_async.transport.backoff import Backoff
 from gcu_async.transport.base import LinkEvent, LinkEventKind
 from gcu_async.transport.udp import UdpTransport
+from helpers.sim.support import host_bytes
 
 linux_only = pytest.mark.skipif(
     not sys.platform.startswith("linux"),

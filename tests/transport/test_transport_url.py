@@ -19,7 +19,6 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from _transport_recorder import Recorder
 from gcu_async.client.connect import connect
 from gcu_async.protocol.links import (
     BAUDRATES,
@@ -36,6 +35,7 @@ from gcu_async.transport import (
     UdpTransport,
     open_transport,
 )
+from helpers.transport.recorder import Recorder
 
 
 @pytest.mark.parametrize(

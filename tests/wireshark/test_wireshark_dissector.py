@@ -1,8 +1,9 @@
 """The Lua dissector against ``gcu-async decode``, on captures written by the library.
 
-Every packet of every kind (:mod:`_xfgcu_corpus`) crosses UDP, TCP and a serial link with
-junk, CRC-failed copies and cuts; tshark with the dissector and ``gcu-async decode --file``
-read the same file, and every field of every packet must agree (:mod:`_xfgcu_compare`).
+Every packet of every kind (:mod:`helpers.wireshark.xfgcu_corpus`) crosses UDP, TCP and a serial
+link with junk, CRC-failed copies and cuts; tshark with the dissector and ``gcu-async decode
+--file`` read the same file, and every field of every packet must agree
+(:mod:`helpers.wireshark.xfgcu_compare`).
 """
 
 from __future__ import annotations
@@ -13,13 +14,13 @@ import subprocess
 import sys
 from pathlib import Path
 
-from _tshark import dissect, needs_tshark, verbose
-from _vectors import GCU_EXAMPLE, HOST_EXAMPLE
-from _xfgcu_compare import compare, compare_capture, packets_by_stream
-from _xfgcu_corpus import GCU, HOST, anomalous_packets, corpus, write_capture
 from gcu_async.capture import PacketCapture
 from gcu_async.capture.synth import TcpFlow
 from gcu_async.cli.decode import decode_capture
+from helpers.protocol.vectors import GCU_EXAMPLE, HOST_EXAMPLE
+from helpers.wireshark.tshark import dissect, needs_tshark, verbose
+from helpers.wireshark.xfgcu_compare import compare, compare_capture, packets_by_stream
+from helpers.wireshark.xfgcu_corpus import GCU, HOST, anomalous_packets, corpus, write_capture
 
 pytestmark = needs_tshark
 

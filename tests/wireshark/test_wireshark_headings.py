@@ -7,11 +7,11 @@ from __future__ import annotations
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import _z1pro
-from _tshark import dissect, needs_tshark, scratch_dir
-from _xfgcu_compare import compare_capture
-from _xfgcu_corpus import write_capture
 from gcu_async.cli.decode import decode_capture
+from helpers.protocol import z1pro
+from helpers.wireshark.tshark import dissect, needs_tshark, scratch_dir
+from helpers.wireshark.xfgcu_compare import compare_capture
+from helpers.wireshark.xfgcu_corpus import write_capture
 
 pytestmark = needs_tshark
 EDGES = (0, 1, 17999, 18000, 35999, 36000, 36001, 47535, 47536, 47537, 65534, 65535)
@@ -29,7 +29,7 @@ def heading(raw: int) -> float:
 def agree(yaws: list[int], *, seed: int = 1) -> None:
     """Z-1Pro replies with these raw yaws over UDP, TCP and serial: the dissector shows what
     decode shows, and decode shows the heading."""
-    packets = [_z1pro.reply(i * 7 % 36000 - 18000, yaw) for i, yaw in enumerate(yaws)]
+    packets = [z1pro.reply(i * 7 % 36000 - 18000, yaw) for i, yaw in enumerate(yaws)]
     path = scratch_dir() / "headings.pcapng"
     try:
         write_capture(path, packets, seed=seed, junk_rate=0.1)
@@ -47,7 +47,7 @@ def agree(yaws: list[int], *, seed: int = 1) -> None:
 
 
 def test_the_logged_z1pro_yaws_and_every_band_edge() -> None:
-    logged = [y for move in _z1pro.MOVES for y in (move[1], move[3])]
+    logged = [y for move in z1pro.MOVES for y in (move[1], move[3])]
     agree([*EDGES, *logged])
 
 

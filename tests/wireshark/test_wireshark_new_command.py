@@ -17,7 +17,6 @@ from pathlib import Path
 
 import pytest
 
-from _tshark import Item, dissect, needs_tshark
 from gcu_async.capture import PacketCapture
 from gcu_async.protocol import (
     COMMAND_TYPES,
@@ -30,6 +29,7 @@ from gcu_async.protocol import (
 )
 from gcu_async.wireshark import tables, template_path
 from gcu_async.wireshark.tables import WireParam, WireRow
+from helpers.wireshark.tshark import Item, dissect, needs_tshark
 
 pytestmark = needs_tshark
 

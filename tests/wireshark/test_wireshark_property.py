@@ -16,13 +16,13 @@ import struct
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from _protocol_strategies import U8, gcu_packets, host_packets, seal
-from _tshark import dissect, needs_tshark, scratch_dir
-from _xfgcu_compare import compare_capture
-from _xfgcu_corpus import write_capture
 from gcu_async.cli.decode import decode_capture
 from gcu_async.protocol import GCU_HEADER, HOST_HEADER
 from gcu_async.wireshark.tables import rows
+from helpers.protocol.strategies import U8, gcu_packets, host_packets, seal
+from helpers.wireshark.tshark import dissect, needs_tshark, scratch_dir
+from helpers.wireshark.xfgcu_compare import compare_capture
+from helpers.wireshark.xfgcu_corpus import write_capture
 
 pytestmark = needs_tshark
 PARAMS_SIZE = {r.opcode: struct.calcsize("<" + "".join(p.fmt for p in r.params)) for r in rows()}

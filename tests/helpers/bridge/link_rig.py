@@ -15,11 +15,11 @@ from collections.abc import AsyncIterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from _bridge_rig import CAMERA, GCS, GIMBAL, SYSTEM, Peer
 from gcu_async.bridge import CameraConfig, MavlinkBridge
 from gcu_async.bridge._mavlink import mavlink
 from gcu_async.client.connect import connect
 from gcu_async.sim import GcuSimulator
+from helpers.bridge.rig import CAMERA, GCS, GIMBAL, SYSTEM, Peer
 
 RATE_LOW, RATE_HIGH = 45, 51
 """The host rate every 1-s window at the GCU must stay within."""

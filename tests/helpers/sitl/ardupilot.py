@@ -393,7 +393,7 @@ def drive(d: Driver, s: Session, *, fly: bool, t0: float) -> None:
 HEADER = """\
 A conversation between ArduPilot SITL 4.7.0 (arducopter, commit 1511f27, built unmodified;
 its AP_Mount_XFRobot driver is the host) and the gcu_async simulator (D-90Pro(TA)), recorded
-by tests/_sitl_ardupilot.py (GCU_SITL_RECORD=FILE with tests/sitl/test_sitl_ardupilot.py):
+by tests/helpers/sitl/ardupilot.py (GCU_SITL_RECORD=FILE with tests/sitl/test_sitl_ardupilot.py):
 boot, DO_MOUNT_CONTROL, DO_GIMBAL_MANAGER_PITCHYAW (vehicle and earth frame),
 GIMBAL_MANAGER_SET_ATTITUDE, photo x2, record start/stop, zoom in/stop/out/stop, focus,
 GPS lock, arm, take-off to 10 m. Home 35.0 N 139.0 E heading 250 deg.

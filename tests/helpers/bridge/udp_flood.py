@@ -1,5 +1,5 @@
 """A UDP flood from many source ports, run as its own process (so it does not share the
-bridge's interpreter): ``python _udp_flood.py HOST PORT SECONDS RATE SOURCES MODE``.
+bridge's interpreter): ``python udp_flood.py HOST PORT SECONDS RATE SOURCES MODE``.
 
 MODE ``junk`` sends junk (one random byte, ``FD FF``, a truncated frame, random bytes),
 ``valid`` sends a valid MAVLink HEARTBEAT from a different system id per source, ``mixed``

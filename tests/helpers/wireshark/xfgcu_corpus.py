@@ -17,8 +17,6 @@ import random
 import struct
 from pathlib import Path
 
-from _catalogue_samples import required_samples
-from _protocol_strategies import seal
 from gcu_async.capture import PacketCapture
 from gcu_async.protocol import (
     COMMAND_TYPES,
@@ -81,6 +79,8 @@ from gcu_async.protocol.catalogue import CATALOGUE
 from gcu_async.protocol.fields import WIRE_RANGES
 from gcu_async.protocol.host_frames import ControlValues
 from gcu_async.wireshark.tables import WireParam, rows
+from helpers.protocol.catalogue_samples import required_samples
+from helpers.protocol.strategies import seal
 
 HOST, GCU = ("127.0.0.1", 2338), ("127.0.0.1", 2337)
 TCP_HOST, TCP_GCU = ("127.0.0.1", 45000), ("127.0.0.1", 2332)

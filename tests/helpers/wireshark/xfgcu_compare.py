@@ -24,9 +24,9 @@ import re
 from collections import defaultdict
 from typing import Any
 
-from _tshark import Field, Frame, Item
 from gcu_async.protocol.enums import CameraMask
 from gcu_async.protocol.pods import pod_name
+from helpers.wireshark.tshark import Field, Frame, Item
 
 FLAG_LISTS = {"pod_status", "faults", "thermal_flags", "camera_flags"}
 RENAMED = {"xfgcu.host.sub.data_hex": "xfgcu.sub.data", "xfgcu.gcu.sub.data_hex": "xfgcu.sub.data"}

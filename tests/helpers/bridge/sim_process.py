@@ -1,5 +1,5 @@
 """The simulator in its own process, for measurements the bridge's process load must not
-distort: ``python _bridge_sim_process.py POD`` serves UDP on 127.0.0.1 (port 0), prints its URL,
+distort: ``python sim_process.py POD`` serves UDP on 127.0.0.1 (port 0), prints its URL,
 then answers lines on stdin: ``report`` → one line, base64 of the pickled (host-packet
 times, execution log) so far (``time.monotonic``, the same clock in every process on
 Linux); ``silence SECONDS`` → stop answering and executing for that long; ``quit`` or end

@@ -8,7 +8,7 @@ concurrent runs never collide; :meth:`Lan.close` kills every process started thr
 gone. Needs Linux, root and iproute2's ``ip``; :func:`unavailable` says why not.
 
 Run as a script (inside a namespace), this file is a passive listener on a port:
-``python _netns.py sniff PORT OPTION N`` binds N sockets to ``0.0.0.0:PORT``, each with
+``python lan.py sniff PORT OPTION N`` binds N sockets to ``0.0.0.0:PORT``, each with
 OPTION (``reuseport``: SO_REUSEPORT, ``reuseaddr``: SO_REUSEADDR) and IP_PKTINFO, prints
 ``ready``, then one JSON object per datagram received (which socket, source address and
 port, destination address, payload in hex) until SIGTERM. It never sends.

@@ -32,7 +32,7 @@ def require_browser() -> ModuleType:
         reason="the browser tests need Playwright: pip install playwright (never `playwright "
         "install`: they drive Debian's chromium)",
     )
-    from _web_example import CHROMIUM
+    from helpers.examples.web import CHROMIUM
 
     if not os.access(CHROMIUM, os.X_OK):
         pytest.skip(f"the browser tests need {CHROMIUM}: apt-get install chromium",

@@ -4,8 +4,8 @@
 Every test has exactly one *kind*:
 
 ``fast``
-    sans-I/O, in-memory transports, virtual time (tests/_vtime.py), pure argument checks.
-    Runs on every CPython in ``make test`` and in ``make check``.
+    sans-I/O, in-memory transports, virtual time (tests/helpers/session/vtime.py), pure argument
+    checks. Runs on every CPython in ``make test`` and in ``make check``.
 ``realtime``, ``subprocess``, ``netns``, ``browser``, ``tshark``, ``sitl``
     real-time waits on the event loop (loopback sockets, ptys, in-memory transports on the
     real clock), child processes (the CLI, a simulator process), network namespaces,

@@ -1,4 +1,4 @@
-"""A MAVLink flood from another process: ``python _mavlink_flood.py PORT KIND RATE SECONDS
+"""A MAVLink flood from another process: ``python mavlink_flood.py PORT KIND RATE SECONDS
 PAIRS [--sockets N] [--heartbeats] [--ids SYS:COMP]`` sends ``RATE`` datagrams/s for
 ``SECONDS`` to 127.0.0.1:PORT, each a MAVLink 2 message from one of ``PAIRS`` (system,
 component) pairs in turn. KIND: ``command`` (photo and autofocus COMMAND_LONGs to the

@@ -32,7 +32,7 @@ import time
 from collections import Counter
 from pathlib import Path
 
-from _sim_process import SimProcess
+from helpers.sim.process import SimProcess
 
 START_TIMEOUT = 30.0
 """Seconds a simulator process may take to listen (an interpreter start on a loaded machine)."""

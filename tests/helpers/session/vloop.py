@@ -1,4 +1,4 @@
-"""The virtual-time rig (tests/_vtime.py) with the host side on a modelled asyncio event loop.
+"""The virtual-time rig (helpers/session/vtime.py) with the host side on a modelled asyncio loop.
 
 asyncio runs a timer in the first loop iteration that *begins* after the timer is due, and
 only after the callbacks already queued for that iteration (other tasks' steps, then I/O):
@@ -24,8 +24,8 @@ from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from _vtime import Rig
 from gcu_async.session import Session
+from helpers.session.vtime import Rig
 
 OVERHEAD = 2e-5
 """Seconds from the end of one iteration's callbacks to the start of the next: CPython's

@@ -17,9 +17,9 @@ from typing import Any, Protocol
 
 import pytest
 
-from _transport_recorder import Recorder, other_tasks
 from gcu_async.errors import LinkLost
 from gcu_async.transport import Transport
+from helpers.transport.recorder import Recorder, other_tasks
 
 EVERY_BYTE = bytes(range(256))
 """Every byte value: CR, LF, XON/XOFF, ^C and 0xA5 0x5A go through untouched."""

@@ -23,7 +23,7 @@ from gcu_async import GcuClient
 from gcu_async.client import ClientState
 from gcu_async.pytest_plugin import SimHandle
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[3]
 if str(ROOT) not in sys.path:  # the examples live beside src/, not inside the package
     sys.path.insert(0, str(ROOT))
 

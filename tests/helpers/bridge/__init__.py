@@ -1,0 +1,1 @@
+"""Bridge helpers: the MAVLink rigs, the simulator and floods in processes of their own."""

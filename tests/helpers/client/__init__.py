@@ -1,0 +1,1 @@
+"""Client helpers: the client's command methods found by what they send, an application process."""

@@ -1,0 +1,1 @@
+"""Network-namespace helpers: two hosts on one LAN."""

@@ -1,0 +1,1 @@
+"""Session helpers: the virtual-time rig, the same on a modelled asyncio loop, a scripted GCU."""

@@ -1,0 +1,1 @@
+"""ArduPilot SITL helpers: a real XF host against the simulator."""
