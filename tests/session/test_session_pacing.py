@@ -1,6 +1,6 @@
 """The heartbeat on a late event loop (docs/session-contract.md, "Guarantees", G4 and G6), in
-virtual time on a modelled asyncio loop (tests/helpers/session/vloop.py): the session and the simulator's
-GCU model, the loop's iterations as the schedule says.
+virtual time on a modelled asyncio loop (tests/helpers/session/vloop.py): the session and the
+simulator's GCU model, the loop's iterations as the schedule says.
 
 The old pacer restarted the slot phase at any packet a whole period late: on a loop whose
 iterations take about a period every packet was that late, so the next slot moved a period
