@@ -102,7 +102,7 @@ from gcu_async.protocol.gpstime import GPS_EPOCH, gps_minus_utc
 from helpers.protocol.boundary import MESSAGE, case_id
 from helpers.protocol.catalogue_samples import required_samples
 from helpers.protocol.strategies import FRAME_SCHEMAS, RAW_RANGES
-from helpers.scale import scaled
+from helpers.scale import FULL, scaled
 
 INF, NAN = math.inf, math.nan
 UTC = timezone.utc
@@ -736,15 +736,37 @@ def _check_error(case: Case, err: BaseException) -> None:
     assert any(s in msg for s in _shown(v)) or p.kind in ("part", "bytes"), msg
 
 
-@pytest.mark.parametrize("case", MISUSE_CASES, ids=[_id(c.p, c.value) for c in MISUSE_CASES])
-def test_misuse_is_rejected_naming_the_field(case: Case) -> None:
-    with pytest.raises(Exception) as info:  # noqa: PT011 - the type is checked below
-        case.p.call(case.value)
-    _check_error(case, info.value)
+CHUNK = 1 if FULL else 60
+"""Cases per test item: one at full size (each its own item), at reduced size every case
+still, in items of this many (pytest's cost per item is most of a case's)."""
 
 
-@pytest.mark.parametrize(("p", "value"), POSITIVE, ids=[_id(p, v) for p, v in POSITIVE])
-def test_boundary_values_are_accepted_and_round_trip(p: P, value: Any) -> None:
+def _chunks(cases: list[Any], ids: list[str]) -> list[Any]:
+    return [pytest.param(cases[i:i + CHUNK], id=ids[i] if CHUNK == 1 else f"{ids[i]}+{CHUNK - 1}")
+            for i in range(0, len(cases), CHUNK)]  # fmt: skip
+
+
+@pytest.mark.parametrize("cases", _chunks(MISUSE_CASES, [_id(c.p, c.value) for c in MISUSE_CASES]))
+def test_misuse_is_rejected_naming_the_field(cases: list[Case]) -> None:
+    for case in cases:
+        try:
+            case.p.call(case.value)
+        except Exception as exc:
+            _check_error(case, exc)
+        else:
+            pytest.fail(f"{_id(case.p, case.value)}: accepted")
+
+
+@pytest.mark.parametrize("cases", _chunks(POSITIVE, [_id(p, v) for p, v in POSITIVE]))
+def test_boundary_values_are_accepted_and_round_trip(cases: list[tuple[P, Any]]) -> None:
+    for p, value in cases:
+        try:
+            _round_trip(p, value)
+        except Exception as exc:
+            raise AssertionError(f"{_id(p, value)}: {exc!r}") from exc
+
+
+def _round_trip(p: P, value: Any) -> None:
     built = p.call(value)
     if p.read is None:
         return
