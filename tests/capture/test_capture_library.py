@@ -226,7 +226,8 @@ def test_wireshark_command(tmp_path: Path) -> None:
     expected = home / ".local" / "lib" / "wireshark" / "plugins" / "xfgcu.lua"
     if sys.platform != "win32":
         assert Path(done.stdout.strip()) == expected and expected.is_file()
-    usage = run_cli("wireshark")
-    assert usage.returncode == 2
+    bare = run_cli("wireshark")  # no option: as --print-path
+    assert bare.returncode == 0 and Path(bare.stdout.strip()) == dissector_path(), bare.stderr
+    assert run_cli("wireshark", "--print-path", "--install").returncode == 2
     assert run_cli("wireshark", "--print-path", "--dest", "x").returncode == 2
 

@@ -382,8 +382,27 @@ def _strings(path: Path) -> Iterator[tuple[int, str]]:
     """Each string literal and docstring outside generated code: (first line, its text)."""
     skip = _generated_lines(path)
     tokens = tokenize.generate_tokens(io.StringIO(path.read_text(encoding="utf-8")).readline)
+    # Python 3.12 tokenizes an f-string in parts (PEP 701): its literal parts, joined with
+    # the source of each replacement field, are the string (as one STRING token before).
+    fstring = getattr(tokenize, "FSTRING_START", None)
+    parts: list[tuple[int, str]] = []  # (line, text) of the open f-strings' pieces, nested
+    depth = 0
     for tok in tokens:
-        if tok.type == tokenize.STRING and tok.start[0] not in skip:
+        if fstring is not None and tok.type == fstring:
+            depth += 1
+            parts.append((tok.start[0], tok.string))
+        elif depth and tok.type == tokenize.FSTRING_END:  # type: ignore[attr-defined]
+            depth -= 1
+            if depth == 0:
+                first = parts[0][0]
+                if first not in skip:
+                    yield first, "".join(t for _, t in parts) + tok.string
+                parts = []
+            else:
+                parts.append((tok.start[0], tok.string))
+        elif depth:
+            parts.append((tok.start[0], tok.string))
+        elif tok.type == tokenize.STRING and tok.start[0] not in skip:
             yield tok.start[0], tok.string
 
 
