@@ -114,3 +114,18 @@ def test_no_option_value_is_taken_for_an_option(name: str,
                 parser.parse_known_args([*required, action.option_strings[-1], text,
                                          *positionals])
             assert "expected one argument" not in capsys.readouterr().err, action.option_strings
+
+
+@pytest.mark.parametrize("form", [["--pitch", "-45"], ["--pitch=-45"]])
+def test_an_optional_argument_by_name_alone(form: list[str]) -> None:
+    """``enter-euler-control --pitch -45``: pitch alone, roll and yaw left to the camera's."""
+    args = build_parser().parse_args(["send", URL, "enter-euler-control", *form])
+    inv = resolve(args)
+    assert inv.values == [] and inv.named == {"pitch": -45.0}
+    assert inv.spec.build(inv.values, inv.named)[1] == {"pitch": -45.0}
+
+
+def test_an_argument_given_twice_is_refused() -> None:
+    args = build_parser().parse_args(["send", URL, "enter-euler-control", "5", "--roll", "6"])
+    with pytest.raises(ValueError, match=r"^roll: given twice"):
+        resolve(args)

@@ -149,6 +149,11 @@ def command_parser(name: str) -> CommandParser:
     for param in spec.params:
         parser.add_argument(f"arg_{param.name}", metavar=param.name, type=param.convert,
                             nargs="?" if param.optional else None, help=param.help)  # fmt: skip
+    for param in spec.params:  # an optional argument by name too: --pitch -45 alone
+        if param.optional:
+            parser.add_argument(f"--{param.name}", dest=f"opt_{param.name}",
+                                type=param.convert, metavar=param.name.upper(),
+                                help=f"{param.name} by name")  # fmt: skip
     _shared_options(parser, cameras=spec.takes_cameras)
     parser.add_argument("-v", "--verbose", action="count", help=VERBOSE_HELP)
     return parser
@@ -162,6 +167,8 @@ class Invocation:
     name: str
     spec: CliCommand
     values: list[Any]
+    named: dict[str, Any]
+    """Optional arguments given by name (``--pitch -45``)."""
     extra: dict[str, Any]
     """Keyword arguments from the options: ``cameras``, ``timeout`` (if the method has it)."""
     timeout: float
@@ -185,7 +192,10 @@ def resolve(args: argparse.Namespace) -> Invocation:
     command_parser(args.name).parse_args(args.args, namespace=args)
     given = [getattr(args, f"arg_{p.name}") for p in spec.params]
     values = [v for v in given if v is not None]
-    group = [name for name in spec.together if getattr(args, f"arg_{name}") is not None]
+    named = {p.name: v for p in spec.params if p.optional
+             and (v := getattr(args, f"opt_{p.name}", None)) is not None}  # fmt: skip
+    group = [name for name in spec.together
+             if getattr(args, f"arg_{name}") is not None or name in named]  # fmt: skip
     if group and len(group) != len(spec.together):
         raise ValueError(f"{args.name}: give all of {' '.join(spec.together)}, or none")
     if args.timeout is not None:
@@ -198,7 +208,7 @@ def resolve(args: argparse.Namespace) -> Invocation:
         extra["cameras"] = args.cameras
     if args.timeout is not None and spec.takes_timeout:
         extra["timeout"] = args.timeout
-    spec.check(values, **extra)  # the method's own checks, before anything is opened
+    spec.check(values, named, **extra)  # the method's own checks, before anything is opened
     if spec.needs_ins and args.aircraft is None:
         raise ValueError(f"{args.name}: the GCU runs it only with valid INS data: give the "
                          "aircraft's state with --aircraft LAT,LON,ALT[,YAW]")  # fmt: skip
@@ -222,7 +232,7 @@ def resolve(args: argparse.Namespace) -> Invocation:
     except (TypeError, CaptureUnavailable) as exc:
         raise ValueError(f"--capture: {exc}") from None
     timeout = args.timeout if args.timeout is not None else DEFAULT_TIMEOUT
-    return Invocation(args.url, args.name, spec, values, extra, timeout, args.rate, hold,
+    return Invocation(args.url, args.name, spec, values, named, extra, timeout, args.rate, hold,
                       capture, args.aircraft)
 
 
@@ -260,12 +270,12 @@ async def _send(inv: Invocation) -> tuple[Any, dict[str, Any]]:
 
 async def _run_command(client: GcuClient, inv: Invocation) -> tuple[Any, dict[str, Any]]:
     async with client as gcu:
-        feedback = await inv.spec.call(gcu, inv.values, **inv.extra)
+        feedback = await inv.spec.call(gcu, inv.values, inv.named, **inv.extra)
         # Control values only act while packets carry them: hold them for a while (angle
         # modes stop early once the camera's attitude matches the target).
         deadline = time.monotonic() + inv.hold
         while time.monotonic() < deadline:
-            if inv.spec.angle_target and _arrived(gcu, inv.spec.build(inv.values)[1]):
+            if inv.spec.angle_target and _arrived(gcu, inv.spec.build(inv.values, inv.named)[1]):
                 break
             await asyncio.sleep(0.05)
         status = gcu.status  # the command's feedback came with a reply: never None here

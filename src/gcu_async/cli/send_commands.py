@@ -10,7 +10,7 @@ import inspect
 import itertools
 import re
 import textwrap
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from enum import IntEnum
 from typing import Any, NamedTuple
@@ -115,7 +115,7 @@ class Param(NamedTuple):
     """May be left out (a trailing argument; the method's default applies)."""
 
 
-Build = Callable[[list[Any]], tuple[tuple[Any, ...], dict[str, Any]]]
+Build = Callable[[list[Any], Mapping[str, Any] | None], tuple[tuple[Any, ...], dict[str, Any]]]
 
 
 @dataclass(frozen=True)
@@ -153,18 +153,21 @@ class CliCommand:
         """The method has its own ``timeout`` parameter (``--timeout`` is passed to it)."""
         return self.parameter("timeout") is not None
 
-    def call(self, gcu: Any, values: list[Any], **extra: Any) -> Any:
-        """Call the method on ``gcu`` with ``values`` and the ``extra`` keyword arguments
-        (``cameras``, ``timeout``); returns what it returns (a coroutine)."""
-        args, kwargs = self.build(values)
+    def call(self, gcu: Any, values: list[Any], named: Mapping[str, Any] | None = None,
+             **extra: Any) -> Any:  # fmt: skip
+        """Call the method on ``gcu`` with ``values`` (the arguments in order), ``named``
+        (optional arguments given by name) and the ``extra`` keyword arguments (``cameras``,
+        ``timeout``); returns what it returns (a coroutine)."""
+        args, kwargs = self.build(values, named)
         return getattr(gcu, self.method)(*args, **kwargs, **extra)
 
-    def check(self, values: list[Any], **extra: Any) -> None:
+    def check(self, values: list[Any], named: Mapping[str, Any] | None = None,
+              **extra: Any) -> None:  # fmt: skip
         """Check the arguments as the method does, with no GCU behind it: raises the same
         ``TypeError`` or :class:`~gcu_async.errors.FieldRangeError` it would, sends nothing.
         (Rate limits are checked at zoom 1x here; the method checks them again at the
         GCU's zoom.)"""
-        _, kwargs = self.build(values)
+        _, kwargs = self.build(values, named)
         builder.build(self.method, **kwargs, **extra)
 
     def description(self) -> str:
@@ -246,8 +249,13 @@ def _builder(params: tuple[Param, ...]) -> Build:
     optional arguments come last); the four edges become one ``box``."""
     names = [p.name for p in params]
 
-    def build(values: list[Any]) -> tuple[tuple[Any, ...], dict[str, Any]]:
+    def build(values: list[Any], named: Mapping[str, Any] | None = None
+              ) -> tuple[tuple[Any, ...], dict[str, Any]]:  # fmt: skip
         kwargs = dict(zip(names, values, strict=False))
+        for name, value in (named or {}).items():
+            if name in kwargs:
+                raise ValueError(f"{name}: given twice (as an argument and as --{name})")
+            kwargs[name] = value
         if all(edge in kwargs for edge in BOX_EDGES):
             kwargs["box"] = tuple(kwargs.pop(edge) for edge in BOX_EDGES)
         return (), kwargs
