@@ -212,17 +212,20 @@ class Driver:
         self._arrived_after = self._arrival_start()
         self._pump()
         try:
-            failure = await asyncio.wait_for(asyncio.shield(first), connect_timeout)
-        except asyncio.TimeoutError:
-            await self.stop_attempt("no reply")
-            raise LinkLost(
-                f"{self.transport.url}: no reply from the GCU within {connect_timeout:g} s"
-            ) from None
+            # asyncio.wait, not wait_for: a first reply handled in the very loop iteration in
+            # which the timeout fires counts (wait_for could raise TimeoutError with the client
+            # already OPEN); and a cancelled open leaves `first` alone
+            await asyncio.wait({first}, timeout=connect_timeout)
         except BaseException:
+            self._first_reply = None
             await self.stop_attempt("open interrupted")
             raise
-        finally:
-            self._first_reply = None
+        self._first_reply = None
+        if not first.done():
+            await self.stop_attempt("no reply")
+            raise LinkLost(
+                f"{self.transport.url}: no reply from the GCU within {connect_timeout:g} s")
+        failure = first.result()
         if failure is None and run == self._run and self.state is ClientState.OPEN:
             return  # the first reply made it OPEN (_handle)
         await self.stop_attempt("open failed")
