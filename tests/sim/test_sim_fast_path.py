@@ -14,7 +14,6 @@ simulator's ManualClock, so the comparison is exact.
 from __future__ import annotations
 
 import copy
-import heapq
 from collections.abc import Callable
 from dataclasses import asdict
 from typing import Any
@@ -63,42 +62,7 @@ from gcu_async.sim.motion import REL, Gimbal, Setpoint
 from helpers.protocol.strategies import seal
 from helpers.scale import scaled
 from helpers.sim.support import host_bytes
-
-
-class _Timer:
-    def __init__(self, when: float, seq: int, fn: Callable[..., None], args: tuple[Any, ...]):
-        self.when, self.seq, self.fn, self.args = when, seq, fn, args
-        self.cancelled = False
-
-    def cancel(self) -> None:
-        self.cancelled = True
-
-    def __lt__(self, other: _Timer) -> bool:
-        return (self.when, self.seq) < (other.when, other.seq)
-
-
-class Lockstep:
-    """``call_later`` on a ManualClock: a timer runs with the clock set to its time."""
-
-    def __init__(self, clock: ManualClock) -> None:
-        self.clock = clock
-        self._heap: list[_Timer] = []
-        self._seq = 0
-
-    def call_later(self, delay: float, fn: Callable[..., None], *args: Any) -> _Timer:
-        self._seq += 1
-        timer = _Timer(self.clock.now() + max(delay, 0.0), self._seq, fn, args)
-        heapq.heappush(self._heap, timer)
-        return timer
-
-    def advance(self, seconds: float) -> None:
-        end = self.clock.now() + seconds
-        while self._heap and self._heap[0].when <= end:
-            timer = heapq.heappop(self._heap)
-            if not timer.cancelled:
-                self.clock.advance(max(0.0, timer.when - self.clock.now()))
-                timer.fn(*timer.args)
-        self.clock.advance(max(0.0, end - self.clock.now()))
+from helpers.sim.timers import VirtualLoop
 
 
 class Side:
@@ -107,7 +71,7 @@ class Side:
     def __init__(self, memo: bool, stream: bool) -> None:
         self.clock = ManualClock()
         self.sim = GcuSimulator(SimulatorModel(clock=self.clock, seed=7, reply_memo=memo))
-        self.loop = Lockstep(self.clock)
+        self.loop = VirtualLoop(self.clock, clamp=True)
         self.sim.stalls._loop = lambda: self.loop  # type: ignore[method-assign,assignment,return-value]
         self.exchange = Exchange(self.sim, stream=stream)
         self.exchange._loop = lambda: self.loop  # type: ignore[method-assign,assignment,return-value]

@@ -8,11 +8,8 @@ event loop only adds its own latency on top; test_sim_cli checks that over real 
 
 from __future__ import annotations
 
-import heapq
 import math
 from collections import defaultdict
-from collections.abc import Callable
-from typing import Any
 
 from hypothesis import given
 from hypothesis import strategies as st
@@ -21,45 +18,9 @@ from gcu_async.protocol import decode_gcu_packet
 from gcu_async.sim import FaultConfig, FaultPlan, GcuSimulator
 from gcu_async.sim.exchange import Exchange
 from helpers.sim.support import host_bytes
+from helpers.sim.timers import VirtualLoop
 
 EPS = 1e-9
-
-
-class _Timer:
-    def __init__(self, when: float, seq: int, fn: Callable[..., None], args: tuple[Any, ...]):
-        self.when, self.seq, self.fn, self.args = when, seq, fn, args
-        self.cancelled = False
-
-    def cancel(self) -> None:
-        self.cancelled = True
-
-    def __lt__(self, other: _Timer) -> bool:
-        return (self.when, self.seq) < (other.when, other.seq)
-
-
-class VirtualLoop:
-    """Just enough of an event loop for :class:`Exchange`: ``call_later`` on virtual time."""
-
-    def __init__(self) -> None:
-        self.now = 0.0
-        self._heap: list[_Timer] = []
-        self._seq = 0
-
-    def call_later(self, delay: float, fn: Callable[..., None], *args: Any) -> _Timer:
-        assert delay >= 0
-        self._seq += 1
-        timer = _Timer(self.now + delay, self._seq, fn, args)
-        heapq.heappush(self._heap, timer)
-        return timer
-
-    def run_until(self, t: float) -> None:
-        while self._heap and self._heap[0].when <= t:
-            timer = heapq.heappop(self._heap)
-            if not timer.cancelled:
-                self.now = timer.when
-                timer.fn(*timer.args)
-        if t < math.inf:
-            self.now = max(self.now, t)
 
 
 def virtual_exchange(sim: GcuSimulator) -> tuple[Exchange, VirtualLoop]:
