@@ -20,6 +20,21 @@ EXAMPLES = 3
 """Examples kept per deviation by default."""
 
 
+class ByKey:
+    """Lookup of a report's deviations by key (both reports' base)."""
+
+    deviations: tuple[Deviation, ...]
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        """The keys of the deviations found, in the report's order."""
+        return tuple(d.key for d in self.deviations)
+
+    def get(self, key: str) -> Deviation | None:
+        """The deviation of ``key``, ``None`` if none was found."""
+        return next((d for d in self.deviations if d.key == key), None)
+
+
 @dataclass(frozen=True)
 class Example:
     """One packet that shows a deviation."""

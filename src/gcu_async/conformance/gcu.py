@@ -31,6 +31,7 @@ from typing import Any
 
 from gcu_async.conformance.findings import (
     EXAMPLES,
+    ByKey,
     Deviation,
     Example,
     Findings,
@@ -87,7 +88,7 @@ _AXES = tuple((GcuMainFrame._fields.index(f), GcuMainFrame._fields.index(r), f, 
 
 
 @dataclass(frozen=True)
-class GcuReport:
+class GcuReport(ByKey):
     """What :meth:`GcuConformance.report` found."""
 
     replies: int
@@ -100,13 +101,6 @@ class GcuReport:
     deviations: tuple[Deviation, ...]
     notes: tuple[str, ...]
     latency: dict[str, Any]
-
-    @property
-    def keys(self) -> tuple[str, ...]:
-        return tuple(d.key for d in self.deviations)
-
-    def get(self, key: str) -> Deviation | None:
-        return next((d for d in self.deviations if d.key == key), None)
 
     @property
     def rate(self) -> float:

@@ -29,6 +29,7 @@ from typing import Any
 
 from gcu_async.conformance.findings import (
     EXAMPLES,
+    ByKey,
     Deviation,
     Findings,
     deviation_lines,
@@ -46,7 +47,7 @@ from gcu_async.protocol.packets import HostPacket, decode_host_packet
 
 
 @dataclass(frozen=True)
-class ConformanceReport:
+class ConformanceReport(ByKey):
     """What :meth:`HostConformance.report` found."""
 
     packets: int
@@ -55,13 +56,6 @@ class ConformanceReport:
     deviations: tuple[Deviation, ...]
     notes: tuple[str, ...]
     """Measurements that are not deviations (rate, velocity check outcome)."""
-
-    @property
-    def keys(self) -> tuple[str, ...]:
-        return tuple(d.key for d in self.deviations)
-
-    def get(self, key: str) -> Deviation | None:
-        return next((d for d in self.deviations if d.key == key), None)
 
     @property
     def rate(self) -> float:
