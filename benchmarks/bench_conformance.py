@@ -37,7 +37,7 @@ from gcu_async.protocol import (
     NullCommand,
     decode_gcu_packet,
 )
-from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.protocol.host_frame_tables import ControlValues
 from gcu_async.sim import ManualClock, SimulatorModel
 
 HZ = 50.0

@@ -19,7 +19,7 @@ from gcu_async.bridge._mavlink import mavlink
 from gcu_async.client.connect import connect
 from gcu_async.protocol.commands import GazeAtCoordinates, PointingFollow, TakePhoto
 from gcu_async.protocol.enums import Mode
-from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.protocol.host_frame_tables import ControlValues
 from gcu_async.sim import GcuSimulator, SimulatorModel
 from helpers.bridge.rig import CAMERA, GCS, GIMBAL, NAN, Peer, Rig, bridge_rig
 

@@ -32,7 +32,7 @@ from gcu_async.protocol import commands as c
 from gcu_async.protocol.builder import MAKERS, Context, Submission, angles, build, rates
 from gcu_async.protocol.catalogue import BY_METHOD, CATALOGUE, CatalogueEntry, Kind, Parameter
 from gcu_async.protocol.gcu_frames import GcuMainFrame
-from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.protocol.host_frame_tables import ControlValues
 from gcu_async.protocol.units import Attitude, ImageBox, ImagePoint
 from gcu_async.session import Session
 from gcu_async.transport.memory import MemoryTransport

@@ -37,9 +37,9 @@ SCHEMA_MODULES = {
     "protocol/command_fields.py",
     "protocol/commands.py",
     "protocol/opcodes.py",
-    "protocol/gcu_frames.py",
+    "protocol/gcu_frame_tables.py",
     "protocol/headings.py",
-    "protocol/host_frames.py",
+    "protocol/host_frame_tables.py",
     "protocol/layout.py",
 }
 """Where the schema is written: its tables, and the field kinds that read them."""
@@ -161,8 +161,9 @@ def _copies(ranges: set[tuple[float, float]], root: Path = SRC) -> list[str]:
         if rel in SCHEMA_MODULES:
             continue
         lines = path.read_text(encoding="utf-8").splitlines()
+        skip = _generated_lines(path)
         for lineno, numbers in _numbers(path):
-            if any(rel == f and text in lines[lineno - 1] for f, text in ALLOWED):
+            if lineno in skip or any(rel == f and text in lines[lineno - 1] for f, text in ALLOWED):
                 continue
             present = set(numbers)
             pairs = [r for r in ranges if r[0] in present and r[1] in present
@@ -248,8 +249,8 @@ FOREIGN_LAYOUTS = {
 def frame_offsets() -> tuple[set[int], set[int]]:
     """(every field's byte offset in a packet, the frame boundaries around the sub frame)."""
     from gcu_async.protocol import layout
-    from gcu_async.protocol.gcu_frames import GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA
-    from gcu_async.protocol.host_frames import HOST_MAIN_SCHEMA, HOST_SUB_SCHEMA
+    from gcu_async.protocol.gcu_frame_tables import GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA
+    from gcu_async.protocol.host_frame_tables import HOST_MAIN_SCHEMA, HOST_SUB_SCHEMA
 
     fields = {layout.SUB_HEADER_OFFSET, layout.OPCODE_OFFSET, layout.OPCODE_OFFSET + 1}
     for schema in (GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA, HOST_MAIN_SCHEMA, HOST_SUB_SCHEMA):
@@ -286,7 +287,10 @@ def _opcode_offset_copies(root: Path = SRC) -> list[str]:
         if rel in SCHEMA_MODULES:
             continue
         lines = path.read_text(encoding="utf-8").splitlines()
+        skip = _generated_lines(path)
         for lineno, text, value, subscript in _literals(path):
+            if lineno in skip:
+                continue
             line = lines[lineno - 1]
             if text.lower().startswith("0x") and value in opcodes:
                 if not any(rel == f and t in line for f, t in OPCODE_ALLOWED):

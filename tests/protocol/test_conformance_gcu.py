@@ -24,7 +24,7 @@ from gcu_async.protocol import (
     PointingLock,
     TakePhoto,
 )
-from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.protocol.host_frame_tables import ControlValues
 from helpers.protocol import z1pro
 from helpers.protocol.strategies import frames
 from helpers.scale import scaled

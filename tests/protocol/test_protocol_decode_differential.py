@@ -30,8 +30,8 @@ from gcu_async.protocol import (
     decode_gcu_packet,
     decode_host_packet,
 )
-from gcu_async.protocol.gcu_frames import GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA
-from gcu_async.protocol.host_frames import HOST_MAIN_SCHEMA, HOST_SUB_SCHEMA
+from gcu_async.protocol.gcu_frame_tables import GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA
+from gcu_async.protocol.host_frame_tables import HOST_MAIN_SCHEMA, HOST_SUB_SCHEMA
 from gcu_async.protocol.packets import GCU_HEADER, HOST_HEADER, _check_envelope
 from helpers.protocol.strategies import gcu_packets, host_packets
 from helpers.scale import scaled

@@ -1,8 +1,9 @@
 """The frame classes are the code their tables give, and ``as_dict`` has its TypedDict's shape.
 
 The frame classes (``GcuMainFrame`` … ``HostSubFrame``) are generated from the frame tables
-by ``tools/gen_frames.py`` into the frame modules, between two marker lines; the committed
-code must be what the tables give now (edit a table, run the tool). Each frame's ``as_dict``
+(``gcu_frame_tables``, ``host_frame_tables``) by ``tools/gen_frames.py`` into the frame
+modules (``gcu_frames``, ``host_frames``), between two marker lines; the committed code must
+be what the tables give now (edit a table, run the tool). Each frame's ``as_dict``
 returns its ``TypedDict``: the dictionary has exactly the keys the TypedDict declares, so a
 type checker's view of it is the run-time one.
 """
@@ -19,8 +20,10 @@ from typing import Any
 import pytest
 from hypothesis import given
 
-from gcu_async.protocol import gcu_frames, host_frames, packets
-from gcu_async.protocol.frame_schema import FrameSchema, Value
+from gcu_async.protocol import gcu_frame_tables, gcu_frames, host_frames, packets
+from gcu_async.protocol.enums import Mode
+from gcu_async.protocol.fields import WireField
+from gcu_async.protocol.frame_schema import Code, FrameSchema, Value
 from helpers.protocol.strategies import gcu_packets, host_packets
 
 TOOL = Path(__file__).resolve().parents[2] / "tools" / "gen_frames.py"
@@ -41,36 +44,56 @@ GEN = _tool()
 @pytest.mark.parametrize("module", GEN.MODULES, ids=lambda m: m.__name__)
 def test_the_generated_frames_are_what_the_tables_give(module: ModuleType) -> None:
     assert GEN.current(module) == GEN.render(module), (
-        f"{module.__name__}: the generated frame classes are not what its tables give: run "
-        "tools/gen_frames.py")
+        f"{GEN.source_path(module).name}: the generated frame classes are not what the tables "
+        f"of {module.__name__} give: run tools/gen_frames.py")
 
 
 def test_a_table_change_changes_the_code(monkeypatch: pytest.MonkeyPatch) -> None:
     """The comparison above is not vacuous: a field added to a table (the worked example of
     docs/architecture.md, "Adding a frame field") changes the generated class, its
     ``build`` keyword, ``as_dict`` and TypedDict."""
-    schema = gcu_frames.GCU_SUB_SCHEMA
-    fields = (*schema.fields, gcu_frames.WireField("humidity_raw", "B", "pod humidity", 0, 100,
-                                                   unit="%", raw_unit="%"))  # fmt: skip
+    schema = gcu_frame_tables.GCU_SUB_SCHEMA
+    fields = (*schema.fields, WireField("humidity_raw", "B", "pod humidity", 0, 100, unit="%",
+                                        raw_unit="%"))  # fmt: skip
     views = (*schema.views, Value(name="humidity_raw", fields=("humidity_raw",)))
     bigger = FrameSchema(schema.cls_name, schema.title, schema.start, schema.size, fields,
                          views, header=schema.header)  # fmt: skip
-    monkeypatch.setattr(gcu_frames, "GCU_SUB_SCHEMA", bigger)
-    code = GEN.render(gcu_frames)
-    assert code != GEN.current(gcu_frames)
+    monkeypatch.setattr(gcu_frame_tables, "GCU_SUB_SCHEMA", bigger)
+    code = GEN.render(gcu_frame_tables)
+    assert code != GEN.current(gcu_frame_tables)
     assert '    humidity_raw: int = 0\n    """Byte 67, U8, [0, 100]: pod humidity."""' in code
     assert "        humidity_raw: int = 0,\n" in code  # the build keyword
     assert '"humidity_raw": self.humidity_raw,' in code and "    humidity_raw: int\n" in code
 
 
 def test_a_field_no_view_writes_is_refused() -> None:
-    schema = FrameSchema("T", "test frame", 5, 4, (gcu_frames.WireField("a", "h"),
-                                                   gcu_frames.WireField("b", "h")),
+    schema = FrameSchema("T", "test frame", 5, 4, (WireField("a", "h"), WireField("b", "h")),
                          (Value(name="a", fields=("a",)),))  # fmt: skip
     module = ModuleType("frames")
     module.T_SCHEMA = schema  # type: ignore[attr-defined]
     with pytest.raises(ValueError, match=r"no view writes \['b'\]"):
         GEN.render(module)
+
+
+def test_a_name_the_frame_module_does_not_import_is_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The generated code names what the frame module imports above its marker line: an enum
+    (or read function, class) a table uses and the frame module does not import is an error
+    naming it, not code that fails later."""
+    tables = ModuleType("t_tables")
+    tables.__file__ = str(tmp_path / "t_tables.py")
+    tables.T_SCHEMA = FrameSchema(  # type: ignore[attr-defined]
+        "T", "test frame", 5, 2, (WireField("mode_raw", "B"), WireField("b", "B")),
+        (Code(name="mode", fields=("mode_raw",), enum=Mode, doc="Mode."),
+         Value(name="b", fields=("b",))))  # fmt: skip
+    monkeypatch.setitem(GEN.TARGETS, tables, "t.py")
+    frames = tmp_path / "t.py"
+    frames.write_text("from gcu_async.protocol.enums import PodModel\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"t\.py does not import Mode from gcu_async\."):
+        GEN.render(tables)
+    frames.write_text("from gcu_async.protocol.enums import Mode\n", encoding="utf-8")
+    assert "        return Mode(self.mode_raw)\n" in GEN.render(tables)
 
 
 def _keys(typed: Any) -> tuple[set[str], set[str]]:

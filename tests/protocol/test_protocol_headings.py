@@ -10,9 +10,9 @@ from hypothesis import strategies as st
 
 from gcu_async.errors import FieldRangeError
 from gcu_async.protocol import GcuMainFrame, GcuPacket, decode_gcu_packet
-from gcu_async.protocol.gcu_frames import CAMERA_YAW
+from gcu_async.protocol.gcu_frame_tables import CAMERA_YAW
 from gcu_async.protocol.headings import PAST_TURN_DETAIL, SIGNED_DETAIL, HeadingRule, Reading
-from gcu_async.protocol.host_frames import AIRCRAFT_YAW
+from gcu_async.protocol.host_frame_tables import AIRCRAFT_YAW
 from gcu_async.protocol.packets import GCU_HEADER
 from gcu_async.protocol.units import wrap_degrees_180
 from helpers.protocol.strategies import seal

@@ -35,7 +35,7 @@ from gcu_async.protocol import (
     decode_packet,
 )
 from gcu_async.protocol.catalogue import CATALOGUE
-from gcu_async.protocol.gcu_frames import GCU_SUB_SCHEMA
+from gcu_async.protocol.gcu_frame_tables import GCU_SUB_SCHEMA
 from helpers.protocol.strategies import (
     COMMAND_STRATEGIES,
     VERSIONS,

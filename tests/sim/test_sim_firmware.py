@@ -12,7 +12,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from gcu_async.protocol import AngleControl, Centre, FaultFlags, GcuPacket, HostSubFrame
-from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.protocol.host_frame_tables import ControlValues
 from gcu_async.sim import (
     DEFAULT_FIRMWARE,
     FIRMWARES,

@@ -48,7 +48,7 @@ from gcu_async.bridge.commands import (
 from gcu_async.bridge.geometry import euler_from_quaternion, quaternion_from_euler
 from gcu_async.bridge.view import Control, GcuView
 from gcu_async.protocol.enums import FaultFlags, Mode
-from gcu_async.protocol.gcu_frames import GCU_MAIN_SCHEMA
+from gcu_async.protocol.gcu_frame_tables import GCU_MAIN_SCHEMA
 from gcu_async.protocol.pods import pod_name
 from gcu_async.protocol.units import wrap_degrees_180
 

@@ -52,7 +52,7 @@ from gcu_async.protocol.commands import ZOOM_RATIO_MAX
 from gcu_async.protocol.enums import PodModel
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
-from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.protocol.host_frame_tables import ControlValues
 from gcu_async.protocol.packets import DEFAULT_VERSION
 from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp
 from gcu_async.session import ControlKind, LinkHealth, Session, SessionConfig, TelemetrySample

@@ -22,7 +22,7 @@ from gcu_async.errors import LinkLost, WaitTimeout
 from gcu_async.protocol.builder import build
 from gcu_async.protocol.catalogue import BY_METHOD
 from gcu_async.protocol.fields import CAMERA_ZOOM
-from gcu_async.protocol.host_frames import ZOOM_MAX
+from gcu_async.protocol.host_frame_tables import ZOOM_MAX
 from gcu_async.protocol.units import wrap_degrees_180
 from gcu_async.session import SessionState, TelemetrySample
 from gcu_async.transport.base import LinkEvent

@@ -45,7 +45,8 @@ from gcu_async.protocol.anomalies import Anomaly
 from gcu_async.protocol.commands import COMMAND_TYPES, MODE_COMMANDS
 from gcu_async.protocol.enums import Mode, Opcode, opcode_name
 from gcu_async.protocol.feedback import Feedback
-from gcu_async.protocol.gcu_frames import CAMERA_YAW, GcuMainFrame, GcuSubFrame, UnknownSubFrame
+from gcu_async.protocol.gcu_frame_tables import CAMERA_YAW
+from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame, UnknownSubFrame
 from gcu_async.protocol.layout import OPCODE_OFFSET
 from gcu_async.protocol.packets import (
     BASE_LENGTH,

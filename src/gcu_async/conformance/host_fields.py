@@ -14,7 +14,8 @@ from gcu_async.protocol.anomalies import Anomaly
 from gcu_async.protocol.command_decode import AnomalousCommand, UnknownCommand
 from gcu_async.protocol.enums import Opcode, opcode_name
 from gcu_async.protocol.gcu_frames import UnknownSubFrame
-from gcu_async.protocol.host_frames import AIRCRAFT_YAW, HostSubFrame
+from gcu_async.protocol.host_frame_tables import AIRCRAFT_YAW
+from gcu_async.protocol.host_frames import HostSubFrame
 from gcu_async.protocol.packets import HostPacket, version_anomalies
 
 _YAW = AIRCRAFT_YAW.field

@@ -100,7 +100,8 @@ from gcu_async.protocol.enums import (
 from gcu_async.protocol.feedback import Feedback, failure_status, read_status
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame, UnknownSubFrame
 from gcu_async.protocol.gpstime import gps_to_utc, utc_to_gps
-from gcu_async.protocol.host_frames import ControlValues, HostMainFrame, HostSubFrame
+from gcu_async.protocol.host_frame_tables import ControlValues
+from gcu_async.protocol.host_frames import HostMainFrame, HostSubFrame
 from gcu_async.protocol.packets import (
     GCU_HEADER,
     HOST_HEADER,

@@ -20,14 +20,13 @@ from gcu_async._checks import check_instance, check_int, check_real
 from gcu_async.protocol.enums import SubFrameRequest
 from gcu_async.protocol.fields import WireField
 from gcu_async.protocol.gpstime import utc_to_gps
-from gcu_async.protocol.host_frames import (
+from gcu_async.protocol.host_frame_tables import (
     GNSS_WEEK_MAX,
     HOST_MAIN_SCHEMA,
     HOST_SUB_SCHEMA,
     ControlValues,
-    HostMainFrame,
-    HostSubFrame,
 )
+from gcu_async.protocol.host_frames import HostMainFrame, HostSubFrame
 from gcu_async.protocol.units import (
     YAW_INPUT_RANGE,
     Attitude,

@@ -37,7 +37,7 @@ from gcu_async.protocol.command_base import Command
 from gcu_async.protocol.command_fields import ZOOM_RATIO, Point, RealRange
 from gcu_async.protocol.command_schema import Parameter
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
-from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.protocol.host_frame_tables import ControlValues
 from gcu_async.protocol.units import Attitude, ImageBox, ImagePoint, check_sequence
 
 __all__ = ["Context", "Submission", "angles", "build", "check_sequence", "rates"]

@@ -48,7 +48,7 @@ from gcu_async.protocol.command_schema import (
 )
 from gcu_async.protocol.enums import CameraMask, Mode, NightVisionMode, OsdCoordinateSource
 from gcu_async.protocol.fields import LATITUDE_RANGE, LONGITUDE_RANGE
-from gcu_async.protocol.host_frames import CONTROL_ANGLE_RAW, CONTROL_RATE_RAW
+from gcu_async.protocol.host_frame_tables import CONTROL_ANGLE_RAW, CONTROL_RATE_RAW
 from gcu_async.protocol.opcodes import Opcode
 from gcu_async.protocol.units import YAW_INPUT_RANGE, ImageBox, ImagePoint
 

@@ -31,9 +31,8 @@ from gcu_async.protocol.crc import crc16_xmodem
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.fields import WIRE_RANGES
 from gcu_async.protocol.frame_schema import FrameSchema
+from gcu_async.protocol.gcu_frame_tables import GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA
 from gcu_async.protocol.gcu_frames import (
-    GCU_MAIN_SCHEMA,
-    GCU_SUB_SCHEMA,
     GcuMainFrame,
     GcuMainFrameDict,
     GcuSubFrame,
@@ -41,10 +40,8 @@ from gcu_async.protocol.gcu_frames import (
     UnknownSubFrame,
     UnknownSubFrameDict,
 )
+from gcu_async.protocol.host_frame_tables import HOST_MAIN_SCHEMA, HOST_SUB_SCHEMA, SUB_FRAME_HEADER
 from gcu_async.protocol.host_frames import (
-    HOST_MAIN_SCHEMA,
-    HOST_SUB_SCHEMA,
-    SUB_FRAME_HEADER,
     HostMainFrame,
     HostMainFrameDict,
     HostSubFrame,

@@ -24,7 +24,7 @@ from gcu_async._checks import check_int
 from gcu_async.protocol.command_base import Command
 from gcu_async.protocol.commands import COMMAND_TYPES, Track
 from gcu_async.protocol.enums import Mode, Opcode, opcode_name
-from gcu_async.protocol.host_frames import CONTROL_ANGLE_RAW, CONTROL_RATE_RAW, ControlValues
+from gcu_async.protocol.host_frame_tables import CONTROL_ANGLE_RAW, CONTROL_RATE_RAW, ControlValues
 from gcu_async.session.tickets import Ticket, TicketState
 
 
@@ -54,8 +54,8 @@ MODE_CHANGING = frozenset(
 
 def check_values(values: ControlValues, kind: ControlKind | None, opcode: int | None) -> None:
     """Control values must fit the wire and, when the mode (``opcode``) is known, its
-    ``kind``: angles within ±:data:`~gcu_async.protocol.host_frames.CONTROL_ANGLE_RAW`
-    (0.01°), rates within ±:data:`~gcu_async.protocol.host_frames.CONTROL_RATE_RAW`
+    ``kind``: angles within ±:data:`~gcu_async.protocol.host_frame_tables.CONTROL_ANGLE_RAW`
+    (0.01°), rates within ±:data:`~gcu_async.protocol.host_frame_tables.CONTROL_RATE_RAW`
     (0.1 °/s ÷ zoom); ValueError/TypeError naming the field otherwise."""
     ControlValues.check(values)
     limit = CONTROL_RATE_RAW if kind is ControlKind.RATES else CONTROL_ANGLE_RAW

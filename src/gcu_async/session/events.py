@@ -7,7 +7,7 @@ from typing import NamedTuple
 from gcu_async.protocol.command_base import Command
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
-from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.protocol.host_frame_tables import ControlValues
 from gcu_async.session.restart import StateChange
 from gcu_async.session.tickets import Ticket
 

@@ -37,8 +37,9 @@ from typing import NamedTuple
 from gcu_async.protocol.command_base import Command
 from gcu_async.protocol.commands import Ranging, ZoomTo
 from gcu_async.protocol.enums import CameraFlags, Mode, Opcode, PodStatus
-from gcu_async.protocol.gcu_frames import GCU_SUB_SCHEMA, GcuMainFrame, GcuSubFrame
-from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.protocol.gcu_frame_tables import GCU_SUB_SCHEMA
+from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
+from gcu_async.protocol.host_frame_tables import ControlValues
 from gcu_async.session.control import KIND, MODE_CHANGING, REPORTED, ControlState
 from gcu_async.session.tickets import TicketState
 

@@ -40,7 +40,8 @@ from gcu_async.protocol.deframer import Deframer
 from gcu_async.protocol.enums import CameraFlags, Opcode, opcode_name
 from gcu_async.protocol.feedback import Feedback
 from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
-from gcu_async.protocol.host_frames import ControlValues, HostMainFrame, HostSubFrame
+from gcu_async.protocol.host_frame_tables import ControlValues
+from gcu_async.protocol.host_frames import HostMainFrame, HostSubFrame
 from gcu_async.protocol.packets import SUPPORTED_VERSIONS, GcuPacket, HostPacket, decode_gcu_packet
 from gcu_async.session.config import SessionConfig, SessionOptions
 from gcu_async.session.control import KIND, ControlKind, ControlState, check_values

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from gcu_async.protocol.host_frames import AIRCRAFT_YAW, HostMainFrame, HostSubFrame
+from gcu_async.protocol.host_frame_tables import AIRCRAFT_YAW
+from gcu_async.protocol.host_frames import HostMainFrame, HostSubFrame
 from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp
 
 DEFAULT_HEIGHT_M = 100.0

@@ -31,7 +31,7 @@ import enum
 from dataclasses import dataclass, field
 
 from gcu_async.protocol.enums import Mode
-from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.protocol.host_frame_tables import ControlValues
 from gcu_async.protocol.units import (
     Attitude,
     GeoPosition,

@@ -4,13 +4,8 @@ from __future__ import annotations
 
 from gcu_async.protocol.enums import PIP_MODE_MASK, FaultFlags, Mode, PodStatus
 from gcu_async.protocol.fields import WireField
-from gcu_async.protocol.gcu_frames import (
-    CAMERA_YAW,
-    GCU_MAIN_SCHEMA,
-    GCU_SUB_SCHEMA,
-    GcuMainFrame,
-    GcuSubFrame,
-)
+from gcu_async.protocol.gcu_frame_tables import CAMERA_YAW, GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA
+from gcu_async.protocol.gcu_frames import GcuMainFrame, GcuSubFrame
 from gcu_async.sim.firmware import Firmware
 from gcu_async.sim.profiles import PodProfile
 from gcu_async.sim.state import SimState

@@ -31,8 +31,8 @@ from gcu_async.protocol import (
     decode_command,
 )
 from gcu_async.protocol.frame_schema import FrameSchema
-from gcu_async.protocol.gcu_frames import GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA
-from gcu_async.protocol.host_frames import HOST_MAIN_SCHEMA, HOST_SUB_SCHEMA
+from gcu_async.protocol.gcu_frame_tables import GCU_MAIN_SCHEMA, GCU_SUB_SCHEMA
+from gcu_async.protocol.host_frame_tables import HOST_MAIN_SCHEMA, HOST_SUB_SCHEMA
 
 S16 = st.integers(-(2**15), 2**15 - 1)
 S32 = st.integers(-(2**31), 2**31 - 1)

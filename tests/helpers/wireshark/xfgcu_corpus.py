@@ -77,7 +77,7 @@ from gcu_async.protocol import (
 from gcu_async.protocol.builder import build
 from gcu_async.protocol.catalogue import CATALOGUE
 from gcu_async.protocol.fields import WIRE_RANGES
-from gcu_async.protocol.host_frames import ControlValues
+from gcu_async.protocol.host_frame_tables import ControlValues
 from gcu_async.wireshark.tables import WireParam, rows
 from helpers.protocol.catalogue_samples import required_samples
 from helpers.protocol.strategies import seal
