@@ -135,6 +135,7 @@ TIERS: dict[str, str | tuple[str, ...]] = {
     "test_example_web_security.py": "realtime",
     "test_fault_proxy.py": "realtime",
     "test_import_graph.py": FAST,
+    "test_module_size.py": FAST,
     "test_no_exec.py": FAST,
     "test_mavlink_mapping.py": FAST,
     "test_netns_lan.py": "netns",
