@@ -19,7 +19,7 @@ import pytest
 
 from gcu_async import connect
 from gcu_async.protocol import gps_to_utc
-from gcu_async.protocol.host_frame_tables import MS_PER_WEEK
+from gcu_async.protocol.gpstime import MS_PER_WEEK
 from gcu_async.sim import GcuSimulator
 
 TIMEOUT = 0.3

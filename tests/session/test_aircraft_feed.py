@@ -24,7 +24,7 @@ from gcu_async.protocol import (
     HostSubFrame,
     decode_host_packet,
 )
-from gcu_async.protocol.host_frame_tables import MS_PER_WEEK
+from gcu_async.protocol.gpstime import MS_PER_WEEK
 from gcu_async.session import Session, TicketState
 from helpers.session.vtime import Rig
 

@@ -24,11 +24,9 @@ from gcu_async.protocol.fields import (
     WireField,
 )
 from gcu_async.protocol.frame_schema import Bit, Entry, Flags, FrameSchema, Group, Method, Value
-from gcu_async.protocol.gpstime import MS_PER_WEEK as MS_PER_WEEK  # re-exported
-from gcu_async.protocol.gpstime import gps_to_utc, utc_to_gps
+from gcu_async.protocol.gpstime import MS_PER_WEEK, gps_to_utc, utc_to_gps
 from gcu_async.protocol.headings import HeadingRule, heading
-from gcu_async.protocol.layout import MAIN_SIZE, MAIN_START, SUB_SIZE, SUB_START
-from gcu_async.protocol.layout import SUB_FRAME_HEADER as SUB_FRAME_HEADER  # re-exported
+from gcu_async.protocol.layout import MAIN_SIZE, MAIN_START, SUB_FRAME_HEADER, SUB_SIZE, SUB_START
 from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp, quantize
 
 D001 = "0.01 deg"

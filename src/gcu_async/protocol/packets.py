@@ -40,7 +40,7 @@ from gcu_async.protocol.gcu_frames import (
     UnknownSubFrame,
     UnknownSubFrameDict,
 )
-from gcu_async.protocol.host_frame_tables import HOST_MAIN_SCHEMA, HOST_SUB_SCHEMA, SUB_FRAME_HEADER
+from gcu_async.protocol.host_frame_tables import HOST_MAIN_SCHEMA, HOST_SUB_SCHEMA
 from gcu_async.protocol.host_frames import (
     HostMainFrame,
     HostMainFrameDict,
@@ -51,6 +51,7 @@ from gcu_async.protocol.layout import (
     CRC_SIZE,
     MAIN_START,
     OPCODE_OFFSET,
+    SUB_FRAME_HEADER,
     SUB_HEADER_OFFSET,
     SUB_SIZE,
     SUB_START,

@@ -32,7 +32,8 @@ from typing import Any
 from gcu_async._checks import type_error
 from gcu_async.protocol.aircraft import AircraftState
 from gcu_async.protocol.enums import SubFrameRequest
-from gcu_async.protocol.host_frame_tables import GNSS_WEEK_MAX, MS_PER_WEEK, ControlValues
+from gcu_async.protocol.gpstime import MS_PER_WEEK
+from gcu_async.protocol.host_frame_tables import GNSS_WEEK_MAX, ControlValues
 from gcu_async.protocol.host_frames import HostMainFrame, HostSubFrame
 
 log = logging.getLogger("gcu_async.session")
