@@ -125,6 +125,7 @@ class Rig:
         bound, the host loop is busy for this long from just before it arrives."""
         self.session = session
         self.stalls = sorted(stalls or [])
+        self._longest_stall = max((stop - start for start, stop in self.stalls), default=0.0)
         self.earliest = earliest
         self.stall_on_late_reply = stall_on_late_reply
         self._rx_bound = -math.inf
@@ -146,6 +147,10 @@ class Rig:
         self.violations: list[str] = []
         self.wakeup = math.inf
         self.polls = 0
+        self._window_i = self._window_j = self._window_best = 0
+        self._executed_key: Callable[[Command], object] | None = None
+        self._executed_seen = 0
+        self._executed_by: dict[object, list[ExecutionRecord]] = {}
 
     @property
     def now(self) -> float:
@@ -170,16 +175,23 @@ class Rig:
         return ticket
 
     def _stall_end(self, t: float) -> float:
-        """``t``, or the end of the host stall(s) it falls into."""
-        moved = True
-        while moved:
-            moved = False
-            for start, stop in self.stalls:
-                if start > t:
+        """``t``, or the end of the host stall(s) it falls into: the first instant from ``t``
+        on that no stall covers. Only stalls that start within the longest stall's length
+        before ``t`` can cover it (the list grows with the run: no scan from its start)."""
+        stalls = self.stalls
+        if not stalls or t < stalls[0][0]:
+            return t
+        longest = self._longest_stall
+        while True:
+            end = t
+            for i in range(bisect.bisect_right(stalls, (t, math.inf)) - 1, -1, -1):
+                start, stop = stalls[i]
+                if start < t - longest - 1e-9:  # ends before t (the margin: rounding)
                     break
-                if t < stop:
-                    t, moved = stop, True
-        return t
+                end = max(end, stop)
+            if end == t:
+                return t
+            t = end
 
     def run_until(self, end: float) -> None:
         heap = self._heap
@@ -230,7 +242,7 @@ class Rig:
             packet = decode_host_packet(data)
             mode = self.session.control_mode if packet.main.control_valid else None
             self.sent.append((now, packet, mode))
-            self._transmit(self.requests, "gcu", data, packet, (now, mode))
+            self._transmit(self.requests, "gcu", data, packet, (now, mode, data, packet))
         self._drain()
         self._reschedule()
         after = self.session.next_wakeup(now)
@@ -258,17 +270,21 @@ class Rig:
                 arrival = base + delay
                 if (kind == "host" and self.stall_on_late_reply and self.bound
                         and delay >= self.bound * 0.99):  # fmt: skip
-                    bisect.insort(self.stalls, (arrival - 1e-6,
-                                                arrival + self.stall_on_late_reply))  # fmt: skip
+                    stall = (arrival - 1e-6, arrival + self.stall_on_late_reply)
+                    bisect.insort(self.stalls, stall)
+                    self._longest_stall = max(self._longest_stall, stall[1] - stall[0])
                 heapq.heappush(self._heap, (arrival, next(self._seq), kind,
                                             (payload, meta, arrival)))  # fmt: skip
 
-    def _gcu_receives(self, item: tuple[bytes, tuple[float, int | None], float]) -> None:
-        data, meta, _ = item
+    def _gcu_receives(self, item: tuple[bytes, tuple[float, int | None, bytes, HostPacket],
+                                        float]) -> None:  # fmt: skip
+        data, (t, mode, sent, sent_packet), _ = item
+        meta = (t, mode)
         model = self.model
         deframer = Deframer.for_host_packets()
         for raw in model.split(data, deframer):
-            packet = decode_host_packet(raw)
+            # decoded once when sent: only a corrupted copy that still passes the CRC differs
+            packet = sent_packet if raw == sent else decode_host_packet(raw)
             mode_before = model.state.mode
             reply = model.handle_bytes(raw)
             self._check_control(packet, mode_before, meta)
@@ -288,26 +304,40 @@ class Rig:
 
     # -- checks ----------------------------------------------------------------------------
     def max_in_window(self) -> int:
-        """Most host packets sent within any window of WINDOW seconds."""
-        times = [t for t, _, _ in self.sent]
-        best, j = 0, 0
-        for i, t in enumerate(times):
-            while times[j] + WINDOW <= t:  # the pacer's own arithmetic
+        """Most host packets sent within any window of WINDOW seconds. ``sent`` only grows:
+        each call carries on from where the last one stopped (a contract run checks after
+        every step; from the start each time it would be quadratic)."""
+        sent, j, best = self.sent, self._window_j, self._window_best
+        for i in range(self._window_i, len(sent)):
+            t = sent[i][0]
+            while sent[j][0] + WINDOW <= t:  # the pacer's own arithmetic
                 j += 1
             best = max(best, i - j + 1)
+        self._window_i, self._window_j, self._window_best = len(sent), j, best
         return best
+
+    def _executed(self, key: Callable[[Command], object]) -> dict[object, list[ExecutionRecord]]:
+        """The executions so far by ``key`` of their command, each new one checked to be its
+        key's first (kept between calls with the same ``key``, as :meth:`max_in_window`)."""
+        log = self.executions
+        if key is not self._executed_key or len(log) < self._executed_seen:
+            self._executed_key, self._executed_seen, self._executed_by = key, 0, {}
+        by = self._executed_by
+        for e in log[self._executed_seen :]:
+            k = key(e.command)
+            runs = by.setdefault(k, [])
+            runs.append(e)
+            assert len(runs) == 1, f"executed {len(runs)} times: {k} at {[r.time for r in runs]}"
+        self._executed_seen = len(log)
+        return by
 
     def check(self, identity: Callable[[Command], object] | None = None) -> None:
         """Assert the contract over everything that happened so far."""
         assert not self.violations, self.violations[:5]
         limit = math.floor(self.session.config.rate_hz) + 1
         assert self.max_in_window() <= limit, (self.max_in_window(), limit)
-        key = identity or (lambda c: c)
-        executed: dict[object, list[ExecutionRecord]] = {}
-        for e in self.executions:
-            executed.setdefault(key(e.command), []).append(e)
-        for k, runs in executed.items():
-            assert len(runs) == 1, f"executed {len(runs)} times: {k} at {[r.time for r in runs]}"
+        key = identity or _itself
+        executed = self._executed(key)
         for t in self.tickets:
             runs = executed.get(key(t.command), [])
             if t.state is TicketState.SUCCEEDED:
@@ -337,6 +367,10 @@ class Rig:
 
     def pending(self) -> bool:
         return self.session.pending > 0 and self.session.state is SessionState.UP
+
+
+def _itself(command: Command) -> object:
+    return command
 
 
 def tagged_commands(kind: str, start: int = 0) -> Iterator[Command]:
