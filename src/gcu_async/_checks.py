@@ -10,7 +10,9 @@ allowed and the value given.
 
 from __future__ import annotations
 
+import difflib
 import math
+from collections.abc import Iterable
 from enum import Enum
 from typing import TypeVar
 
@@ -18,6 +20,13 @@ from gcu_async.errors import FieldRangeError
 
 E = TypeVar("E", bound=Enum)
 T = TypeVar("T")
+
+
+def did_you_mean(given: str, names: Iterable[str], n: int = 1) -> str:
+    """The one wording of a suggestion for a misspelt name: ``"did you mean 'zoom-to'?"``
+    (up to ``n`` of the closest ``names``, joined by "or"), or ``""`` if none is close."""
+    close = difflib.get_close_matches(given, list(names), n=n)
+    return f"did you mean {' or '.join(map(repr, close))}?" if close else ""
 
 
 def type_error(field: str, expected: str, value: object) -> TypeError:

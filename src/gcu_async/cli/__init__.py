@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import difflib
 import re
 import sys
 from collections.abc import Sequence
 from typing import NoReturn
 
 from gcu_async import __version__
+from gcu_async._checks import did_you_mean
 from gcu_async.cli import decode, demo, mavlink_bridge, monitor, send, sim, wireshark
 from gcu_async.cli._exit import EXIT_USAGE
 from gcu_async.cli._logging import VERBOSE_HELP, configure_logging
@@ -27,9 +27,9 @@ class OneLineParser(CliParser):
         if match and self._subparsers is not None:
             names = [n for a in self._subparsers._group_actions
                      for n in getattr(a, "choices", None) or ()]  # fmt: skip
-            close = difflib.get_close_matches(match["given"], names, n=1)
-            if close:
-                message = f"unknown command {match['given']!r}: did you mean {close[0]!r}?"
+            hint = did_you_mean(match["given"], names)
+            if hint:
+                message = f"unknown command {match['given']!r}: {hint}"
         self.exit(EXIT_USAGE, f"{self.prog}: {message} (see {self.prog} --help)\n")
 
 

@@ -12,7 +12,6 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
-import difflib
 import json
 import sys
 import textwrap
@@ -23,6 +22,7 @@ from functools import cache
 from pathlib import Path
 from typing import Any, NoReturn
 
+from gcu_async._checks import did_you_mean
 from gcu_async.capture import CaptureUnavailable, PacketCapture, as_capture
 from gcu_async.cli._exit import (
     EXIT_FAILED,
@@ -240,8 +240,8 @@ def _unknown(name: str) -> str:
     """The message for an unknown command, one short line: up to three close names
     (``zoom_to`` → ``zoom-to``) and where the whole list is."""
     spelt = name.replace("_", "-").lower()
-    close = [spelt] if spelt in COMMANDS else difflib.get_close_matches(spelt, COMMANDS, n=3)
-    hint = f"did you mean {' or '.join(map(repr, close))}? " if close else ""
+    hint = did_you_mean(spelt, [spelt] if spelt in COMMANDS else COMMANDS, n=3)
+    hint += " " if hint else ""
     return f"unknown command {name!r}; {hint}{PROG} --help lists all {len(COMMANDS)}"
 
 

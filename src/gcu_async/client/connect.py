@@ -10,14 +10,13 @@ closest name.
 
 from __future__ import annotations
 
-import difflib
 import inspect
 import os
 import sys
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, TypedDict
 
-from gcu_async._checks import type_error
+from gcu_async._checks import did_you_mean, type_error
 from gcu_async.capture.writer import PacketCapture
 from gcu_async.client.client import GcuClient
 from gcu_async.transport.options import TransportOptions
@@ -100,8 +99,8 @@ def connect(url: str, **options: Unpack[ConnectOptions]) -> GcuClient:
 
 def _unknown(name: str, scheme: str, client: list[str], transport: list[str]) -> str:
     """The error of an option ``connect`` does not take: the closest name, then every one."""
-    close = difflib.get_close_matches(name, client + transport, n=1)
-    hint = f" did you mean {close[0]!r}?" if close else ""
+    hint = did_you_mean(name, client + transport)
+    hint = f" {hint}" if hint else ""
     return (f"option: {name!r} is not an option of the client or of a {scheme} "
             f"transport;{hint} (client and session: {', '.join(client)}; {scheme} "
             f"transport: {', '.join(transport)})")
