@@ -20,17 +20,7 @@ import pytest
 from hypothesis import HealthCheck, settings
 
 from helpers.scale import FULL
-from helpers.tiers import (
-    ALONE,
-    DEFAULT,
-    FAST,
-    HEAVY,
-    KINDS,
-    MARKERS,
-    TIERS,
-    kinds_of,
-    start_order,
-)
+from helpers.tiers import ALONE, DEFAULT, FAST, HEAVY, KINDS, MARKERS, TIERS, kinds_of
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -62,7 +52,6 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
         for name, wanted in ((kind, True), (ALONE, alone), (HEAVY, heavy)):
             if wanted and item.get_closest_marker(name) is None:
                 item.add_marker(name)
-    items.sort(key=lambda item: start_order(item.path.name))  # stable: the rest keep order
 
 
 def pytest_collection_finish(session: pytest.Session) -> None:

@@ -221,21 +221,3 @@ of its own (a subprocess test in a fast file, say) keeps that kind."""
 
 def kinds_of(entry: str | tuple[str, ...]) -> tuple[str, ...]:
     return (entry,) if isinstance(entry, str) else entry
-
-
-FIRST = (
-    "test_bridge_outage_matrix.py",
-    "test_client_outage_matrix.py",
-    "test_session_contract.py",
-    "test_sitl_bridge.py",
-    "test_sitl_ardupilot.py",
-)
-"""Files whose tests each take minutes (outages of 30 s and 120 s, the 100,000-command
-contract, an ArduPilot boot): collected first, in this order, so that pytest-xdist starts them
-on its workers at once instead of leaving one to run alone at the end of the parallel phase.
-The order of every other test is kept."""
-
-
-def start_order(name: str) -> int:
-    """Where a test of the file ``name`` goes in the run: by :data:`FIRST`, then the rest."""
-    return FIRST.index(name) if name in FIRST else len(FIRST)
