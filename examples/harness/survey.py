@@ -30,10 +30,12 @@ from typing import TypeVar
 
 from gcu_async import (
     CommandFailed,
+    CommandLinkLost,
     CommandTimeout,
     GcuClient,
     LinkLost,
     Mode,
+    Outcome,
     UnsupportedCommandError,
     connect,
 )
@@ -64,6 +66,9 @@ class SurveyReport:
     """Times the link was lost and the survey waited for it."""
     retries: int = 0
     """Commands repeated after a timeout."""
+    repeated_unknown: int = 0
+    """Times the link was lost while a command was on the wire (outcome unknown): it may have
+    run, and the survey runs it again, so a photo more than asked is possible."""
     completed: bool = False
     notes: list[str] = field(default_factory=list)
 
@@ -131,6 +136,8 @@ class _Steps:
                 self.report.retries += 1
             except LinkLost as exc:
                 self.report.link_losses += 1
+                if isinstance(exc, CommandLinkLost) and exc.outcome is Outcome.UNKNOWN:
+                    self.report.repeated_unknown += 1
                 log.warning("%s: link lost (%s); waiting for the GCU", name, exc)
                 if not await wait_for_link(self.gcu, self.reconnect_timeout):
                     raise SurveyAborted(

@@ -103,7 +103,9 @@ async def test_survey_waits_out_a_short_outage(gcu_sim: SimHandle, gcu_client: G
     assert report.completed, report.notes
     assert report.link_losses >= 1
     assert report.photos_taken == PHOTOS
-    assert model.executions[Opcode.TAKE_PHOTO] == PHOTOS
+    # a photo on the wire when the GCU fell silent may have been taken before it was repeated
+    extra = report.retries + report.repeated_unknown
+    assert PHOTOS <= model.executions[Opcode.TAKE_PHOTO] <= PHOTOS + extra, report
     assert gcu_client.link.up
 
 
