@@ -3,6 +3,7 @@ its path, the test plays the GCU on the controller fd."""
 
 from __future__ import annotations
 
+import array
 import asyncio
 import errno
 import os
@@ -31,6 +32,7 @@ _PTY_ONLY = "the serial transport is tested on a pseudo-terminal: POSIX only (no
 if sys.platform == "win32" or not hasattr(os, "openpty"):
     pytest.skip(_PTY_ONLY, allow_module_level=True)
 termios = pytest.importorskip("termios", reason=_PTY_ONLY)
+fcntl = pytest.importorskip("fcntl", reason=_PTY_ONLY)
 tty = pytest.importorskip("tty", reason=_PTY_ONLY)
 
 
@@ -174,10 +176,25 @@ async def test_close_does_not_hang_when_peer_never_reads(
 # -- reading everything per event, backpressure, reset ------------------------------------
 
 
-def block_loop(seconds: float) -> None:
-    """Keep the event loop from running for ``seconds``, as a slow handler would: on
-    purpose, so that input piles up in the kernel meanwhile."""
-    time.sleep(seconds)
+TTY_HOLDS = 4095
+"""The most input a tty's line discipline holds for its reader (N_TTY_BUF_SIZE - 1); more waits
+in the pty's buffers and follows as the reader takes it."""
+
+
+def block_loop(pty: Pty, pending: int, least: float = 0.05, limit: float = 2.0) -> None:
+    """Keep the event loop from running, as a slow handler would, for ``least`` seconds and
+    until the tty holds the input written (``FIONREAD``: ``pending`` bytes, or as much as it
+    can hold; at most ``limit`` seconds): on purpose, so that input piles up in the kernel
+    meanwhile. Not a fixed time alone: on a loaded host the tty layer can take longer than
+    any to pass the bytes on."""
+    start = time.monotonic()
+    count = array.array("i", [0])
+    while time.monotonic() < start + limit:
+        fcntl.ioctl(pty.follower, termios.FIONREAD, count)
+        if count[0] >= min(pending, TTY_HOLDS) and time.monotonic() >= start + least:
+            return
+        time.sleep(0.002)
+    raise AssertionError(f"the tty held {count[0]} of {pending} bytes after {limit:g} s")
 
 
 async def one_readiness_event() -> None:
@@ -233,7 +250,7 @@ async def test_input_that_arrived_while_blocked_comes_in_one_event(pty: Pty) -> 
         rec = Recorder(t)
         payload = fill_input(pty)
         assert len(payload) > 3 * 4096
-        block_loop(0.05)  # the loop is blocked while it all arrives
+        block_loop(pty, len(payload))  # the loop is blocked while it all arrives
         await one_readiness_event()
         assert rec.chunks == [payload]
         assert t.bytes_received == len(payload)
@@ -247,8 +264,9 @@ async def test_read_cap_leaves_the_rest_for_the_next_event(
     monkeypatch.setattr(serial_module, "MAX_READ_PER_EVENT", 5000)
     async with SerialTransport(pty.path) as t:
         rec = Recorder(t)
-        assert len(fill_input(pty)) > 15_000
-        block_loop(0.05)
+        filled = len(fill_input(pty))
+        assert filled > 15_000
+        block_loop(pty, filled)
         await one_readiness_event()
         sizes = [len(c) for c in rec.chunks]
         for _ in range(2):  # the select() that resumed us queued the next event: run it
@@ -356,7 +374,7 @@ async def test_read_error_in_the_middle_of_draining(
 
     monkeypatch.setattr(serial_module, "os", FailingOs())
     pty.write(b"\x5a" * 10_000)
-    block_loop(0.05)
+    block_loop(pty, 10_000)
     await rec.wait_events(1)
     monkeypatch.undo()
     # pyserial-asyncio's read (1024 bytes), then our first (a tty hands out <= 4095)
