@@ -621,23 +621,25 @@ def imported_names(path: Path) -> dict[str, Any]:
     return names
 
 
-def _begin(module: ModuleType) -> str:
-    return BEGIN.format(Path(str(module.__file__)).name)
+def _span(module: ModuleType, text: str) -> tuple[int, int]:
+    """Where the generated code of ``module``'s frame module, ``text``, starts and ends: after
+    the first marker line (it names the table module's file), before the last."""
+    begin = BEGIN.format(Path(str(module.__file__)).name)
+    return text.index(begin) + len(begin) + 1, text.index(END)
 
 
 def current(module: ModuleType) -> str:
     """What sits between the marker lines of the frame module of ``module`` now."""
     text = source_path(module).read_text(encoding="utf-8")
-    start = text.index(_begin(module)) + len(_begin(module)) + 1
-    return text[start : text.index(END)]
+    start, end = _span(module, text)
+    return text[start:end]
 
 
 def write(module: ModuleType) -> bool:
     """Rewrite the generated code of ``module``'s frame module; True if it changed."""
     path = source_path(module)
     text = path.read_text(encoding="utf-8")
-    start = text.index(_begin(module)) + len(_begin(module)) + 1
-    end = text.index(END)
+    start, end = _span(module, text)
     new = text[:start] + render(module) + text[end:]
     if new == text:
         return False

@@ -36,6 +36,8 @@ ANGLE_RANGE = (-18000, 18000)
 camera's relative angles and pitch, the aircraft's roll and the control values."""
 TILT_RANGE = (-9000, 9000)
 """Up to a quarter turn either way in 0.01° steps: the camera's roll, the aircraft's pitch."""
+CENTIDEGREE = "0.01 deg"
+"""The raw unit of every angle field (one step of :data:`ANGLE_RANGE`, a heading's, ...)."""
 
 
 @dataclass(frozen=True, slots=True)

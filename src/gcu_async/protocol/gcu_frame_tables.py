@@ -23,6 +23,7 @@ from gcu_async.protocol.enums import (
 from gcu_async.protocol.fields import (
     ANGLE_RANGE,
     CAMERA_ZOOM,
+    CENTIDEGREE,
     LATITUDE_RANGE,
     LONGITUDE_RANGE,
     TILT_RANGE,
@@ -34,7 +35,6 @@ from gcu_async.protocol.layout import MAIN_SIZE, MAIN_START, SUB_FRAME_HEADER, S
 from gcu_async.protocol.pods import pod_name
 from gcu_async.protocol.units import Attitude, AxisAngles, GeoPosition, check_tuple, quantize
 
-D001 = "0.01 deg"
 CAMERA_YAW = HeadingRule(heading("yaw_raw", "camera absolute yaw (a heading)"))
 """The camera's absolute yaw, and how any raw value reads as a heading
 (:mod:`~gcu_async.protocol.headings`: the Z-1Pro sends a signed S16)."""
@@ -111,9 +111,9 @@ GCU_MAIN_SCHEMA = FrameSchema("GcuMainFrame", "GCU main frame", MAIN_START, MAIN
     *(WireField(f"miss_{a}", "h", f"{doc} miss distance, image centre = 0", -1000, 1000)
       for a, doc in (("x", "horizontal (right +)"), ("y", "vertical (down +)"))),
     *(WireField(f"relative_{a}_raw", "h", f"camera {a.upper()} angle relative to the aircraft",
-                *ANGLE_RANGE, 100, "deg", D001, high_open=True) for a in _XYZ),
-    WireField("roll_raw", "h", "camera absolute roll", *TILT_RANGE, 100, "deg", D001),
-    WireField("pitch_raw", "h", "camera absolute pitch", *ANGLE_RANGE, 100, "deg", D001,
+                *ANGLE_RANGE, 100, "deg", CENTIDEGREE, high_open=True) for a in _XYZ),
+    WireField("roll_raw", "h", "camera absolute roll", *TILT_RANGE, 100, "deg", CENTIDEGREE),
+    WireField("pitch_raw", "h", "camera absolute pitch", *ANGLE_RANGE, 100, "deg", CENTIDEGREE,
               high_open=True),
     CAMERA_YAW.field,
     *(WireField(f"rate_{a}_raw", "h", f"camera {a.upper()}-axis absolute angular rate",

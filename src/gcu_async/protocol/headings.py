@@ -22,7 +22,7 @@ import enum
 from dataclasses import dataclass
 from functools import cached_property
 
-from gcu_async.protocol.fields import WIRE_RANGES, WireField
+from gcu_async.protocol.fields import CENTIDEGREE, WIRE_RANGES, WireField
 
 TURN = 36000
 """A full turn in raw heading steps (0.01°)."""
@@ -30,7 +30,7 @@ TURN = 36000
 
 def heading(name: str, doc: str) -> WireField:
     """A heading field as V2.0.6 gives it: U16, 0.01° steps, from 0 up to a full turn."""
-    return WireField(name, "H", doc, 0, TURN, 100, "deg", "0.01 deg", high_open=True)
+    return WireField(name, "H", doc, 0, TURN, 100, "deg", CENTIDEGREE, high_open=True)
 
 
 class Reading(enum.Enum):

@@ -18,6 +18,7 @@ from gcu_async.protocol.enums import HostFlags, SubFrameRequest
 from gcu_async.protocol.fields import (
     ANGLE_RANGE,
     CAMERA_ZOOM,
+    CENTIDEGREE,
     LATITUDE_RANGE,
     LONGITUDE_RANGE,
     TILT_RANGE,
@@ -29,7 +30,6 @@ from gcu_async.protocol.headings import HeadingRule, heading
 from gcu_async.protocol.layout import MAIN_SIZE, MAIN_START, SUB_FRAME_HEADER, SUB_SIZE, SUB_START
 from gcu_async.protocol.units import Attitude, GeoPosition, NorthEastUp, quantize
 
-D001 = "0.01 deg"
 CONTROL_RATE_RAW = 1500
 """The control values' rate range, ± this raw (0.1 °/s ÷ zoom): a part of the fields' range
 (:data:`CONTROL_ANGLE_RAW`) the document gives the rates."""
@@ -175,9 +175,9 @@ HOST_MAIN_SCHEMA = FrameSchema("HostMainFrame", "host main frame", MAIN_START, M
     *(WireField(f"control_{axis}_raw", "h", "control value (rate or angle, per mode)",
                 *ANGLE_RANGE) for axis in _AXES),
     WireField("flags_raw", "B", "B2 control values valid, B0 aircraft INS valid"),
-    WireField("aircraft_roll_raw", "h", "aircraft roll", *ANGLE_RANGE, 100, "deg", D001,
+    WireField("aircraft_roll_raw", "h", "aircraft roll", *ANGLE_RANGE, 100, "deg", CENTIDEGREE,
               high_open=True),
-    WireField("aircraft_pitch_raw", "h", "aircraft pitch", *TILT_RANGE, 100, "deg", D001),
+    WireField("aircraft_pitch_raw", "h", "aircraft pitch", *TILT_RANGE, 100, "deg", CENTIDEGREE),
     heading("aircraft_yaw_raw", "aircraft yaw"),
     *(WireField(f"accel_{axis}_raw", "h", f"aircraft acceleration {axis}, gravity excluded",
                 scale=100, unit="m/s^2", raw_unit="0.01 m/s^2") for axis in _NEU),
